@@ -1,0 +1,326 @@
+//! The seed's rheological chains (Fig. 1, eqs. 1-3) and their relaxation functions.
+//!
+//! Every model is a series chain of Voigt elements (`E_i || c_i`), springs and one
+//! dashpot `c3`. Under a strain history `e(t)` the stress is the hereditary integral
+//!
+//! ```text
+//! s(t) = B2 e'(t) + g_inf e(t) + sum_k a_k h_k(t),   h_k(t) = int_0^t exp(-r_k (t - t')) e'(t') dt'
+//! ```
+//!
+//! i.e. the relaxation function is `G(t) = B2 delta(t) + g_inf + sum_k a_k exp(-r_k t)`
+//! (design.md 3.1). The five-element values follow eq. (3) of the seed:
+//! `x^2 + A1 x + A0 = (x + m)(x + n)`, `p = B1 - B2 A1`, `q = B0 - B2 A0`,
+//! `a = (q - p m)/(n - m)`, `b = (q - p n)/(m - n)`.
+//!
+//! Units: moduli in MPa, viscosities in MPa s, rates in 1/s.
+
+use thiserror::Error;
+
+/// One rheological model with its parameters (Young-type moduli, uniaxial viscosities).
+///
+/// Key sets (experiment-format.md): `elastic` = `E`; `three-element` = a Voigt
+/// element `(E1, c1)` in series with a dashpot `c3`; `four-element` = a spring `E2`
+/// in series with a Voigt element `(E1, c1)` and a dashpot `c3`; `five-element` = two
+/// Voigt elements `(E1, c1)`, `(E2, c2)` and a dashpot `c3` in series.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Rheology {
+    /// Hookean solid, `E` [MPa].
+    Elastic { e_mpa: f64 },
+    /// Voigt `(E1 [MPa], c1 [MPa s])` + dashpot `c3 [MPa s]`.
+    ThreeElement { e1_mpa: f64, c1_mpa_s: f64, c3_mpa_s: f64 },
+    /// Spring `E2 [MPa]` + Voigt `(E1, c1)` + dashpot `c3`.
+    FourElement { e1_mpa: f64, c1_mpa_s: f64, e2_mpa: f64, c3_mpa_s: f64 },
+    /// Voigt `(E1, c1)` + Voigt `(E2, c2)` + dashpot `c3` (the seed's model).
+    FiveElement { e1_mpa: f64, e2_mpa: f64, c1_mpa_s: f64, c2_mpa_s: f64, c3_mpa_s: f64 },
+}
+
+/// An elementary piece of the series chain; used for creep and recovery closed forms.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ChainElement {
+    /// A spring of modulus `E` [MPa].
+    Spring { e_mpa: f64 },
+    /// A Voigt element: spring `E` [MPa] parallel to dashpot `c` [MPa s].
+    Voigt { e_mpa: f64, c_mpa_s: f64 },
+    /// A dashpot `c` [MPa s].
+    Dashpot { c_mpa_s: f64 },
+}
+
+/// Why a material's parameters were refused.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum MaterialError {
+    /// A modulus or viscosity that is not finite and positive.
+    #[error("{name} = {value}: must be finite and > 0")]
+    NotPositive { name: &'static str, value: f64 },
+    /// A Poisson ratio outside (-1, 0.5).
+    #[error("poisson = {value}: must lie in (-1, 0.5)")]
+    PoissonOutOfRange { value: f64 },
+}
+
+/// The relaxation function `G(t) = viscous delta(t) + equilibrium + sum_k a_k exp(-r_k t)`
+/// of a chain, Young-type (for a unit-Young constitutive shape, see [`super::Material`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RelaxationKernel {
+    /// `B2` [MPa s]: the instantaneous viscous coefficient.
+    pub viscous: f64,
+    /// `G(inf)` [MPa]: the long-time modulus (0 for every chain with a dashpot).
+    pub equilibrium: f64,
+    /// Number of exponential terms in use (0..=2).
+    pub num_terms: usize,
+    /// Amplitudes `a_k` [MPa].
+    pub amplitudes: [f64; 2],
+    /// Rates `r_k` [1/s].
+    pub rates: [f64; 2],
+}
+
+impl Rheology {
+    /// The parameter values with their names, in the order of the model's key set.
+    pub fn parameters(&self) -> Vec<(&'static str, f64)> {
+        match *self {
+            Rheology::Elastic { e_mpa } => vec![("E", e_mpa)],
+            Rheology::ThreeElement { e1_mpa, c1_mpa_s, c3_mpa_s } => {
+                vec![("E1", e1_mpa), ("c1", c1_mpa_s), ("c3", c3_mpa_s)]
+            }
+            Rheology::FourElement { e1_mpa, c1_mpa_s, e2_mpa, c3_mpa_s } => {
+                vec![("E1", e1_mpa), ("E2", e2_mpa), ("c1", c1_mpa_s), ("c3", c3_mpa_s)]
+            }
+            Rheology::FiveElement { e1_mpa, e2_mpa, c1_mpa_s, c2_mpa_s, c3_mpa_s } => vec![
+                ("E1", e1_mpa),
+                ("E2", e2_mpa),
+                ("c1", c1_mpa_s),
+                ("c2", c2_mpa_s),
+                ("c3", c3_mpa_s),
+            ],
+        }
+    }
+
+    /// The model's name as the bundle format spells it.
+    pub fn model_name(&self) -> &'static str {
+        match self {
+            Rheology::Elastic { .. } => "elastic",
+            Rheology::ThreeElement { .. } => "three-element",
+            Rheology::FourElement { .. } => "four-element",
+            Rheology::FiveElement { .. } => "five-element",
+        }
+    }
+
+    /// Refuses non-finite or non-positive moduli and viscosities.
+    pub fn validate(&self) -> Result<(), MaterialError> {
+        for (name, value) in self.parameters() {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(MaterialError::NotPositive { name, value });
+            }
+        }
+        Ok(())
+    }
+
+    /// The chain as series elements (the seed's Fig. 1).
+    pub fn chain(&self) -> Vec<ChainElement> {
+        use ChainElement::*;
+        match *self {
+            Rheology::Elastic { e_mpa } => vec![Spring { e_mpa }],
+            Rheology::ThreeElement { e1_mpa, c1_mpa_s, c3_mpa_s } => vec![
+                Voigt { e_mpa: e1_mpa, c_mpa_s: c1_mpa_s },
+                Dashpot { c_mpa_s: c3_mpa_s },
+            ],
+            Rheology::FourElement { e1_mpa, c1_mpa_s, e2_mpa, c3_mpa_s } => vec![
+                Spring { e_mpa: e2_mpa },
+                Voigt { e_mpa: e1_mpa, c_mpa_s: c1_mpa_s },
+                Dashpot { c_mpa_s: c3_mpa_s },
+            ],
+            Rheology::FiveElement { e1_mpa, e2_mpa, c1_mpa_s, c2_mpa_s, c3_mpa_s } => vec![
+                Voigt { e_mpa: e1_mpa, c_mpa_s: c1_mpa_s },
+                Voigt { e_mpa: e2_mpa, c_mpa_s: c2_mpa_s },
+                Dashpot { c_mpa_s: c3_mpa_s },
+            ],
+        }
+    }
+
+    /// The relaxation function of the chain (design.md 3.1).
+    pub fn relaxation(&self) -> RelaxationKernel {
+        match *self {
+            Rheology::Elastic { e_mpa } => RelaxationKernel {
+                viscous: 0.0,
+                equilibrium: e_mpa,
+                num_terms: 0,
+                amplitudes: [0.0; 2],
+                rates: [0.0; 2],
+            },
+            Rheology::ThreeElement { e1_mpa: e1, c1_mpa_s: c1, c3_mpa_s: c3 } => {
+                // Q(s)/s = B2 + a/(s + k): B2 = c1 c3/(c1+c3), a = E1 c3^2/(c1+c3)^2, k = E1/(c1+c3).
+                let sum = c1 + c3;
+                RelaxationKernel {
+                    viscous: c1 * c3 / sum,
+                    equilibrium: 0.0,
+                    num_terms: 1,
+                    amplitudes: [e1 * c3 * c3 / (sum * sum), 0.0],
+                    rates: [e1 / sum, 0.0],
+                }
+            }
+            Rheology::FourElement { e1_mpa: e1, c1_mpa_s: c1, e2_mpa: e2, c3_mpa_s: c3 } => {
+                // Q(s)/s = (E2 s + E1 E2/c1) / (s^2 + A1 s + A0).
+                let a1 = (c3 * e1 + e2 * c3 + e2 * c1) / (c1 * c3);
+                let a0 = e1 * e2 / (c1 * c3);
+                second_order(0.0, e2, e1 * e2 / c1, a1, a0)
+            }
+            Rheology::FiveElement {
+                e1_mpa: e1,
+                e2_mpa: e2,
+                c1_mpa_s: c1,
+                c2_mpa_s: c2,
+                c3_mpa_s: c3,
+            } => {
+                // The seed's eq. (3).
+                let d = c1 * c2 + c2 * c3 + c3 * c1;
+                let a0 = e1 * e2 / d;
+                let a1 = (e1 * (c2 + c3) + e2 * (c1 + c3)) / d;
+                let b0 = e1 * e2 * c3 / d;
+                let b1 = (e1 * c2 * c3 + c1 * e2 * c3) / d;
+                let b2 = c1 * c2 * c3 / d;
+                second_order(b2, b1 - b2 * a1, b0 - b2 * a0, a1, a0)
+            }
+        }
+    }
+}
+
+/// `Q(s)/s = b2 + (p s + q)/(s^2 + a1 s + a0)` split into two exponentials.
+fn second_order(b2: f64, p: f64, q: f64, a1: f64, a0: f64) -> RelaxationKernel {
+    // Roots of x^2 + a1 x + a0, m > n > 0, computed without cancellation.
+    let disc = (a1 * a1 - 4.0 * a0).max(0.0).sqrt();
+    let m = 0.5 * (a1 + disc);
+    let n = a0 / m;
+    let a = (q - p * m) / (n - m);
+    let b = (q - p * n) / (m - n);
+    RelaxationKernel {
+        viscous: b2,
+        equilibrium: 0.0,
+        num_terms: 2,
+        amplitudes: [a, b],
+        rates: [m, n],
+    }
+}
+
+/// `(1 - exp(-x))/x`, accurate for small `x`.
+pub fn phi1(x: f64) -> f64 {
+    if x.abs() < 1e-8 {
+        1.0 - 0.5 * x
+    } else {
+        -(-x).exp_m1() / x
+    }
+}
+
+impl RelaxationKernel {
+    /// `G(t)` for `t > 0` [MPa] (the delta part excluded).
+    pub fn modulus(&self, t: f64) -> f64 {
+        let mut g = self.equilibrium;
+        for k in 0..self.num_terms {
+            g += self.amplitudes[k] * (-self.rates[k] * t).exp();
+        }
+        g
+    }
+
+    /// The step's stiffness factor `g(dt) = B2/dt + G_inf + sum_k a_k (1 - exp(-r_k dt))/(r_k dt)`
+    /// (design.md 3.3): the stress at the step's end is `g(dt) e(t+dt)` plus history terms.
+    pub fn step_factor(&self, dt: f64) -> f64 {
+        let mut g = self.viscous / dt + self.equilibrium;
+        for k in 0..self.num_terms {
+            g += self.amplitudes[k] * phi1(self.rates[k] * dt);
+        }
+        g
+    }
+
+    /// True when the two kernels are equal up to one positive factor (same shape in time).
+    pub fn proportional_to(&self, other: &RelaxationKernel) -> Option<f64> {
+        if self.num_terms != other.num_terms {
+            return None;
+        }
+        let scale_of = |a: f64, b: f64| if b != 0.0 { Some(a / b) } else { None };
+        let mut scale = None;
+        let mut pairs = vec![(self.viscous, other.viscous), (self.equilibrium, other.equilibrium)];
+        for k in 0..self.num_terms {
+            if self.rates[k] != other.rates[k] {
+                return None;
+            }
+            pairs.push((self.amplitudes[k], other.amplitudes[k]));
+        }
+        for (a, b) in pairs {
+            match (a == 0.0, b == 0.0) {
+                (true, true) => continue,
+                (false, false) => {
+                    let s = scale_of(a, b)?;
+                    match scale {
+                        None => scale = Some(s),
+                        Some(s0) if ((s - s0) / s0).abs() < 1e-14 => {}
+                        Some(_) => return None,
+                    }
+                }
+                _ => return None,
+            }
+        }
+        scale
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn mat1() -> Rheology {
+        Rheology::FiveElement {
+            e1_mpa: 0.0349,
+            e2_mpa: 0.0221,
+            c1_mpa_s: 0.0071,
+            c2_mpa_s: 0.1869,
+            c3_mpa_s: 29.719,
+        }
+    }
+
+    /// design.md 3.1 quotes m, n, B2, a, b for the seed's material 1 to five digits.
+    #[test]
+    fn five_element_matches_design_values() {
+        let k = mat1().relaxation();
+        let rel = |x: f64, y: f64| ((x - y) / y).abs();
+        assert!(rel(k.rates[0], 0.29445) < 5e-5, "m = {}", k.rates[0]);
+        assert!(rel(k.rates[1], 4.5422e-4) < 5e-5, "n = {}", k.rates[1]);
+        assert!(rel(k.viscous, 6.8386e-3) < 5e-5, "B2 = {}", k.viscous);
+        assert!(rel(k.amplitudes[0], 1.8940e-2) < 5e-5, "a = {}", k.amplitudes[0]);
+        assert!(rel(k.amplitudes[1], 1.3467e-2) < 5e-5, "b = {}", k.amplitudes[1]);
+    }
+
+    /// The relaxation function must invert the creep compliance: in Laplace space
+    /// `s G^(s) * s J^(s) = 1`, with `J^` summed from the chain. Checked at several s.
+    #[test]
+    fn relaxation_inverts_chain_compliance() {
+        let models = [
+            mat1(),
+            Rheology::ThreeElement { e1_mpa: 0.05, c1_mpa_s: 0.3, c3_mpa_s: 12.0 },
+            Rheology::FourElement { e1_mpa: 0.05, c1_mpa_s: 0.3, e2_mpa: 0.02, c3_mpa_s: 12.0 },
+            Rheology::Elastic { e_mpa: 0.7 },
+        ];
+        for model in models {
+            let k = model.relaxation();
+            for s in [1e-4, 1e-2, 0.3, 1.0, 17.0, 1e3] {
+                let mut sg = k.viscous * s + k.equilibrium;
+                for i in 0..k.num_terms {
+                    sg += k.amplitudes[i] * s / (s + k.rates[i]);
+                }
+                let mut j = 0.0;
+                for e in model.chain() {
+                    j += match e {
+                        ChainElement::Spring { e_mpa } => 1.0 / e_mpa,
+                        ChainElement::Voigt { e_mpa, c_mpa_s } => 1.0 / (e_mpa + c_mpa_s * s),
+                        ChainElement::Dashpot { c_mpa_s } => 1.0 / (c_mpa_s * s),
+                    };
+                }
+                assert!((sg * j - 1.0).abs() < 1e-12, "{model:?} at s = {s}: {}", sg * j);
+            }
+        }
+    }
+
+    #[test]
+    fn validation_names_the_parameter() {
+        let bad = Rheology::ThreeElement { e1_mpa: 0.05, c1_mpa_s: -1.0, c3_mpa_s: 1.0 };
+        assert_eq!(bad.validate(), Err(MaterialError::NotPositive { name: "c1", value: -1.0 }));
+        let nan = Rheology::Elastic { e_mpa: f64::NAN };
+        assert!(matches!(nan.validate(), Err(MaterialError::NotPositive { name: "E", .. })));
+    }
+}

@@ -1,0 +1,296 @@
+use thiserror::Error;
+
+use crate::element::{Formulation, ReferenceSimplex, Simplex};
+use crate::material::Material;
+use crate::mesh::{MeshError, SimplexMesh, TetMesh, TriMesh};
+
+/// How a face is held by the plate or the floor.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Attachment {
+    /// No slip: every displacement component follows the plate (or is zero on the floor).
+    Glued,
+    /// Only the normal (y) component is held; the face slides freely.
+    Frictionless,
+}
+
+/// The loading protocol of a press trial.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Protocol {
+    /// `[t_s, d_mm]`: downward plate displacement from first touch, piecewise linear.
+    pub waypoints: Vec<[f64; 2]>,
+    /// The plate lets go at this time [s].
+    pub release_s: f64,
+    /// The trial ends here [s]; the shape then is the final shape.
+    pub end_s: f64,
+    /// How the top face is held by the plate until release.
+    pub plate: Attachment,
+    /// How the bottom face is held by the floor.
+    pub support: Attachment,
+    /// Gravity along -y (9.81 m/s^2), off by default.
+    pub gravity: bool,
+}
+
+impl Protocol {
+    /// Push at `speed` [mm/s] for `push_s`, hold until `release_s`, recover until `end_s`;
+    /// glued plates, no gravity (the seed's protocol, Table I).
+    pub fn ramp_hold_release(speed_mm_s: f64, push_s: f64, release_s: f64, end_s: f64) -> Self {
+        let d = speed_mm_s * push_s;
+        Self {
+            waypoints: vec![[0.0, 0.0], [push_s, d], [release_s, d]],
+            release_s,
+            end_s,
+            plate: Attachment::Glued,
+            support: Attachment::Glued,
+            gravity: false,
+        }
+    }
+
+    /// The plate displacement d(t) [mm] (held constant past the last waypoint).
+    pub fn displacement(&self, t: f64) -> f64 {
+        let w = &self.waypoints;
+        if w.is_empty() {
+            return 0.0;
+        }
+        if t <= w[0][0] {
+            return w[0][1];
+        }
+        for pair in w.windows(2) {
+            let ([t0, d0], [t1, d1]) = (pair[0], pair[1]);
+            if t <= t1 {
+                return if t1 > t0 { d0 + (d1 - d0) * (t - t0) / (t1 - t0) } else { d1 };
+            }
+        }
+        w[w.len() - 1][1]
+    }
+
+    /// The plate velocity d'(t) [mm/s] on the segment that ends after `t`.
+    pub fn velocity(&self, t: f64) -> f64 {
+        for pair in self.waypoints.windows(2) {
+            let ([t0, d0], [t1, d1]) = (pair[0], pair[1]);
+            if t < t1 && t >= t0 && t1 > t0 {
+                return (d1 - d0) / (t1 - t0);
+            }
+        }
+        0.0
+    }
+
+    /// Times where the loading has a kink: waypoints in (0, end), release, end; sorted.
+    pub fn kinks(&self) -> Vec<f64> {
+        let mut k: Vec<f64> = self
+            .waypoints
+            .iter()
+            .map(|w| w[0])
+            .filter(|&t| t > 0.0 && t < self.end_s)
+            .collect();
+        k.push(self.release_s.min(self.end_s));
+        k.push(self.end_s);
+        k.sort_by(f64::total_cmp);
+        k.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * b.abs().max(1.0));
+        k
+    }
+
+    /// Refuses waypoints out of time order, negative times, and a release or end
+    /// before the last waypoint that pushes.
+    pub fn validate(&self) -> Result<(), PressError> {
+        let bad = |m: String| Err(PressError::BadProtocol(m));
+        if self.waypoints.is_empty() {
+            return bad("no waypoints".into());
+        }
+        for (i, w) in self.waypoints.iter().enumerate() {
+            if !(w[0].is_finite() && w[1].is_finite()) || w[0] < 0.0 {
+                return bad(format!("waypoint {i} = [{}, {}] must be finite with t >= 0", w[0], w[1]));
+            }
+            if i > 0 && w[0] <= self.waypoints[i - 1][0] {
+                return bad(format!("waypoint {i} at t = {} s is not after the previous one", w[0]));
+            }
+        }
+        let last_push = self
+            .waypoints
+            .windows(2)
+            .filter(|p| p[1][1] != p[0][1])
+            .map(|p| p[1][0])
+            .fold(0.0, f64::max);
+        if !(self.release_s.is_finite() && self.release_s >= last_push) {
+            return bad(format!("release_s = {} is before the last pushing waypoint ({last_push} s)", self.release_s));
+        }
+        if !(self.end_s.is_finite() && self.end_s >= last_push && self.end_s > 0.0) {
+            return bad(format!("end_s = {} is before the last pushing waypoint ({last_push} s)", self.end_s));
+        }
+        Ok(())
+    }
+}
+
+/// A marker: the material point at `position` (initial, mm), reported at `times`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MarkerRequest {
+    /// The marker's name.
+    pub name: String,
+    /// Initial position [mm], `D` components.
+    pub position: Vec<f64>,
+    /// Times at which to report its position [s].
+    pub times: Vec<f64>,
+}
+
+/// The time integrator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Integrator {
+    /// Quasi-static implicit with the exact exponential history update (default).
+    #[default]
+    QuasiStatic,
+    /// Dynamic, Newmark average acceleration with a lumped mass.
+    Dynamic,
+    /// The seed's scheme: dynamics, constraint stabilisation (psi = 2000), explicit RK.
+    Seed,
+}
+
+/// Numerical settings of a run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Settings {
+    /// The integrator; default quasi-static.
+    pub integrator: Integrator,
+    /// Local error tolerance of the adaptive step control, relative to the largest
+    /// plate displacement; default 1e-4.
+    pub rtol: f64,
+    /// A fixed step [s] instead of adaptive steps (steps still land on kinks).
+    pub fixed_dt_s: Option<f64>,
+    /// Upper bound on the step [s]; default: a twentieth of the trial.
+    pub max_dt_s: Option<f64>,
+    /// The constraint stabilisation frequency of the seed's scheme [1/s]; default 2000.
+    pub seed_psi: f64,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self { integrator: Integrator::QuasiStatic, rtol: 1e-4, fixed_dt_s: None, max_dt_s: None, seed_psi: 2000.0 }
+    }
+}
+
+/// A press problem in `D` dimensions with `N`-node cells and `S` strain components.
+#[derive(Debug, Clone)]
+pub struct PressProblem<const D: usize, const N: usize, const S: usize> {
+    /// The specimen; needs the node sets `bottom` and `top`.
+    pub mesh: SimplexMesh<D, N>,
+    /// 3D solid, or 2D plane stress/strain with a thickness.
+    pub formulation: Formulation,
+    /// One material per mesh region (indexed like `mesh.region_names`).
+    pub materials: Vec<Material>,
+    /// Density [t/mm^3] (1 g/cm^3 = 1e-9 t/mm^3), for gravity and the dynamic schemes.
+    pub density_t_mm3: f64,
+    /// The loading.
+    pub protocol: Protocol,
+    /// Markers to track.
+    pub markers: Vec<MarkerRequest>,
+    /// Extra times at which to keep the nodal displacements [s] (release and end are always kept).
+    pub snapshot_times: Vec<f64>,
+}
+
+/// A 2D (plane) press problem.
+pub type PlanePress = PressProblem<2, 3, 3>;
+/// A 3D (solid) press problem.
+pub type SolidPress = PressProblem<3, 4, 6>;
+
+/// A press problem of either dimension.
+#[derive(Debug, Clone)]
+pub enum AnyPress {
+    /// Triangles, plane stress or plane strain.
+    Plane(PlanePress),
+    /// Tetrahedra.
+    Solid(SolidPress),
+}
+
+/// Why a press problem was refused or failed.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum PressError {
+    /// The mesh is invalid.
+    #[error("mesh: {0}")]
+    Mesh(#[from] MeshError),
+    /// Regions and materials do not match.
+    #[error("the mesh has {regions} regions but {materials} materials were given")]
+    MaterialCount { regions: usize, materials: usize },
+    /// A material's parameters were refused.
+    #[error("material of region `{region}`: {source}")]
+    Material { region: String, source: crate::material::MaterialError },
+    /// The protocol was refused.
+    #[error("protocol: {0}")]
+    BadProtocol(String),
+    /// A marker that is not inside the specimen.
+    #[error("marker `{name}` at {position:?} mm is not inside the specimen (nearest cell {distance_mm:.3e} mm away)")]
+    MarkerOutside { name: String, position: Vec<f64>, distance_mm: f64 },
+    /// The step matrix is not positive definite (an unconstrained rigid motion or a
+    /// non-physical material).
+    #[error("step {step} at t = {time_s:.6} s: the step matrix is singular or not positive definite ({detail})")]
+    Singular { step: usize, time_s: f64, detail: String },
+    /// A NaN or infinity appeared in the solution.
+    #[error("step {step} at t = {time_s:.6} s: non-finite displacement in element {element} (node {node})")]
+    NonFinite { step: usize, time_s: f64, element: usize, node: usize },
+    /// A cell turned inside out.
+    #[error("step {step} at t = {time_s:.6} s: element {element} inverted (volume ratio {ratio:.3e})")]
+    Inverted { step: usize, time_s: f64, element: usize, ratio: f64 },
+    /// The step size fell below the smallest allowed.
+    #[error("step {step} at t = {time_s:.6} s: step size {dt_s:.3e} s below the minimum; the error control cannot meet rtol")]
+    StepTooSmall { step: usize, time_s: f64, dt_s: f64 },
+    /// Settings out of range.
+    #[error("settings: {0}")]
+    BadSettings(String),
+}
+
+impl<const D: usize, const N: usize, const S: usize> PressProblem<D, N, S>
+where
+    Simplex<D, N>: ReferenceSimplex<D, N>,
+{
+    /// Checks the mesh, materials, sets and protocol.
+    pub fn validate(&self) -> Result<(), PressError> {
+        const { assert!(N == D + 1 && S == D * (D + 1) / 2) };
+        self.mesh.validate()?;
+        self.mesh.node_set("bottom")?;
+        self.mesh.node_set("top")?;
+        if self.materials.len() != self.mesh.region_names.len() {
+            return Err(PressError::MaterialCount {
+                regions: self.mesh.region_names.len(),
+                materials: self.materials.len(),
+            });
+        }
+        for (m, name) in self.materials.iter().zip(&self.mesh.region_names) {
+            Material::new(m.rheology, m.poisson)
+                .map_err(|source| PressError::Material { region: name.clone(), source })?;
+        }
+        if !(self.density_t_mm3.is_finite() && self.density_t_mm3 > 0.0) {
+            return Err(PressError::BadProtocol(format!("density {} t/mm^3 must be > 0", self.density_t_mm3)));
+        }
+        self.protocol.validate()
+    }
+}
+
+impl PlanePress {
+    /// A plane-stress problem of the given thickness, density 1 g/cm^3, no markers.
+    pub fn new_2d(mesh: TriMesh, thickness_mm: f64, materials: Vec<Material>, protocol: Protocol) -> Result<Self, PressError> {
+        let p = Self {
+            mesh,
+            formulation: Formulation::PlaneStress { thickness_mm },
+            materials,
+            density_t_mm3: 1e-9,
+            protocol,
+            markers: Vec::new(),
+            snapshot_times: Vec::new(),
+        };
+        p.validate()?;
+        Ok(p)
+    }
+}
+
+impl SolidPress {
+    /// A 3D problem, density 1 g/cm^3, no markers.
+    pub fn new_3d(mesh: TetMesh, materials: Vec<Material>, protocol: Protocol) -> Result<Self, PressError> {
+        let p = Self {
+            mesh,
+            formulation: Formulation::Solid,
+            materials,
+            density_t_mm3: 1e-9,
+            protocol,
+            markers: Vec::new(),
+            snapshot_times: Vec::new(),
+        };
+        p.validate()?;
+        Ok(p)
+    }
+}

@@ -1,0 +1,168 @@
+/// One accepted time step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepRecord {
+    /// Time at the end of the step [s].
+    pub t_s: f64,
+    /// Step size [s].
+    pub dt_s: f64,
+    /// Wall time spent in factorization and solve [s].
+    pub solve_s: f64,
+    /// Relative residual of the linear solve, `|A x - b| / |b|` (0 when b = 0).
+    pub residual: f64,
+    /// Whether the step needed a new numeric factorization.
+    pub refactored: bool,
+    /// Bottom reaction at the step's end, compression positive [N].
+    pub bottom_force_n: f64,
+    /// Plate force at the step's end, compression positive [N].
+    pub plate_force_n: f64,
+    /// The step controller's local error estimate, relative to its tolerance (<= 1 accepted).
+    pub error_ratio: f64,
+}
+
+/// The nodal state kept at one time.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Snapshot {
+    /// Time [s].
+    pub t_s: f64,
+    /// Nodal displacements [mm], `dim` per node.
+    pub displacement: Vec<f64>,
+    /// Cell stresses [MPa], Voigt order (`[xx, yy, xy]` or `[xx, yy, zz, xy, xz, yz]`).
+    pub cell_stress: Vec<f64>,
+}
+
+/// A marker's simulated positions.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MarkerTrack {
+    /// The marker's name.
+    pub name: String,
+    /// `(t_s, position_mm)` with `dim` components each.
+    pub samples: Vec<(f64, Vec<f64>)>,
+}
+
+/// How far a run has come.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Progress {
+    /// Current simulated time [s].
+    pub t_s: f64,
+    /// End time [s].
+    pub end_s: f64,
+    /// Accepted steps so far.
+    pub steps: usize,
+}
+
+/// Exact force between two step ends for the quasi-static scheme: the stress in a
+/// step is known in closed form for a strain linear in time (design.md 3.3), so the
+/// forces at any time inside follow from a few reaction functionals per region.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct ForceSegment {
+    pub t0: f64,
+    pub dt: f64,
+    /// Per region: [rate term P, strain term Q, history terms H_k...], bottom then plate.
+    pub terms: Vec<RegionTerms>,
+    /// Constant body-force part of the reactions (gravity), bottom and plate.
+    pub constant: [f64; 2],
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct RegionTerms {
+    pub kernel: crate::material::RelaxationKernel,
+    /// `R(C1 de/dt)`, `R(C1 e_n)`, `R(C1 h_k,n)` for the bottom [0] and plate [1] functionals.
+    pub rate: [f64; 2],
+    pub strain: [f64; 2],
+    pub history: [[f64; 2]; 2],
+    /// Whether the plate is attached during this step.
+    pub plate_attached: bool,
+}
+
+impl ForceSegment {
+    fn eval(&self, tau: f64) -> [f64; 2] {
+        let mut f = self.constant;
+        for r in &self.terms {
+            let k = &r.kernel;
+            for side in 0..2 {
+                if side == 1 && !r.plate_attached {
+                    continue;
+                }
+                let mut v = k.viscous * r.rate[side] + k.equilibrium * (r.strain[side] + tau * r.rate[side]);
+                for j in 0..k.num_terms {
+                    let x = k.rates[j] * tau;
+                    v += k.amplitudes[j]
+                        * ((-x).exp() * r.history[j][side] + crate::material::phi1(x) * tau * r.rate[side]);
+                }
+                f[side] += v;
+            }
+        }
+        f
+    }
+}
+
+/// Everything a run produced.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PressResult {
+    /// Spatial dimension (2 or 3).
+    pub dim: usize,
+    /// Number of strain components per cell stress in snapshots.
+    pub num_stress: usize,
+    /// Accepted steps, in time order.
+    pub steps: Vec<StepRecord>,
+    /// Kept nodal states: the release time, the end time and any requested ones.
+    pub snapshots: Vec<Snapshot>,
+    /// Marker positions at the requested times.
+    pub markers: Vec<MarkerTrack>,
+    /// Number of numeric factorizations.
+    pub num_factorizations: usize,
+    /// Nonzeros of the (largest) Cholesky factor.
+    pub factor_nonzeros: usize,
+    /// Free degrees of freedom (largest constraint set).
+    pub num_free_dofs: usize,
+    pub(crate) segments: Vec<ForceSegment>,
+}
+
+impl PressResult {
+    fn forces_at(&self, t: f64) -> [f64; 2] {
+        if !self.segments.is_empty() {
+            // The segment whose interval contains t (the first one at a shared end).
+            let i = self.segments.partition_point(|s| s.t0 + s.dt < t).min(self.segments.len() - 1);
+            let s = &self.segments[i];
+            return s.eval((t - s.t0).clamp(0.0, s.dt));
+        }
+        // Integrators without dense output: linear interpolation of step ends.
+        let i = self.steps.partition_point(|s| s.t_s < t);
+        if i == 0 {
+            let s = &self.steps[0];
+            let w = (t / s.t_s).clamp(0.0, 1.0);
+            return [w * s.bottom_force_n, w * s.plate_force_n];
+        }
+        if i >= self.steps.len() {
+            let s = self.steps.last().unwrap();
+            return [s.bottom_force_n, s.plate_force_n];
+        }
+        let (a, b) = (&self.steps[i - 1], &self.steps[i]);
+        let w = (t - a.t_s) / (b.t_s - a.t_s);
+        [
+            a.bottom_force_n + w * (b.bottom_force_n - a.bottom_force_n),
+            a.plate_force_n + w * (b.plate_force_n - a.plate_force_n),
+        ]
+    }
+
+    /// The bottom reaction at time `t` [N], compression positive (exact inside each
+    /// quasi-static step; interpolated for the dynamic schemes).
+    pub fn bottom_force_at(&self, t: f64) -> f64 {
+        self.forces_at(t)[0]
+    }
+
+    /// The plate force at time `t` [N], compression positive.
+    pub fn plate_force_at(&self, t: f64) -> f64 {
+        self.forces_at(t)[1]
+    }
+
+    /// The largest bottom force over the step ends [N].
+    pub fn peak_force(&self) -> f64 {
+        self.steps.iter().map(|s| s.bottom_force_n).fold(f64::NEG_INFINITY, f64::max)
+    }
+
+    /// The snapshot kept at time `t` (within 1e-9 s).
+    pub fn snapshot_at(&self, t: f64) -> Option<&Snapshot> {
+        self.snapshots.iter().find(|s| (s.t_s - t).abs() <= 1e-9 * t.abs().max(1.0))
+    }
+}

@@ -1,0 +1,1 @@
+#[test] fn builds() { fem_core::x(); }
