@@ -83,13 +83,9 @@ impl Rheology {
             Rheology::FourElement { e1_mpa, c1_mpa_s, e2_mpa, c3_mpa_s } => {
                 vec![("E1", e1_mpa), ("E2", e2_mpa), ("c1", c1_mpa_s), ("c3", c3_mpa_s)]
             }
-            Rheology::FiveElement { e1_mpa, e2_mpa, c1_mpa_s, c2_mpa_s, c3_mpa_s } => vec![
-                ("E1", e1_mpa),
-                ("E2", e2_mpa),
-                ("c1", c1_mpa_s),
-                ("c2", c2_mpa_s),
-                ("c3", c3_mpa_s),
-            ],
+            Rheology::FiveElement { e1_mpa, e2_mpa, c1_mpa_s, c2_mpa_s, c3_mpa_s } => {
+                vec![("E1", e1_mpa), ("E2", e2_mpa), ("c1", c1_mpa_s), ("c2", c2_mpa_s), ("c3", c3_mpa_s)]
+            }
         }
     }
 
@@ -118,10 +114,9 @@ impl Rheology {
         use ChainElement::*;
         match *self {
             Rheology::Elastic { e_mpa } => vec![Spring { e_mpa }],
-            Rheology::ThreeElement { e1_mpa, c1_mpa_s, c3_mpa_s } => vec![
-                Voigt { e_mpa: e1_mpa, c_mpa_s: c1_mpa_s },
-                Dashpot { c_mpa_s: c3_mpa_s },
-            ],
+            Rheology::ThreeElement { e1_mpa, c1_mpa_s, c3_mpa_s } => {
+                vec![Voigt { e_mpa: e1_mpa, c_mpa_s: c1_mpa_s }, Dashpot { c_mpa_s: c3_mpa_s }]
+            }
             Rheology::FourElement { e1_mpa, c1_mpa_s, e2_mpa, c3_mpa_s } => vec![
                 Spring { e_mpa: e2_mpa },
                 Voigt { e_mpa: e1_mpa, c_mpa_s: c1_mpa_s },
@@ -162,13 +157,7 @@ impl Rheology {
                 let a0 = e1 * e2 / (c1 * c3);
                 second_order(0.0, e2, e1 * e2 / c1, a1, a0)
             }
-            Rheology::FiveElement {
-                e1_mpa: e1,
-                e2_mpa: e2,
-                c1_mpa_s: c1,
-                c2_mpa_s: c2,
-                c3_mpa_s: c3,
-            } => {
+            Rheology::FiveElement { e1_mpa: e1, e2_mpa: e2, c1_mpa_s: c1, c2_mpa_s: c2, c3_mpa_s: c3 } => {
                 // The seed's eq. (3).
                 let d = c1 * c2 + c2 * c3 + c3 * c1;
                 let a0 = e1 * e2 / d;
@@ -190,13 +179,7 @@ fn second_order(b2: f64, p: f64, q: f64, a1: f64, a0: f64) -> RelaxationKernel {
     let n = a0 / m;
     let a = (q - p * m) / (n - m);
     let b = (q - p * n) / (m - n);
-    RelaxationKernel {
-        viscous: b2,
-        equilibrium: 0.0,
-        num_terms: 2,
-        amplitudes: [a, b],
-        rates: [m, n],
-    }
+    RelaxationKernel { viscous: b2, equilibrium: 0.0, num_terms: 2, amplitudes: [a, b], rates: [m, n] }
 }
 
 /// `(1 - exp(-x))/x`, accurate for small `x`.
@@ -265,13 +248,7 @@ mod tests {
     use super::*;
 
     fn mat1() -> Rheology {
-        Rheology::FiveElement {
-            e1_mpa: 0.0349,
-            e2_mpa: 0.0221,
-            c1_mpa_s: 0.0071,
-            c2_mpa_s: 0.1869,
-            c3_mpa_s: 29.719,
-        }
+        Rheology::FiveElement { e1_mpa: 0.0349, e2_mpa: 0.0221, c1_mpa_s: 0.0071, c2_mpa_s: 0.1869, c3_mpa_s: 29.719 }
     }
 
     /// design.md 3.1 quotes m, n, B2, a, b for the seed's material 1 to five digits.

@@ -33,7 +33,10 @@ fn intervals(length: f64, h: f64, what: &str) -> Result<usize, MeshError> {
 }
 
 /// y coordinates of the grid planes and the region of each y interval.
-fn layer_grid(layers: &[Layer], h: f64) -> Result<(Vec<f64>, Vec<u16>, Vec<String>), MeshError> {
+/// Grid planes along y, the region of each interval, and the region names.
+type LayerGrid = (Vec<f64>, Vec<u16>, Vec<String>);
+
+fn layer_grid(layers: &[Layer], h: f64) -> Result<LayerGrid, MeshError> {
     if layers.is_empty() {
         return Err(MeshError::BadGeometry("no layers".into()));
     }
@@ -87,35 +90,19 @@ pub fn layered_rectangle(width_mm: f64, layers: &[Layer], size_mm: f64) -> Resul
         }
     }
     let height = *ys.last().unwrap();
-    let mut mesh = TriMesh {
-        nodes,
-        cells,
-        cell_regions,
-        region_names,
-        node_sets: BTreeMap::new(),
-        face_sets: BTreeMap::new(),
-    };
+    let mut mesh =
+        TriMesh { nodes, cells, cell_regions, region_names, node_sets: BTreeMap::new(), face_sets: BTreeMap::new() };
     add_bottom_top(&mut mesh, height);
     Ok(mesh)
 }
 
 /// A `size = [W, H, T]` block (x, y, z) of one region.
 pub fn block(size_mm: [f64; 3], element_size_mm: f64, region: &str) -> Result<TetMesh, MeshError> {
-    layered_block(
-        size_mm[0],
-        size_mm[2],
-        &[Layer { region: region.into(), thickness_mm: size_mm[1] }],
-        element_size_mm,
-    )
+    layered_block(size_mm[0], size_mm[2], &[Layer { region: region.into(), thickness_mm: size_mm[1] }], element_size_mm)
 }
 
 /// A block of width `W` (x) and thickness `T` (z) made of layers stacked along y.
-pub fn layered_block(
-    width_mm: f64,
-    thickness_mm: f64,
-    layers: &[Layer],
-    size_mm: f64,
-) -> Result<TetMesh, MeshError> {
+pub fn layered_block(width_mm: f64, thickness_mm: f64, layers: &[Layer], size_mm: f64) -> Result<TetMesh, MeshError> {
     let nx = intervals(width_mm, size_mm, "width")?;
     let nz = intervals(thickness_mm, size_mm, "thickness")?;
     let (ys, layer_of_row, region_names) = layer_grid(layers, size_mm)?;
@@ -166,14 +153,8 @@ pub fn layered_block(
         }
     }
     let height = *ys.last().unwrap();
-    let mut mesh = TetMesh {
-        nodes,
-        cells,
-        cell_regions,
-        region_names,
-        node_sets: BTreeMap::new(),
-        face_sets: BTreeMap::new(),
-    };
+    let mut mesh =
+        TetMesh { nodes, cells, cell_regions, region_names, node_sets: BTreeMap::new(), face_sets: BTreeMap::new() };
     add_bottom_top(&mut mesh, height);
     Ok(mesh)
 }
@@ -248,11 +229,7 @@ pub fn cylinder(radius_mm: f64, height_mm: f64, size_mm: f64, region: &str) -> R
             v.sort_unstable();
             let lo = |k: usize| (j * nd + v[k]) as u32;
             let hi = |k: usize| ((j + 1) * nd + v[k]) as u32;
-            for mut tet in [
-                [lo(0), lo(1), lo(2), hi(0)],
-                [lo(1), lo(2), hi(0), hi(1)],
-                [lo(2), hi(0), hi(1), hi(2)],
-            ] {
+            for mut tet in [[lo(0), lo(1), lo(2), hi(0)], [lo(1), lo(2), hi(0), hi(1)], [lo(2), hi(0), hi(1), hi(2)]] {
                 let x = tet.map(|n| nodes[n as usize]);
                 if crate::element::signed_measure::<3, 4>(&x) < 0.0 {
                     tet.swap(2, 3);

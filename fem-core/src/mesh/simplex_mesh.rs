@@ -59,10 +59,7 @@ where
 
     /// The node set `name`, or an error naming it.
     pub fn node_set(&self, name: &str) -> Result<&[u32], MeshError> {
-        self.node_sets
-            .get(name)
-            .map(|v| v.as_slice())
-            .ok_or_else(|| MeshError::MissingSet(name.to_string()))
+        self.node_sets.get(name).map(|v| v.as_slice()).ok_or_else(|| MeshError::MissingSet(name.to_string()))
     }
 
     /// Axis-aligned bounding box `(min, max)` [mm].
@@ -84,11 +81,7 @@ where
         for (e, cell) in self.cells.iter().enumerate() {
             for &v in cell {
                 if v as usize >= self.nodes.len() {
-                    return Err(MeshError::NodeOutOfRange {
-                        element: e,
-                        node: v,
-                        num_nodes: self.nodes.len(),
-                    });
+                    return Err(MeshError::NodeOutOfRange { element: e, node: v, num_nodes: self.nodes.len() });
                 }
             }
             let measure = crate::element::signed_measure(&self.cell_coordinates(e));
@@ -106,19 +99,14 @@ where
 
     /// Builds the node sets `name` from the nodes that satisfy `pred`.
     pub fn add_node_set(&mut self, name: &str, pred: impl Fn(&[f64; D]) -> bool) {
-        let set: Vec<u32> = (0..self.nodes.len() as u32)
-            .filter(|&i| pred(&self.nodes[i as usize]))
-            .collect();
+        let set: Vec<u32> = (0..self.nodes.len() as u32).filter(|&i| pred(&self.nodes[i as usize])).collect();
         self.node_sets.insert(name.to_string(), set);
     }
 
     /// Builds the face set `name` from the boundary facets whose nodes all satisfy `pred`.
     pub fn add_face_set(&mut self, name: &str, pred: impl Fn(&[f64; D]) -> bool) {
-        let faces = self
-            .boundary_facets()
-            .into_iter()
-            .filter(|f| f.iter().all(|&v| pred(&self.nodes[v as usize])))
-            .collect();
+        let faces =
+            self.boundary_facets().into_iter().filter(|f| f.iter().all(|&v| pred(&self.nodes[v as usize]))).collect();
         self.face_sets.insert(name.to_string(), faces);
     }
 
@@ -135,7 +123,7 @@ where
                 all.push((key, f));
             }
         }
-        all.sort_unstable_by(|a, b| a.0.cmp(&b.0));
+        all.sort_unstable_by_key(|a| a.0);
         let mut out = Vec::new();
         let mut i = 0;
         while i < all.len() {
@@ -153,8 +141,6 @@ where
 
     /// Total measure (area in 2D, volume in 3D) [mm^D].
     pub fn measure(&self) -> f64 {
-        (0..self.cells.len())
-            .map(|e| crate::element::signed_measure(&self.cell_coordinates(e)))
-            .sum()
+        (0..self.cells.len()).map(|e| crate::element::signed_measure(&self.cell_coordinates(e))).sum()
     }
 }

@@ -12,13 +12,14 @@
 //! dynamics, constraint stabilisation with psi = 2000, explicit Runge-Kutta), kept
 //! as a reference.
 
+mod model;
 mod problem;
 mod result;
 mod seed;
 mod stepper;
 
 pub use problem::{
-    AnyPress, Attachment, Integrator, MarkerRequest, PressError, PressProblem, PlanePress, Protocol, Settings,
+    AnyPress, Attachment, Integrator, MarkerRequest, PlanePress, PressError, PressProblem, Protocol, Settings,
     SolidPress,
 };
 pub use result::{MarkerTrack, PressResult, Progress, Snapshot, StepRecord};

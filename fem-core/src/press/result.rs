@@ -61,13 +61,23 @@ pub(crate) struct ForceSegment {
     pub terms: Vec<RegionTerms>,
     /// Constant body-force part of the reactions (gravity), bottom and plate.
     pub constant: [f64; 2],
+    /// Forces at the step's start and end when the plate is detached: then nothing
+    /// but the body force loads the specimen, the reactions are fixed by equilibrium
+    /// and are interpolated linearly between the (exact) step ends.
+    pub detached_ends: Option<[[f64; 2]; 2]>,
 }
 
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct RegionTerms {
     pub kernel: crate::material::RelaxationKernel,
-    /// `R(C1 de/dt)`, `R(C1 e_n)`, `R(C1 h_k,n)` for the bottom [0] and plate [1] functionals.
+    /// `R(C1 de/dt)` (the mean rate), `R(C1 e'(t1))` (the backward-difference rate at
+    /// the step's end), `R(C1 e_n)`, `R(C1 h_k,n)` for the bottom [0] and plate [1]
+    /// functionals. Both rates are equal for a strain linear in time.
     pub rate: [f64; 2],
+    pub rate_end: [f64; 2],
+    /// The viscous rate at the step's start: the previous step's end rate, or the
+    /// mean rate after a kink (where the true rate jumps).
+    pub rate_start: [f64; 2],
     pub strain: [f64; 2],
     pub history: [[f64; 2]; 2],
     /// Whether the plate is attached during this step.
@@ -75,7 +85,16 @@ pub(crate) struct RegionTerms {
 }
 
 impl ForceSegment {
-    fn eval(&self, tau: f64) -> [f64; 2] {
+    pub(crate) fn eval(&self, tau: f64) -> [f64; 2] {
+        if let Some([start, end]) = self.detached_ends {
+            let w = tau / self.dt;
+            return [start[0] + w * (end[0] - start[0]), start[1] + w * (end[1] - start[1])];
+        }
+        self.eval_formula(tau)
+    }
+
+    /// The closed-form force inside the step for a strain linear in time.
+    pub(crate) fn eval_formula(&self, tau: f64) -> [f64; 2] {
         let mut f = self.constant;
         for r in &self.terms {
             let k = &r.kernel;
@@ -83,7 +102,8 @@ impl ForceSegment {
                 if side == 1 && !r.plate_attached {
                     continue;
                 }
-                let mut v = k.viscous * r.rate[side] + k.equilibrium * (r.strain[side] + tau * r.rate[side]);
+                let viscous_rate = r.rate_start[side] + (tau / self.dt) * (r.rate_end[side] - r.rate_start[side]);
+                let mut v = k.viscous * viscous_rate + k.equilibrium * (r.strain[side] + tau * r.rate[side]);
                 for j in 0..k.num_terms {
                     let x = k.rates[j] * tau;
                     v += k.amplitudes[j]

@@ -1,6 +1,606 @@
-use super::*;
+//! The implicit integrators: quasi-static (default) and dynamic Newmark.
+//!
+//! Quasi-static step from `t0` to `t1 = t0 + dt` (design.md 3.3). With the strain
+//! linear in time inside the step, each cell's history `h_k` updates exactly,
+//! `h_k(t1) = exp(-r_k dt) h_k(t0) + phi1(r_k dt) (e1 - e0)`. The instantaneous
+//! viscous term `B2 e'(t1)` uses the variable-step BDF2 derivative
+//! `(alpha0 e1 - alpha1 e0 + alpha2 e_-1)/dt` (BDF1, `e1 - e0`, on the first step after
+//! a kink or after a step more than doubled): both are exact for a strain linear
+//! in time, so a ramp-hold on a uniform specimen is integrated exactly, and the
+//! recovery converges at second order. The stress at `t1` is `C1 [g e1 - q]` with
+//! `g = B2 alpha0/dt + G_inf + sum_k a_k phi1(r_k dt)` and `q` from the history.
+//! Equilibrium at `t1` is then linear: `(sum_g g_g K_g) u1 = f_body + f_hist`. For one kernel group the
+//! matrix is `g(dt) K`, so `K` is factored once per constraint set and every step is
+//! one solve; otherwise a factorization is kept per step size (a sqrt(2) ladder).
+//!
+//! Dynamic: the same internal force plus a lumped mass, Newmark average
+//! acceleration (beta = 1/4, gamma = 1/2). Held dofs move with the plate exactly
+//! (their acceleration is zero between kinks), so reactions carry no spurious inertia.
+//!
+//! Step control: the local error of the displacement is estimated against an
+//! extrapolation of the previous steps (quadratic for BDF2 steps, linear for BDF1
+//! ones), relative to `rtol` times the largest plate displacement; steps land on every
+//! kink (waypoints, release, end). After a kink the estimator restarts from a tiny
+//! step (it cannot check the first step of a segment) and grows at most 4x a step.
+
+use std::time::Instant;
+
+use crate::parallel::map_collect;
+use nalgebra::{SMatrix, SVector};
+
+use super::model::{Constraints, Model};
+use super::result::{ForceSegment, RegionTerms};
+use super::{Integrator, MarkerTrack, PressError, PressProblem, PressResult, Progress, Settings, Snapshot, StepRecord};
+use crate::assembly::assemble_vector;
+use crate::element::{cell_strain, nodal_force, ReferenceSimplex, Simplex};
+use crate::material::phi1;
+use crate::solve::{Factor, ReducedSystem};
+
+const NEWMARK_BETA: f64 = 0.25;
+const NEWMARK_GAMMA: f64 = 0.5;
+/// The first step after a kink, as a fraction of the time to the next kink: small,
+/// because it cannot be checked (the estimator needs two steps of one segment).
+const FIRST_STEP_FRACTION: f64 = 1e-6;
+/// The length of the step that takes an instantaneous elastic jump, relative to the trial.
+const INSTANT_STEP_FRACTION: f64 = 1e-11;
+/// The largest growth of the step from one step to the next.
+const MAX_GROWTH: f64 = 4.0;
+/// The factorization cache holds at most this many numeric factors.
+const CACHE_SIZE: usize = 3;
+
+/// A numeric factor is valid for one constraint set (plate attached or not) and,
+/// unless one kernel group lets it be scaled, one step size and BDF coefficient.
+type CacheKey = (bool, (u64, u64));
+
+/// A cell after a step: strain, histories, stress, volume ratio.
+type CellUpdate<const S: usize> = (SVector<f64, S>, [SVector<f64, S>; 2], SVector<f64, S>, f64);
+
+/// The state at a step end.
+#[derive(Clone)]
+struct State<const S: usize> {
+    t: f64,
+    u: Vec<f64>,
+    v: Vec<f64>,
+    a: Vec<f64>,
+    strain: Vec<SVector<f64, S>>,
+    /// The strain one step back (for BDF2).
+    strain_prev: Vec<SVector<f64, S>>,
+    history: Vec<[SVector<f64, S>; 2]>,
+}
+
+/// Per-region scalars of one step size.
+struct StepFactors {
+    g: f64,
+    decay: [f64; 2],
+    phi: [f64; 2],
+}
+
+/// The backward-difference coefficients of `e'(t1) = (alpha0 e1 - alpha1 e0 + alpha2 e_-1)/dt`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Bdf {
+    alpha: [f64; 3],
+}
+
+impl Bdf {
+    const ONE: Bdf = Bdf { alpha: [1.0, 1.0, 0.0] };
+
+    /// Variable-step BDF2 for `omega = dt / dt_prev`.
+    fn two(omega: f64) -> Bdf {
+        Bdf { alpha: [(1.0 + 2.0 * omega) / (1.0 + omega), 1.0 + omega, omega * omega / (1.0 + omega)] }
+    }
+}
+
+/// `g = B2 alpha0/dt + G_inf + sum_k a_k phi1(r_k dt)`.
+fn step_factor(k: &crate::material::RelaxationKernel, dt: f64, bdf: Bdf) -> f64 {
+    k.step_factor(dt) + k.viscous * (bdf.alpha[0] - 1.0) / dt
+}
+
 pub(crate) fn run<const D: usize, const N: usize, const S: usize>(
-    _p: &PressProblem<D, N, S>, _s: &Settings, _g: &mut dyn FnMut(Progress),
-) -> Result<PressResult, PressError> where crate::element::Simplex<D, N>: crate::element::ReferenceSimplex<D, N> {
-    Err(PressError::BadSettings("in progress".into()))
+    problem: &PressProblem<D, N, S>,
+    settings: &Settings,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<PressResult, PressError>
+where
+    Simplex<D, N>: ReferenceSimplex<D, N>,
+{
+    check_settings(settings)?;
+    let model = Model::new(problem)?;
+    let protocol = &problem.protocol;
+    let end = protocol.end_s;
+    let dynamic = settings.integrator == Integrator::Dynamic;
+    let ndof = model.num_dofs();
+    let ncell = problem.mesh.num_cells();
+
+    // Times the steps must land on: physical kinks restart the error estimator.
+    let physical_kinks = protocol.kinks();
+    let mut landings = physical_kinks.clone();
+    landings.extend(problem.snapshot_times.iter().copied().filter(|&t| t > 0.0 && t < end));
+    landings.sort_by(f64::total_cmp);
+    landings.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * b.abs().max(1.0));
+    let mut snapshot_times: Vec<f64> =
+        problem.snapshot_times.iter().copied().filter(|&t| t > 0.0 && t <= end).collect();
+    if protocol.release_s <= end {
+        snapshot_times.push(protocol.release_s);
+    }
+    snapshot_times.push(end);
+
+    let dt_max = settings.max_dt_s.unwrap_or(end / 20.0);
+    let dt_min = 1e-10 * end;
+    let tol = settings.rtol * model.displacement_scale;
+    let single_group = model.groups.len() == 1 && !dynamic;
+    let ladder = settings.fixed_dt_s.is_none() && !single_group;
+
+    let sys_attached = ReducedSystem::new(&model.pattern, &model.attached.held).map_err(|e| PressError::Singular {
+        step: 0,
+        time_s: 0.0,
+        detail: e.to_string(),
+    })?;
+    let sys_released = if protocol.release_s < end {
+        Some(ReducedSystem::new(&model.pattern, &model.released.held).map_err(|e| PressError::Singular {
+            step: 0,
+            time_s: protocol.release_s,
+            detail: e.to_string(),
+        })?)
+    } else {
+        None
+    };
+    let mut cache: Vec<(CacheKey, Factor<'_>)> = Vec::new();
+    let mut num_factorizations = 0usize;
+
+    let mut state = State::<S> {
+        t: 0.0,
+        u: vec![0.0; ndof],
+        v: vec![0.0; ndof],
+        a: vec![0.0; ndof],
+        strain: vec![SVector::zeros(); ncell],
+        strain_prev: vec![SVector::zeros(); ncell],
+        history: vec![[SVector::zeros(); 2]; ncell],
+    };
+    // Displacements one and two steps back in this segment, with the step that left them.
+    let mut back: Vec<(Vec<f64>, f64)> = Vec::new();
+    let mut steps = Vec::new();
+    let mut segments = Vec::new();
+    let mut snapshots = Vec::new();
+    let mut tracks: Vec<MarkerTrack> =
+        problem.markers.iter().map(|m| MarkerTrack { name: m.name.clone(), samples: Vec::new() }).collect();
+    let mut marker_next = vec![0usize; problem.markers.len()];
+    emit_markers(&model, &mut tracks, &mut marker_next, &state.u, &state.u, 0.0, 0.0, true);
+
+    let first_dt = |t: f64| -> f64 {
+        let next = physical_kinks.iter().copied().find(|&k| k > t * (1.0 + 1e-12) + 1e-12).unwrap_or(end);
+        settings.fixed_dt_s.unwrap_or_else(|| (FIRST_STEP_FRACTION * (next - t)).min(dt_max).max(dt_min))
+    };
+    let mut dt = first_dt(0.0);
+    let mut step_index = 0usize;
+    let mut instant_step = false;
+
+    while state.t < end * (1.0 - 1e-13) {
+        let landing = landings.iter().copied().find(|&k| k > state.t + 1e-12 * end.max(1.0)).unwrap_or(end);
+        let mut h = dt.min(dt_max);
+        if ladder {
+            h = 2f64.powf((2.0 * h.log2()).floor() / 2.0);
+        }
+        let remaining = landing - state.t;
+        if h >= remaining * (1.0 - 1e-9) {
+            h = remaining;
+        } else if settings.fixed_dt_s.is_none() && h > 0.6 * remaining {
+            h = 0.5 * remaining;
+        }
+        let t1 = if h == remaining { landing } else { state.t + h };
+        let constraints = model.constraints_at(t1);
+        let system =
+            if constraints.plate_attached { &sys_attached } else { sys_released.as_ref().expect("released system") };
+
+        let bdf = match back.first() {
+            Some(&(_, h_prev)) if h <= 2.0 * h_prev * (1.0 + 1e-9) => Bdf::two(h / h_prev),
+            _ => Bdf::ONE,
+        };
+        // Numeric factor for this constraint set and step size.
+        let key =
+            (constraints.plate_attached, if single_group { (0, 0) } else { (h.to_bits(), bdf.alpha[0].to_bits()) });
+        let clock = Instant::now();
+        let refactored = if let Some(pos) = cache.iter().position(|(k, _)| *k == key) {
+            let entry = cache.remove(pos);
+            cache.push(entry);
+            false
+        } else {
+            let terms: Vec<(f64, &[f64])> = model
+                .groups
+                .iter()
+                .map(|g| (if single_group { 1.0 } else { step_factor(&g.kernel, h, bdf) }, g.stiffness.as_slice()))
+                .collect();
+            let mass_term: Option<Vec<f64>> =
+                dynamic.then(|| model.mass.iter().map(|m| m / (NEWMARK_BETA * h * h)).collect());
+            let factor = system.factor(&terms, mass_term.as_deref()).map_err(|e| PressError::Singular {
+                step: step_index + 1,
+                time_s: t1,
+                detail: e.to_string(),
+            })?;
+            num_factorizations += 1;
+            if cache.len() >= CACHE_SIZE {
+                cache.remove(0);
+            }
+            cache.push((key, factor));
+            true
+        };
+        let factor = &cache.last().unwrap().1;
+
+        let mut outcome =
+            step(&model, &state, h, bdf, t1, constraints, system, factor, single_group, dynamic, step_index + 1)?;
+        if !constraints.plate_attached {
+            let start = segments.last().map_or([0.0; 2], |l: &ForceSegment| l.eval(l.dt));
+            outcome.segment.detached_ends = Some([start, outcome.segment.eval_formula(h)]);
+        }
+        if let (false, Some(last)) = (bdf == Bdf::ONE, segments.last()) {
+            // Continue the viscous rate from the previous step's end (no kink here).
+            let last: &ForceSegment = last;
+            for (t, l) in outcome.segment.terms.iter_mut().zip(&last.terms) {
+                t.rate_start = l.rate_end;
+            }
+        }
+        let solve_s = clock.elapsed().as_secs_f64();
+
+        // Error control: quadratic extrapolation for BDF2 steps (local error about
+        // 2/11 of the difference, exponent 1/3), linear for BDF1 ones (exponent 1/2).
+        let (error_ratio, exponent) = if settings.fixed_dt_s.is_some() {
+            (0.0, 0.5)
+        } else {
+            match (back.first(), back.get(1)) {
+                (Some((u1b, h0)), Some((u2b, hm))) if bdf != Bdf::ONE => {
+                    let (t0, tm1, tm2) = (state.t, state.t - h0, state.t - h0 - hm);
+                    let tt = t1;
+                    let l0 = (tt - tm1) * (tt - tm2) / ((t0 - tm1) * (t0 - tm2));
+                    let l1 = (tt - t0) * (tt - tm2) / ((tm1 - t0) * (tm1 - tm2));
+                    let l2 = (tt - t0) * (tt - tm1) / ((tm2 - t0) * (tm2 - tm1));
+                    let mut e: f64 = 0.0;
+                    for &d in &system.dof_of_free {
+                        let d = d as usize;
+                        let pred = l0 * state.u[d] + l1 * u1b[d] + l2 * u2b[d];
+                        e = e.max((outcome.state.u[d] - pred).abs());
+                    }
+                    (e * 2.0 / 11.0 / tol, 1.0 / 3.0)
+                }
+                (Some((u1b, h0)), _) => {
+                    let w = h / h0;
+                    let mut e: f64 = 0.0;
+                    for &d in &system.dof_of_free {
+                        let d = d as usize;
+                        let pred = state.u[d] + w * (state.u[d] - u1b[d]);
+                        e = e.max((outcome.state.u[d] - pred).abs());
+                    }
+                    (e * h / (h + h0) / tol, 0.5)
+                }
+                _ => (0.0, 0.5),
+            }
+        };
+        if error_ratio > 1.0 {
+            dt = h * (0.9 * error_ratio.powf(-exponent)).clamp(0.1, 0.7);
+            if dt < dt_min {
+                return Err(PressError::StepTooSmall { step: step_index + 1, time_s: state.t, dt_s: dt });
+            }
+            continue;
+        }
+
+        // Accept.
+        step_index += 1;
+        let [bottom_force_n, plate_force_n] = outcome.segment.eval_end();
+        steps.push(StepRecord {
+            t_s: t1,
+            dt_s: h,
+            solve_s,
+            residual: outcome.residual,
+            refactored,
+            bottom_force_n,
+            plate_force_n,
+            error_ratio,
+        });
+        segments.push(outcome.segment);
+        emit_markers(&model, &mut tracks, &mut marker_next, &state.u, &outcome.state.u, state.t, t1, false);
+        if snapshot_times.iter().any(|&s| (s - t1).abs() <= 1e-12 * end.max(1.0)) {
+            snapshots.push(Snapshot {
+                t_s: t1,
+                displacement: outcome.state.u.clone(),
+                cell_stress: outcome.stress.iter().flat_map(|s| s.iter().copied()).collect(),
+            });
+        }
+        // A material with no instantaneous viscosity (B2 = 0) jumps elastically when
+        // the plate lets go: that jump is taken as its own near-zero step (a strain
+        // linear over a whole step cannot represent it), after which the segment
+        // starts afresh.
+        let at_kink = physical_kinks.iter().any(|&k| (k - t1).abs() <= 1e-12 * end.max(1.0)) || instant_step;
+        let releasing = (t1 - protocol.release_s).abs() <= 1e-12 * end.max(1.0) && t1 < end;
+        instant_step = releasing && !instant_step && model.region_kernel.iter().any(|k| k.viscous == 0.0);
+        let old = std::mem::replace(&mut state, outcome.state);
+        if at_kink {
+            back.clear();
+            dt = if instant_step { INSTANT_STEP_FRACTION * end } else { first_dt(t1) };
+        } else {
+            dt = match settings.fixed_dt_s {
+                Some(f) => f,
+                None if back.is_empty() => MAX_GROWTH * h,
+                None => h * (0.9 * error_ratio.max(1e-12).powf(-exponent)).clamp(0.2, MAX_GROWTH),
+            };
+            back.insert(0, (old.u, h));
+            back.truncate(2);
+        }
+        progress(Progress { t_s: state.t, end_s: end, steps: step_index });
+    }
+
+    Ok(PressResult {
+        dim: D,
+        num_stress: S,
+        steps,
+        snapshots,
+        markers: tracks,
+        num_factorizations,
+        factor_nonzeros: sys_attached.factor_nonzeros().max(sys_released.as_ref().map_or(0, |s| s.factor_nonzeros())),
+        num_free_dofs: sys_attached.num_free().max(sys_released.as_ref().map_or(0, |s| s.num_free())),
+        segments,
+    })
+}
+
+fn check_settings(s: &Settings) -> Result<(), PressError> {
+    if !(s.rtol.is_finite() && s.rtol > 0.0) {
+        return Err(PressError::BadSettings(format!("rtol = {} must be > 0", s.rtol)));
+    }
+    for (name, v) in [("fixed dt", s.fixed_dt_s), ("max dt", s.max_dt_s)] {
+        if let Some(v) = v {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(PressError::BadSettings(format!("{name} = {v} s must be > 0")));
+            }
+        }
+    }
+    Ok(())
+}
+
+struct StepOutcome<const S: usize> {
+    state: State<S>,
+    stress: Vec<SVector<f64, S>>,
+    segment: ForceSegment,
+    residual: f64,
+}
+
+impl ForceSegment {
+    fn eval_end(&self) -> [f64; 2] {
+        self.eval(self.dt)
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn step<const D: usize, const N: usize, const S: usize>(
+    model: &Model<'_, D, N, S>,
+    s0: &State<S>,
+    dt: f64,
+    bdf: Bdf,
+    t1: f64,
+    constraints: &Constraints,
+    system: &ReducedSystem,
+    factor: &Factor<'_>,
+    single_group: bool,
+    dynamic: bool,
+    step_index: usize,
+) -> Result<StepOutcome<S>, PressError>
+where
+    Simplex<D, N>: ReferenceSimplex<D, N>,
+{
+    let mesh = &model.problem.mesh;
+    let factors: Vec<StepFactors> = model
+        .region_kernel
+        .iter()
+        .map(|k| {
+            let g = step_factor(k, dt, bdf);
+            let mut decay = [0.0; 2];
+            let mut phi = [0.0; 2];
+            for j in 0..k.num_terms {
+                decay[j] = (-k.rates[j] * dt).exp();
+                phi[j] = phi1(k.rates[j] * dt);
+            }
+            StepFactors { g, decay, phi }
+        })
+        .collect();
+
+    // The history part q of the stress at t1 = C1 [g e1 - q]:
+    // q = B2 (alpha1 e0 - alpha2 e_-1)/dt + sum_k a_k (phi_k e0 - decay_k h_k).
+    let history_part = |e: usize| -> SVector<f64, S> {
+        let r = mesh.cell_regions[e] as usize;
+        let (k, f) = (&model.region_kernel[r], &factors[r]);
+        let mut q = (s0.strain[e] * bdf.alpha[1] - s0.strain_prev[e] * bdf.alpha[2]) * (k.viscous / dt);
+        for j in 0..k.num_terms {
+            q += (s0.strain[e] * f.phi[j] - s0.history[e][j] * f.decay[j]) * k.amplitudes[j];
+        }
+        q
+    };
+    // History force: f_hist = sum_e w B^T C1 q.
+    let cell_forces: Vec<[SVector<f64, D>; N]> = map_collect(mesh.num_cells(), |e| {
+        let r = mesh.cell_regions[e] as usize;
+        let sigma = model.region_c1[r] * history_part(e);
+        std::array::from_fn(|a| nodal_force::<D, N, S>(&model.geometry[e], &sigma, a))
+    });
+    let ndof = model.num_dofs();
+    let mut rhs = vec![0.0; ndof];
+    assemble_vector::<D, N>(&model.topology, &cell_forces, &mut rhs);
+    drop(cell_forces);
+    for (r, b) in rhs.iter_mut().zip(&model.body_force) {
+        *r += b;
+    }
+    let inv_bdt2 = 1.0 / (NEWMARK_BETA * dt * dt);
+    if dynamic {
+        for d in 0..ndof {
+            rhs[d] += model.mass[d] * (inv_bdt2 * (s0.u[d] + dt * s0.v[d]) + (0.5 / NEWMARK_BETA - 1.0) * s0.a[d]);
+        }
+    }
+
+    // Held values, then the coupling of held dofs into the free rows.
+    let mut u1 = vec![0.0; ndof];
+    model.prescribe(constraints, t1, &mut u1);
+    let apply = |x: &[f64], y: &mut [f64]| {
+        let mut tmp = vec![0.0; ndof];
+        y.iter_mut().for_each(|v| *v = 0.0);
+        for g in &model.groups {
+            model.pattern.mul_vec(&g.stiffness, x, &mut tmp);
+            let c = step_factor(&g.kernel, dt, bdf);
+            for (yi, ti) in y.iter_mut().zip(&tmp) {
+                *yi += c * ti;
+            }
+        }
+        if dynamic {
+            for d in 0..ndof {
+                y[d] += model.mass[d] * inv_bdt2 * x[d];
+            }
+        }
+    };
+    let mut coupling = vec![0.0; ndof];
+    apply(&u1, &mut coupling);
+    let mut x: Vec<f64> = system.dof_of_free.iter().map(|&d| rhs[d as usize] - coupling[d as usize]).collect();
+    factor.solve_in_place(&mut x);
+    if single_group {
+        let g = step_factor(&model.groups[0].kernel, dt, bdf);
+        x.iter_mut().for_each(|v| *v /= g);
+    }
+    for (i, &d) in system.dof_of_free.iter().enumerate() {
+        let d = d as usize;
+        if !x[i].is_finite() {
+            let node = d / D;
+            return Err(PressError::NonFinite {
+                step: step_index,
+                time_s: t1,
+                element: model.cell_of_node(node),
+                node,
+            });
+        }
+        u1[d] = x[i];
+    }
+    // Residual of the free rows.
+    let mut y = vec![0.0; ndof];
+    apply(&u1, &mut y);
+    let (mut rr, mut bb) = (0.0, 0.0);
+    for &d in &system.dof_of_free {
+        let d = d as usize;
+        rr += (y[d] - rhs[d]).powi(2);
+        bb += rhs[d].powi(2);
+    }
+    let residual = if bb > 0.0 { (rr / bb).sqrt() } else { rr.sqrt() };
+
+    // Cell update: strain, exact history, stress, inversion check.
+    let updated: Vec<CellUpdate<S>> = map_collect(mesh.num_cells(), |e| {
+        let r = mesh.cell_regions[e] as usize;
+        let (k, f) = (&model.region_kernel[r], &factors[r]);
+        let ue = model.cell_displacements(e, &u1);
+        let e1 = cell_strain::<D, N, S>(&model.geometry[e].gradients, &ue);
+        let de = e1 - s0.strain[e];
+        let mut h1 = [SVector::<f64, S>::zeros(); 2];
+        for j in 0..k.num_terms {
+            h1[j] = s0.history[e][j] * f.decay[j] + de * f.phi[j];
+        }
+        let stress = model.region_c1[r] * (e1 * f.g - history_part(e));
+        (e1, h1, stress, model.volume_ratio(e, &ue))
+    });
+    if let Some((e, ratio)) = updated.iter().enumerate().map(|(e, x)| (e, x.3)).find(|(_, r)| !(*r > 0.0)) {
+        return Err(PressError::Inverted { step: step_index, time_s: t1, element: e, ratio });
+    }
+
+    // Reaction functionals for exact dense force output.
+    let nreg = model.region_kernel.len();
+    let mut terms: Vec<RegionTerms> = (0..nreg)
+        .map(|r| RegionTerms {
+            kernel: model.region_kernel[r],
+            rate: [0.0; 2],
+            rate_end: [0.0; 2],
+            rate_start: [0.0; 2],
+            strain: [0.0; 2],
+            history: [[0.0; 2]; 2],
+            plate_attached: constraints.plate_attached,
+        })
+        .collect();
+    for (side, list) in model.functionals.iter().enumerate() {
+        for f in list {
+            let r = mesh.cell_regions[f.cell] as usize;
+            let c: &SMatrix<f64, S, S> = &model.region_c1[r];
+            let rc = c * f.rho; // C1 symmetric: rho . (C1 x) = (C1 rho) . x
+            let t = &mut terms[r];
+            let e1 = &updated[f.cell].0;
+            t.rate[side] += rc.dot(&(e1 - s0.strain[f.cell])) / dt;
+            t.rate_end[side] += rc
+                .dot(&(e1 * bdf.alpha[0] - s0.strain[f.cell] * bdf.alpha[1] + s0.strain_prev[f.cell] * bdf.alpha[2]))
+                / dt;
+            t.strain[side] += rc.dot(&s0.strain[f.cell]);
+            for j in 0..t.kernel.num_terms {
+                t.history[j][side] += rc.dot(&s0.history[f.cell][j]);
+            }
+        }
+    }
+    for t in &mut terms {
+        t.rate_start = t.rate;
+    }
+    let segment = ForceSegment {
+        t0: s0.t,
+        dt,
+        terms,
+        constant: [model.body_reaction[0], if constraints.plate_attached { model.body_reaction[1] } else { 0.0 }],
+        detached_ends: None,
+    };
+
+    // Dynamic state update (held dofs move with the plate at constant velocity).
+    let (mut v1, mut a1) = (vec![0.0; ndof], vec![0.0; ndof]);
+    if dynamic {
+        for &d in &system.dof_of_free {
+            let d = d as usize;
+            a1[d] = inv_bdt2 * (u1[d] - s0.u[d] - dt * s0.v[d]) - (0.5 / NEWMARK_BETA - 1.0) * s0.a[d];
+            v1[d] = s0.v[d] + dt * ((1.0 - NEWMARK_GAMMA) * s0.a[d] + NEWMARK_GAMMA * a1[d]);
+        }
+        let vel = model.problem.protocol.velocity(0.5 * (s0.t + t1));
+        for &d in &constraints.plate_dofs {
+            v1[d] = -vel;
+        }
+    }
+
+    let mut strain = Vec::with_capacity(updated.len());
+    let mut history = Vec::with_capacity(updated.len());
+    let mut stress = Vec::with_capacity(updated.len());
+    for (e1, h1, s1, _) in updated {
+        strain.push(e1);
+        history.push(h1);
+        stress.push(s1);
+    }
+    let strain_prev = s0.strain.clone();
+    Ok(StepOutcome {
+        state: State { t: t1, u: u1, v: v1, a: a1, strain, strain_prev, history },
+        stress,
+        segment,
+        residual,
+    })
+}
+
+/// Records marker positions at their requested times inside `(t0, t1]` (or at 0).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn emit_markers<const D: usize, const N: usize, const S: usize>(
+    model: &Model<'_, D, N, S>,
+    tracks: &mut [MarkerTrack],
+    next: &mut [usize],
+    u0: &[f64],
+    u1: &[f64],
+    t0: f64,
+    t1: f64,
+    initial: bool,
+) where
+    Simplex<D, N>: ReferenceSimplex<D, N>,
+{
+    if tracks.is_empty() {
+        return;
+    }
+    let p0 = model.marker_positions(u0);
+    let p1 = model.marker_positions(u1);
+    for (m, req) in model.problem.markers.iter().enumerate() {
+        while next[m] < req.times.len() {
+            let t = req.times[next[m]];
+            let inside = if initial { t <= 0.0 } else { t <= t1 * (1.0 + 1e-12) };
+            if !inside {
+                break;
+            }
+            let w = if initial || t1 <= t0 { 1.0 } else { ((t - t0) / (t1 - t0)).clamp(0.0, 1.0) };
+            let pos = (0..D).map(|k| p0[m][k] + w * (p1[m][k] - p0[m][k])).collect();
+            tracks[m].samples.push((t, pos));
+            next[m] += 1;
+        }
+    }
 }

@@ -1,0 +1,372 @@
+//! What every integrator shares: cell geometry, the assembled unit stiffness of
+//! each kernel group, the lumped mass, the constraint sets, the reaction
+//! functionals and the located markers.
+
+use nalgebra::{SMatrix, SVector};
+use rayon::prelude::*;
+
+use super::{Attachment, PressError, PressProblem};
+use crate::assembly::{assemble_stiffness, CsrPattern, Topology};
+use crate::element::{cell_geometry, strain_block, unit_young_matrix, CellGeometry, ReferenceSimplex, Simplex};
+use crate::material::RelaxationKernel;
+use crate::mesh::MeshError;
+
+/// Standard gravity [mm/s^2].
+pub(crate) const GRAVITY_MM_S2: f64 = 9810.0;
+
+/// Regions whose kernels are equal up to a factor share one assembled matrix.
+pub(crate) struct KernelGroup {
+    /// The group's reference kernel (its first region's).
+    pub kernel: RelaxationKernel,
+    /// `sum_r s_r K1_r` over the group's regions, values on the model's pattern.
+    pub stiffness: Vec<f64>,
+}
+
+/// A constraint set: which dofs are held, and how their values follow the plate.
+#[derive(Clone)]
+pub(crate) struct Constraints {
+    pub held: Vec<bool>,
+    /// Dofs that follow the plate's displacement: `u = -d(t)` (the top's y dofs).
+    pub plate_dofs: Vec<usize>,
+    /// Whether the plate holds the top face.
+    pub plate_attached: bool,
+}
+
+/// A boundary cell's reaction functional: the y reaction summed over a node set is
+/// `rho . s` for the cell stress `s`.
+pub(crate) struct Functional<const S: usize> {
+    pub cell: usize,
+    pub rho: SVector<f64, S>,
+}
+
+/// A marker located in its cell.
+pub(crate) struct LocatedMarker<const N: usize> {
+    pub cell: usize,
+    pub barycentric: [f64; N],
+}
+
+pub(crate) struct Model<'p, const D: usize, const N: usize, const S: usize> {
+    pub problem: &'p PressProblem<D, N, S>,
+    pub geometry: Vec<CellGeometry<D, N>>,
+    pub topology: Topology,
+    pub pattern: CsrPattern,
+    /// Per region: kernel, unit-Young matrix, group index, scale within the group.
+    pub region_kernel: Vec<RelaxationKernel>,
+    pub region_c1: Vec<SMatrix<f64, S, S>>,
+    pub groups: Vec<KernelGroup>,
+    /// Lumped mass per dof [t].
+    pub mass: Vec<f64>,
+    /// External body force per dof (gravity) [N].
+    pub body_force: Vec<f64>,
+    pub attached: Constraints,
+    pub released: Constraints,
+    /// Bottom (index 0) and plate (index 1) functionals; the plate one is negated so
+    /// both read compression positive.
+    pub functionals: [Vec<Functional<S>>; 2],
+    /// Constant parts of the reactions from body forces [N].
+    pub body_reaction: [f64; 2],
+    pub markers: Vec<LocatedMarker<N>>,
+    /// Displacement scale for error control [mm].
+    pub displacement_scale: f64,
+}
+
+impl<'p, const D: usize, const N: usize, const S: usize> Model<'p, D, N, S>
+where
+    Simplex<D, N>: ReferenceSimplex<D, N>,
+{
+    pub fn new(problem: &'p PressProblem<D, N, S>) -> Result<Self, PressError> {
+        problem.validate()?;
+        let mesh = &problem.mesh;
+        let thickness = problem.formulation.thickness();
+        let geometry = (0..mesh.num_cells())
+            .into_par_iter()
+            .map(|e| {
+                cell_geometry::<D, N>(&mesh.cell_coordinates(e), thickness)
+                    .map_err(|measure| MeshError::InvertedElement { element: e, measure })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let topology = Topology::new(mesh.num_nodes(), &mesh.cells);
+        let pattern = CsrPattern::new(&topology, D);
+
+        let region_kernel: Vec<RelaxationKernel> = problem.materials.iter().map(|m| m.relaxation()).collect();
+        let region_c1: Vec<SMatrix<f64, S, S>> =
+            problem.materials.iter().map(|m| unit_young_matrix::<S>(problem.formulation, m.poisson)).collect();
+        // Group regions with proportional kernels.
+        let mut group_of_region = vec![0usize; region_kernel.len()];
+        let mut scale_of_region = vec![1.0; region_kernel.len()];
+        let mut group_kernels: Vec<RelaxationKernel> = Vec::new();
+        for (r, k) in region_kernel.iter().enumerate() {
+            match group_kernels.iter().enumerate().find_map(|(g, gk)| k.proportional_to(gk).map(|s| (g, s))) {
+                Some((g, s)) => {
+                    group_of_region[r] = g;
+                    scale_of_region[r] = s;
+                }
+                None => {
+                    group_of_region[r] = group_kernels.len();
+                    group_kernels.push(*k);
+                }
+            }
+        }
+        let groups = group_kernels
+            .iter()
+            .enumerate()
+            .map(|(g, &kernel)| {
+                let cell_matrix = |e: usize| {
+                    let r = mesh.cell_regions[e] as usize;
+                    (group_of_region[r] == g).then(|| region_c1[r] * scale_of_region[r])
+                };
+                let stiffness =
+                    assemble_stiffness::<D, N, S>(&topology, &pattern, &mesh.cells, &geometry, &cell_matrix);
+                KernelGroup { kernel, stiffness }
+            })
+            .collect();
+
+        // Lumped mass: each node takes 1/N of its cells' mass.
+        let mut mass = vec![0.0; mesh.num_nodes() * D];
+        for (e, cell) in mesh.cells.iter().enumerate() {
+            let m = problem.density_t_mm3 * geometry[e].weight / N as f64;
+            for &v in cell {
+                for k in 0..D {
+                    mass[v as usize * D + k] += m;
+                }
+            }
+        }
+        let mut body_force = vec![0.0; mass.len()];
+        if problem.protocol.gravity {
+            for i in 0..mesh.num_nodes() {
+                body_force[i * D + 1] = -GRAVITY_MM_S2 * mass[i * D + 1];
+            }
+        }
+
+        let bottom = mesh.node_set("bottom")?.to_vec();
+        let top = mesh.node_set("top")?.to_vec();
+        let attached = constraints::<D, N>(mesh, &bottom, &top, problem.protocol.support, Some(problem.protocol.plate));
+        let released = constraints::<D, N>(mesh, &bottom, &top, problem.protocol.support, None);
+
+        let functionals =
+            [functional(&geometry, &topology, &bottom, 1.0), functional(&geometry, &topology, &top, -1.0)];
+        let body_reaction = [
+            -bottom.iter().map(|&i| body_force[i as usize * D + 1]).sum::<f64>(),
+            top.iter().map(|&i| body_force[i as usize * D + 1]).sum::<f64>(),
+        ];
+
+        let markers =
+            problem.markers.iter().map(|m| locate(mesh, &m.name, &m.position)).collect::<Result<Vec<_>, _>>()?;
+
+        let (lo, hi) = mesh.bounding_box();
+        let size = (0..D).map(|k| hi[k] - lo[k]).fold(f64::INFINITY, f64::min);
+        let dmax = problem.protocol.waypoints.iter().map(|w| w[1].abs()).fold(0.0, f64::max);
+        let displacement_scale = dmax.max(1e-3 * size);
+
+        Ok(Self {
+            problem,
+            geometry,
+            topology,
+            pattern,
+            region_kernel,
+            region_c1,
+            groups,
+            mass,
+            body_force,
+            attached,
+            released,
+            functionals,
+            body_reaction,
+            markers,
+            displacement_scale,
+        })
+    }
+
+    pub fn num_dofs(&self) -> usize {
+        self.pattern.num_dofs()
+    }
+
+    /// The constraints in force for a step ending at `t_end`.
+    pub fn constraints_at(&self, t_end: f64) -> &Constraints {
+        if t_end <= self.problem.protocol.release_s * (1.0 + 1e-12) {
+            &self.attached
+        } else {
+            &self.released
+        }
+    }
+
+    /// Writes the held values at time `t` into `u` (zero except the plate dofs).
+    pub fn prescribe(&self, c: &Constraints, t: f64, u: &mut [f64]) {
+        for (d, &h) in c.held.iter().enumerate() {
+            if h {
+                u[d] = 0.0;
+            }
+        }
+        let d = self.problem.protocol.displacement(t);
+        for &dof in &c.plate_dofs {
+            u[dof] = -d;
+        }
+    }
+
+    /// Nodal displacements of cell `e` from a global vector.
+    #[inline]
+    pub fn cell_displacements(&self, e: usize, u: &[f64]) -> [SVector<f64, D>; N] {
+        self.problem.mesh.cells[e].map(|v| SVector::<f64, D>::from_fn(|k, _| u[v as usize * D + k]))
+    }
+
+    /// `det(I + grad u)` of cell `e`: the deformed-to-initial volume ratio.
+    pub fn volume_ratio(&self, e: usize, u: &[SVector<f64, D>; N]) -> f64 {
+        let g = &self.geometry[e].gradients;
+        let mut f = SMatrix::<f64, D, D>::identity();
+        for a in 0..N {
+            for i in 0..D {
+                for j in 0..D {
+                    f[(i, j)] += u[a][i] * g[(a, j)];
+                }
+            }
+        }
+        let (det, _) = <Simplex<D, N> as ReferenceSimplex<D, N>>::det_and_inverse(&f);
+        det
+    }
+
+    /// Marker positions for the displacement `u`.
+    pub fn marker_positions(&self, u: &[f64]) -> Vec<Vec<f64>> {
+        self.markers
+            .iter()
+            .zip(&self.problem.markers)
+            .map(|(m, req)| {
+                let cell = &self.problem.mesh.cells[m.cell];
+                (0..D)
+                    .map(|k| {
+                        req.position[k] + (0..N).map(|a| m.barycentric[a] * u[cell[a] as usize * D + k]).sum::<f64>()
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The first cell holding `node` (for error messages).
+    pub fn cell_of_node(&self, node: usize) -> usize {
+        self.topology.node_cells[self.topology.cell_ptr[node]].0 as usize
+    }
+}
+
+fn constraints<const D: usize, const N: usize>(
+    mesh: &crate::mesh::SimplexMesh<D, N>,
+    bottom: &[u32],
+    top: &[u32],
+    support: Attachment,
+    plate: Option<Attachment>,
+) -> Constraints
+where
+    Simplex<D, N>: ReferenceSimplex<D, N>,
+{
+    let mut held = vec![false; mesh.num_nodes() * D];
+    for &i in bottom {
+        let i = i as usize;
+        match support {
+            Attachment::Glued => (0..D).for_each(|k| held[i * D + k] = true),
+            Attachment::Frictionless => held[i * D + 1] = true,
+        }
+    }
+    let mut plate_dofs = Vec::new();
+    if let Some(plate) = plate {
+        for &i in top {
+            let i = i as usize;
+            plate_dofs.push(i * D + 1);
+            held[i * D + 1] = true;
+            if plate == Attachment::Glued {
+                for k in (0..D).filter(|&k| k != 1) {
+                    held[i * D + k] = true;
+                }
+            }
+        }
+    }
+    // Statically determinate pins against the rigid motions in the x(-z) plane when
+    // no face is glued: node A (min x, then min z) holds x and z; in 3D node B (max x
+    // at A's z) holds z. They carry no load, so they add no stress.
+    let some_face_glued = support == Attachment::Glued || plate == Some(Attachment::Glued);
+    if !some_face_glued {
+        let key = |i: u32| {
+            let p = mesh.nodes[i as usize];
+            (p[0], if D == 3 { p[2] } else { 0.0 })
+        };
+        let a = *bottom
+            .iter()
+            .min_by(|&&i, &&j| key(i).partial_cmp(&key(j)).unwrap())
+            .expect("the bottom set is not empty");
+        held[a as usize * D] = true;
+        if D == 3 {
+            held[a as usize * D + 2] = true;
+            let za = mesh.nodes[a as usize][2];
+            let b = bottom.iter().copied().filter(|&i| i != a).min_by(|&i, &j| {
+                let score = |n: u32| {
+                    let p = mesh.nodes[n as usize];
+                    ((p[2] - za).abs(), -p[0])
+                };
+                score(i).partial_cmp(&score(j)).unwrap()
+            });
+            if let Some(b) = b {
+                held[b as usize * D + 2] = true;
+            }
+        }
+    }
+    Constraints { held, plate_dofs, plate_attached: plate.is_some() }
+}
+
+fn functional<const D: usize, const N: usize, const S: usize>(
+    geometry: &[CellGeometry<D, N>],
+    topology: &Topology,
+    set: &[u32],
+    sign: f64,
+) -> Vec<Functional<S>> {
+    let mut rho: std::collections::BTreeMap<usize, SVector<f64, S>> = Default::default();
+    for &i in set {
+        let i = i as usize;
+        for &(e, a) in &topology.node_cells[topology.cell_ptr[i]..topology.cell_ptr[i + 1]] {
+            let g = &geometry[e as usize];
+            let b = strain_block::<D, N, S>(&g.gradients, a as usize);
+            *rho.entry(e as usize).or_insert_with(SVector::zeros) += b.column(1) * (g.weight * sign);
+        }
+    }
+    rho.into_iter().map(|(cell, rho)| Functional { cell, rho }).collect()
+}
+
+fn locate<const D: usize, const N: usize>(
+    mesh: &crate::mesh::SimplexMesh<D, N>,
+    name: &str,
+    p: &[f64],
+) -> Result<LocatedMarker<N>, PressError>
+where
+    Simplex<D, N>: ReferenceSimplex<D, N>,
+{
+    assert_eq!(p.len(), D, "marker `{name}` needs {D} coordinates");
+    let best = (0..mesh.num_cells())
+        .into_par_iter()
+        .map(|e| {
+            let x = mesh.cell_coordinates(e);
+            let g = cell_geometry::<D, N>(&x, 1.0).expect("validated mesh");
+            let mut bary = [0.0; N];
+            let mut sum = 0.0;
+            for a in 1..N {
+                bary[a] = (0..D).map(|k| g.gradients[(a, k)] * (p[k] - x[0][k])).sum();
+                sum += bary[a];
+            }
+            bary[0] = 1.0 - sum;
+            let worst = bary.iter().copied().fold(f64::INFINITY, f64::min);
+            (worst, e, bary)
+        })
+        .reduce(
+            || (f64::NEG_INFINITY, usize::MAX, [0.0; N]),
+            |a, b| if (b.0, std::cmp::Reverse(b.1)) > (a.0, std::cmp::Reverse(a.1)) { b } else { a },
+        );
+    let (worst, cell, mut bary) = best;
+    // Points a little outside a faceted surface (e.g. a cylinder) are projected in.
+    if worst < -0.25 {
+        let x = mesh.cell_coordinates(cell);
+        let centroid: Vec<f64> = (0..D).map(|k| x.iter().map(|q| q[k]).sum::<f64>() / N as f64).collect();
+        let distance_mm = (0..D).map(|k| (p[k] - centroid[k]).powi(2)).sum::<f64>().sqrt();
+        return Err(PressError::MarkerOutside { name: name.to_string(), position: p.to_vec(), distance_mm });
+    }
+    for b in &mut bary {
+        *b = b.max(0.0);
+    }
+    let s: f64 = bary.iter().sum();
+    bary.iter_mut().for_each(|b| *b /= s);
+    Ok(LocatedMarker { cell, barycentric: bary })
+}

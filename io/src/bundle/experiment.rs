@@ -1,0 +1,243 @@
+//! `experiment.toml` as typed structs: the keys of experiment-format.md v1 and the
+//! project's extensions, each struct refusing unknown keys except `[extra]`.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use super::material_spec::MaterialSpec;
+
+/// The only format this crate reads and writes.
+pub const FORMAT_V1: &str = "wagashi-experiment/1";
+
+/// The content of `experiment.toml`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Experiment {
+    /// Must be [`FORMAT_V1`].
+    pub format: String,
+    /// Free text, unique within a campaign.
+    pub name: String,
+    /// 3: solid tetrahedra; 2: plane stress in x-y with thickness `size_mm[2]`.
+    pub dimension: u32,
+    /// The specimen's shape, size and materials.
+    pub specimen: Specimen,
+    /// Material definitions by name; may be empty when they come from a
+    /// `--materials` file (see [`super::read_bundle_with`]). Default: none.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub materials: BTreeMap<String, MaterialSpec>,
+    /// The loading.
+    pub protocol: ProtocolSpec,
+    /// What was measured (or simulated); default: nothing.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub data: Option<DataSpec>,
+    /// Any table: kept and written back, never interpreted. Default: none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub extra: Option<toml::Table>,
+}
+
+/// The specimen's shape.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Shape {
+    /// A box `[0, W] x [0, H] x [0, T]` (x, y, z); `size_mm = [W, H, T]`.
+    Block,
+    /// A cylinder of `radius_mm` around the y axis (x = z = 0), `height_mm` tall; 3D only.
+    Cylinder,
+    /// A closed surface (OBJ, glTF or GLB) named by `surface`.
+    Surface,
+}
+
+impl Shape {
+    /// The name as the format spells it.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Shape::Block => "block",
+            Shape::Cylinder => "cylinder",
+            Shape::Surface => "surface",
+        }
+    }
+}
+
+/// `[specimen]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Specimen {
+    /// Block, cylinder or surface.
+    pub shape: Shape,
+    /// Block only: `[W, H, T]` [mm], each > 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub size_mm: Option<Vec<f64>>,
+    /// Cylinder only: radius [mm], > 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius_mm: Option<f64>,
+    /// Cylinder only: height along y [mm], > 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub height_mm: Option<f64>,
+    /// The specimen's mass [g], > 0; optional.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass_g: Option<f64>,
+    /// Project extension: density [g/cm^3], > 0; optional. When absent the engine
+    /// takes `mass_g` / volume, or else 1 g/cm^3.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub density_g_cm3: Option<f64>,
+    /// The one material of an unlayered block or cylinder (or of a whole surface).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub material: Option<String>,
+    /// Block only: layers stacked along y, bottom first; thicknesses sum to H.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub layers: Vec<Layer>,
+    /// Surface only: the closed surface file, relative to the bundle folder.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub surface: Option<String>,
+    /// Surface only: surface region (OBJ object/group, glTF mesh) -> material name.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub regions: BTreeMap<String, String>,
+}
+
+impl Specimen {
+    /// The block's `[W, H, T]` [mm], when it has exactly three entries.
+    pub fn block_size(&self) -> Option<[f64; 3]> {
+        match self.size_mm.as_deref() {
+            Some(&[w, h, t]) => Some([w, h, t]),
+            _ => None,
+        }
+    }
+
+    /// The material names this specimen refers to, each once, in order of appearance
+    /// (`material`, then layers bottom first, then surface regions).
+    pub fn material_names(&self) -> Vec<&str> {
+        let mut names: Vec<&str> = Vec::new();
+        let all = self
+            .material
+            .iter()
+            .map(String::as_str)
+            .chain(self.layers.iter().map(|l| l.material.as_str()))
+            .chain(self.regions.values().map(String::as_str));
+        for n in all {
+            if !names.contains(&n) {
+                names.push(n);
+            }
+        }
+        names
+    }
+}
+
+/// `[[specimen.layers]]`: one layer of a block.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Layer {
+    /// The layer's material name.
+    pub material: String,
+    /// Its thickness along y [mm], > 0.
+    pub thickness_mm: f64,
+}
+
+/// The rigid tool that presses the specimen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Tool {
+    /// A rigid plate larger than the top face (the only tool simulated today).
+    Plate,
+    /// A sphere of `tool_radius_mm`.
+    Sphere,
+    /// A flat cylindrical punch of `tool_radius_mm`.
+    Punch,
+    /// A closed rigid shape from `tool_surface`.
+    Surface,
+}
+
+impl Tool {
+    /// The name as the format spells it.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Tool::Plate => "plate",
+            Tool::Sphere => "sphere",
+            Tool::Punch => "punch",
+            Tool::Surface => "surface",
+        }
+    }
+}
+
+/// How a face is held by the tool or the floor.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Contact {
+    /// No slip; a glued tool holds on until `release_s`.
+    Glued,
+    /// Slides freely.
+    Frictionless,
+    /// Coulomb friction with coefficient `friction`.
+    Friction,
+}
+
+impl Contact {
+    /// The name as the format spells it.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Contact::Glued => "glued",
+            Contact::Frictionless => "frictionless",
+            Contact::Friction => "friction",
+        }
+    }
+}
+
+/// `[protocol]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ProtocolSpec {
+    /// The tool.
+    pub tool: Tool,
+    /// Sphere and punch only: the tool's radius [mm], > 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tool_radius_mm: Option<f64>,
+    /// Surface tool only: the tool's closed surface file, relative to the bundle folder.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tool_surface: Option<String>,
+    /// How the tool holds the specimen's top.
+    pub tool_contact: Contact,
+    /// How the floor holds the specimen's bottom face.
+    pub support: Contact,
+    /// Coulomb coefficient, >= 0; required when `tool_contact` or `support` is
+    /// `"friction"`, refused otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub friction: Option<f64>,
+    /// `[t_s, d_mm]`: the tool's downward displacement from first touch, piecewise
+    /// linear; times >= 0 and strictly increasing.
+    pub waypoints: Vec<[f64; 2]>,
+    /// The tool leaves the specimen at this time [s], > 0, not before the last
+    /// waypoint that pushes.
+    pub release_s: f64,
+    /// The trial ends here [s], > 0, not before the last waypoint that pushes.
+    pub end_s: f64,
+    /// Project extension: gravity along -y. Default false.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub gravity: bool,
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
+}
+
+impl ProtocolSpec {
+    /// The time of the last waypoint that ends a segment of changing displacement
+    /// [s] (0 when the tool never moves).
+    pub fn last_push_s(&self) -> f64 {
+        self.waypoints.windows(2).filter(|p| p[1][1] != p[0][1]).map(|p| p[1][0]).fold(0.0, f64::max)
+    }
+}
+
+/// `[data]`: the measured (or simulated) files, relative to the bundle folder.
+#[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DataSpec {
+    /// `t_s,force_N`: the force on the bottom sensor, compression positive.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub force: Option<String>,
+    /// `marker,t_s,x_mm,y_mm[,z_mm]`: marker positions.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub markers: Option<String>,
+    /// The force sensor was zeroed with the specimen on it; default: not stated.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub force_tared: Option<bool>,
+}

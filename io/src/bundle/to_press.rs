@@ -1,0 +1,295 @@
+//! From a bundle to the engine's press problem.
+//!
+//! - Mesh: 3D blocks with `fem_core::mesh::block` / `layered_block`, 2D blocks with
+//!   `rectangle` / `layered_rectangle` in plane stress of thickness `T = size_mm[2]`,
+//!   3D cylinders with `cylinder`. Region names are material names; the materials
+//!   vector follows the mesh's region order.
+//! - Density [t/mm^3]: `density_g_cm3` x 1e-9, else `mass_g` / volume (the exact
+//!   volume of the shape, W H T or pi R^2 H) x 1e-6, else 1 g/cm^3.
+//! - Protocol: the plate tool with `glued` or `frictionless` contact and support.
+//!   Sphere, punch and surface tools, `friction` contact and `shape = "surface"` are
+//!   valid bundle content that the engine does not simulate yet:
+//!   [`BundleError::Unsupported`].
+//! - Markers: one request per marker at its initial position, reported at every
+//!   time the marker was measured (`t_s = 0` included). No extra snapshots.
+
+use fem_core::element::Formulation;
+use fem_core::material::{Material, MaterialError};
+use fem_core::mesh::{self, Layer};
+use fem_core::press::{AnyPress, Attachment, MarkerRequest, PlanePress, PressError, Protocol, SolidPress};
+
+use super::experiment::{Contact, Shape, Tool};
+use super::read::Bundle;
+use super::validate::validate_experiment;
+use crate::error::BundleError;
+
+const SURFACE_UNSUPPORTED: &str =
+    "shape = \"surface\" is valid bundle content but not simulated yet: it arrives with surface meshing";
+
+/// 1 g/cm^3 in t/mm^3.
+pub const G_CM3_IN_T_MM3: f64 = 1e-9;
+
+impl Bundle {
+    fn unsupported(&self, field: &str, what: String) -> BundleError {
+        BundleError::Unsupported {
+            file: self.experiment_file(),
+            line: self.line_of(field),
+            field: field.to_string(),
+            what,
+        }
+    }
+
+    fn engine_error(&self, source: PressError) -> BundleError {
+        let (file, line, field) = match &source {
+            PressError::Material { region, source: m } => {
+                let key = match m {
+                    MaterialError::NotPositive { name, .. } if name.starts_with('E') => {
+                        format!("{name}_MPa")
+                    }
+                    MaterialError::NotPositive { name, .. } => format!("{name}_MPa_s"),
+                    MaterialError::PoissonOutOfRange { .. } => "poisson".to_string(),
+                };
+                let field = format!("materials.{region}.{key}");
+                match self.experiment.materials.get(region).and_then(|s| s.location(&key)) {
+                    Some((file, line)) => (file.to_path_buf(), line, field),
+                    None => (self.experiment_file(), self.line_of(&field), field),
+                }
+            }
+            PressError::Mesh(_) | PressError::MaterialCount { .. } => {
+                (self.experiment_file(), self.line_of("specimen"), "specimen".to_string())
+            }
+            PressError::MarkerOutside { .. } => {
+                (self.experiment_file(), self.line_of("data.markers"), "data.markers".to_string())
+            }
+            _ => (self.experiment_file(), self.line_of("protocol"), "protocol".to_string()),
+        };
+        BundleError::Engine { file, line, field, source }
+    }
+
+    /// Refuses what the engine cannot simulate yet.
+    fn check_supported(&self) -> Result<(), BundleError> {
+        let e = &self.experiment;
+        if e.specimen.shape == Shape::Surface {
+            return Err(self.unsupported("specimen.shape", SURFACE_UNSUPPORTED.into()));
+        }
+        let p = &e.protocol;
+        if p.tool != Tool::Plate {
+            return Err(self.unsupported(
+                "protocol.tool",
+                format!(
+                    "tool = \"{}\" is valid bundle content but not simulated yet: it arrives with rigid-tool contact",
+                    p.tool.as_str()
+                ),
+            ));
+        }
+        for (key, c) in [("protocol.tool_contact", p.tool_contact), ("protocol.support", p.support)] {
+            if c == Contact::Friction {
+                return Err(self.unsupported(
+                    key,
+                    "\"friction\" is valid bundle content but not simulated yet: it arrives with rigid-tool contact"
+                        .into(),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The specimen's volume [mm^3] from its nominal size (W H T; pi R^2 H), when known.
+    pub fn volume_mm3(&self) -> Option<f64> {
+        let s = &self.experiment.specimen;
+        match s.shape {
+            Shape::Block => s.block_size().map(|[w, h, t]| w * h * t),
+            Shape::Cylinder => Some(std::f64::consts::PI * s.radius_mm?.powi(2) * s.height_mm?),
+            Shape::Surface => None,
+        }
+    }
+
+    /// The density [t/mm^3]: `density_g_cm3`, else `mass_g` / volume, else 1 g/cm^3.
+    pub fn density_t_mm3(&self) -> f64 {
+        let s = &self.experiment.specimen;
+        if let Some(rho) = s.density_g_cm3 {
+            return rho * G_CM3_IN_T_MM3;
+        }
+        match (s.mass_g, self.volume_mm3()) {
+            // g/mm^3 -> t/mm^3.
+            (Some(m), Some(v)) => m / v * 1e-6,
+            _ => G_CM3_IN_T_MM3,
+        }
+    }
+
+    /// The engine's protocol (plate tool only).
+    pub fn protocol(&self) -> Result<Protocol, BundleError> {
+        self.check_supported()?;
+        let p = &self.experiment.protocol;
+        let attachment = |c: Contact| match c {
+            Contact::Glued => Attachment::Glued,
+            // Friction was refused by `check_supported`.
+            Contact::Frictionless | Contact::Friction => Attachment::Frictionless,
+        };
+        Ok(Protocol {
+            waypoints: p.waypoints.clone(),
+            release_s: p.release_s,
+            end_s: p.end_s,
+            plate: attachment(p.tool_contact),
+            support: attachment(p.support),
+            gravity: p.gravity,
+        })
+    }
+
+    /// One request per marker: its initial position, reported at every measured time.
+    pub fn marker_requests(&self) -> Vec<MarkerRequest> {
+        self.markers
+            .iter()
+            .map(|m| MarkerRequest {
+                name: m.name.clone(),
+                position: m.initial_position().map(<[f64]>::to_vec).unwrap_or_default(),
+                times: m.samples.iter().map(|s| s.t_s).collect(),
+            })
+            .collect()
+    }
+
+    /// The engine materials of `regions` (material names), in that order.
+    pub fn materials_for(&self, regions: &[String]) -> Result<Vec<Material>, BundleError> {
+        regions
+            .iter()
+            .map(|name| {
+                let spec = self.experiment.materials.get(name).ok_or_else(|| BundleError::Invalid {
+                    file: self.experiment_file(),
+                    line: self.line_of("specimen"),
+                    field: "specimen".into(),
+                    cause: format!("material \"{name}\" is not defined"),
+                })?;
+                spec.to_material().map_err(|missing| {
+                    let field = format!("materials.{name}.{}", missing.key);
+                    let (file, line) = match spec.location("") {
+                        Some((f, l)) => (f.to_path_buf(), l),
+                        None => (self.experiment_file(), self.line_of(&field)),
+                    };
+                    BundleError::Invalid {
+                        file,
+                        line,
+                        field,
+                        cause: format!(
+                            "missing: a simulation needs every parameter of the {} model (this material lacks {})",
+                            spec.model.as_str(),
+                            spec.missing().join(", ")
+                        ),
+                    }
+                })
+            })
+            .collect()
+    }
+
+    /// The engine's press problem at element size `size_mm` [mm], checked by the
+    /// engine (`PressProblem::validate`); no extra snapshot times.
+    pub fn to_press(&self, size_mm: f64) -> Result<AnyPress, BundleError> {
+        if !(size_mm.is_finite() && size_mm > 0.0) {
+            return Err(BundleError::ElementSize { size_mm });
+        }
+        // The fields are public: check again whatever may have been edited since reading.
+        validate_experiment(&self.experiment, &self.map)?;
+        self.check_supported()?;
+        let protocol = self.protocol()?;
+        let s = &self.experiment.specimen;
+        let missing = |field: &str| self.map.invalid(field, "missing required key");
+        let block_size = || s.block_size().ok_or_else(|| missing("specimen.size_mm"));
+        let layers: Vec<Layer> = match &s.material {
+            Some(m) => vec![Layer {
+                region: m.clone(),
+                thickness_mm: s.block_size().map_or(s.height_mm.unwrap_or(0.0), |b| b[1]),
+            }],
+            None => {
+                s.layers.iter().map(|l| Layer { region: l.material.clone(), thickness_mm: l.thickness_mm }).collect()
+            }
+        };
+        let mesh_err = |e: mesh::MeshError| self.engine_error(PressError::Mesh(e));
+        let density_t_mm3 = self.density_t_mm3();
+        let markers = self.marker_requests();
+        let problem = match (s.shape, self.dimension()) {
+            (Shape::Block, 2) => {
+                let [w, _, t] = block_size()?;
+                let mesh = mesh::layered_rectangle(w, &layers, size_mm).map_err(mesh_err)?;
+                let materials = self.materials_for(&mesh.region_names)?;
+                AnyPress::Plane(PlanePress {
+                    mesh,
+                    formulation: Formulation::PlaneStress { thickness_mm: t },
+                    materials,
+                    density_t_mm3,
+                    protocol,
+                    markers,
+                    snapshot_times: Vec::new(),
+                })
+            }
+            (Shape::Block, _) => {
+                let [w, _, t] = block_size()?;
+                let mesh = mesh::layered_block(w, t, &layers, size_mm).map_err(mesh_err)?;
+                let materials = self.materials_for(&mesh.region_names)?;
+                AnyPress::Solid(SolidPress {
+                    mesh,
+                    formulation: Formulation::Solid,
+                    materials,
+                    density_t_mm3,
+                    protocol,
+                    markers,
+                    snapshot_times: Vec::new(),
+                })
+            }
+            (Shape::Cylinder, _) => {
+                let r = s.radius_mm.ok_or_else(|| missing("specimen.radius_mm"))?;
+                let h = s.height_mm.ok_or_else(|| missing("specimen.height_mm"))?;
+                let material = s.material.as_deref().ok_or_else(|| missing("specimen.material"))?;
+                let mesh = mesh::cylinder(r, h, size_mm, material).map_err(mesh_err)?;
+                let materials = self.materials_for(&mesh.region_names)?;
+                AnyPress::Solid(SolidPress {
+                    mesh,
+                    formulation: Formulation::Solid,
+                    materials,
+                    density_t_mm3,
+                    protocol,
+                    markers,
+                    snapshot_times: Vec::new(),
+                })
+            }
+            // Refused by `check_supported`; kept as an error, never a panic.
+            (Shape::Surface, _) => return Err(self.unsupported("specimen.shape", SURFACE_UNSUPPORTED.into())),
+        };
+        match &problem {
+            AnyPress::Plane(p) => p.validate(),
+            AnyPress::Solid(p) => p.validate(),
+        }
+        .map_err(|e| self.engine_error(e))?;
+        Ok(problem)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bundle::read_bundle;
+
+    /// The engine's material errors name the bundle key that caused them.
+    #[test]
+    fn engine_errors_map_to_bundle_keys() {
+        let dir = tempfile::tempdir().unwrap();
+        let text = "format = \"wagashi-experiment/1\"\nname = \"a\"\ndimension = 2\n[specimen]\nshape = \"block\"\n\
+                    size_mm = [1.0, 1.0, 1.0]\nmaterial = \"m\"\n[materials.m]\nmodel = \"four-element\"\n\
+                    poisson = 0.3\nE1_MPa = 1.0\nc1_MPa_s = 1.0\nE2_MPa = 1.0\nc3_MPa_s = 1.0\n[protocol]\n\
+                    tool = \"plate\"\ntool_contact = \"glued\"\nsupport = \"glued\"\nwaypoints = [[0.0, 0.0]]\n\
+                    release_s = 1.0\nend_s = 1.0\n";
+        std::fs::write(dir.path().join("experiment.toml"), text).unwrap();
+        let bundle = read_bundle(dir.path()).unwrap();
+        let cases = [
+            (MaterialError::NotPositive { name: "E2", value: 0.0 }, "materials.m.E2_MPa", 13),
+            (MaterialError::NotPositive { name: "c3", value: 0.0 }, "materials.m.c3_MPa_s", 14),
+            (MaterialError::PoissonOutOfRange { value: 0.6 }, "materials.m.poisson", 10),
+        ];
+        for (source, key, line) in cases {
+            let err = bundle.engine_error(PressError::Material { region: "m".into(), source });
+            let want =
+                format!("{}:{line}: {key}: material of region `m`: ", dir.path().join("experiment.toml").display());
+            assert!(err.to_string().starts_with(&want), "{err}");
+        }
+        let err = bundle.engine_error(PressError::BadProtocol("x".into()));
+        assert!(err.to_string().contains(":15: protocol: protocol: x"), "{err}");
+    }
+}

@@ -1,0 +1,320 @@
+//! The checks of experiment-format.md that serde's types cannot express.
+//!
+//! Each check names the key that is wrong and the line it stands on (the line of
+//! its table when the key is absent).
+
+use std::collections::BTreeMap;
+
+use super::experiment::{Contact, Experiment, Shape, Tool, FORMAT_V1};
+use super::material_spec::MaterialSpec;
+use super::series::MarkerSeries;
+use crate::error::BundleError;
+use crate::source_map::SourceMap;
+
+/// Layer thicknesses must sum to H within this [mm].
+pub const LAYER_SUM_TOLERANCE_MM: f64 = 1e-6;
+
+/// A marker's initial position may lie this fraction of the specimen's smallest
+/// size away from its surface.
+pub const MARKER_SURFACE_TOLERANCE: f64 = 0.01;
+
+fn positive(map: &SourceMap, field: &str, value: Option<f64>, what: &str) -> Result<(), BundleError> {
+    match value {
+        Some(v) if !(v.is_finite() && v > 0.0) => Err(map.invalid(field, format!("{v} is not {what} > 0"))),
+        _ => Ok(()),
+    }
+}
+
+fn refuse_key(map: &SourceMap, field: &str, given: bool, why: String) -> Result<(), BundleError> {
+    if given {
+        Err(map.invalid(field, why))
+    } else {
+        Ok(())
+    }
+}
+
+fn require<T>(map: &SourceMap, field: &str, value: Option<T>, why: &str) -> Result<T, BundleError> {
+    value.ok_or_else(|| map.invalid(field, format!("missing required key {why}")))
+}
+
+/// Checks an experiment whose materials are already merged.
+pub(crate) fn validate_experiment(e: &Experiment, map: &SourceMap) -> Result<(), BundleError> {
+    if e.format != FORMAT_V1 {
+        return Err(
+            map.invalid("format", format!("unsupported format \"{}\"; this reader knows \"{FORMAT_V1}\"", e.format))
+        );
+    }
+    if e.dimension != 2 && e.dimension != 3 {
+        return Err(map.invalid("dimension", format!("{} is neither 2 nor 3", e.dimension)));
+    }
+    validate_specimen(e, map)?;
+    for (name, spec) in &e.materials {
+        spec.validate(name, map, "materials")?;
+    }
+    validate_protocol(e, map)?;
+    if let Some(data) = &e.data {
+        for (key, file) in [("data.force", &data.force), ("data.markers", &data.markers)] {
+            if file.as_deref().is_some_and(|f| f.trim().is_empty()) {
+                return Err(map.invalid(key, "empty file name"));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn validate_specimen(e: &Experiment, map: &SourceMap) -> Result<(), BundleError> {
+    let s = &e.specimen;
+    let shape = format!("shape = \"{}\"", s.shape.as_str());
+    let not_for = |key: &str, belongs: &str| format!("{key} belongs to {belongs}, not to {shape}");
+    positive(map, "specimen.mass_g", s.mass_g, "a mass")?;
+    positive(map, "specimen.density_g_cm3", s.density_g_cm3, "a density")?;
+    match s.shape {
+        Shape::Block => {
+            let size = require(map, "specimen.size_mm", s.size_mm.as_ref(), "for shape = \"block\"")?;
+            if size.len() != 3 || !size.iter().all(|v| v.is_finite() && *v > 0.0) {
+                return Err(map.invalid("specimen.size_mm", "must be three positive lengths [W, H, T] in mm"));
+            }
+            refuse_key(map, "specimen.radius_mm", s.radius_mm.is_some(), not_for("radius_mm", "a cylinder"))?;
+            refuse_key(map, "specimen.height_mm", s.height_mm.is_some(), not_for("height_mm", "a cylinder"))?;
+        }
+        Shape::Cylinder => {
+            if e.dimension == 2 {
+                return Err(map.invalid("specimen.shape", "a cylinder is 3D only; dimension = 2 needs a block"));
+            }
+            let r = require(map, "specimen.radius_mm", s.radius_mm, "for shape = \"cylinder\"")?;
+            positive(map, "specimen.radius_mm", Some(r), "a length")?;
+            let h = require(map, "specimen.height_mm", s.height_mm, "for shape = \"cylinder\"")?;
+            positive(map, "specimen.height_mm", Some(h), "a length")?;
+            refuse_key(map, "specimen.size_mm", s.size_mm.is_some(), not_for("size_mm", "a block"))?;
+            refuse_key(map, "specimen.layers", !s.layers.is_empty(), not_for("layers", "a block"))?;
+        }
+        Shape::Surface => {
+            let file = require(map, "specimen.surface", s.surface.as_deref(), "for shape = \"surface\"")?;
+            if file.trim().is_empty() {
+                return Err(map.invalid("specimen.surface", "empty file name"));
+            }
+            refuse_key(map, "specimen.size_mm", s.size_mm.is_some(), not_for("size_mm", "a block"))?;
+            refuse_key(map, "specimen.radius_mm", s.radius_mm.is_some(), not_for("radius_mm", "a cylinder"))?;
+            refuse_key(map, "specimen.height_mm", s.height_mm.is_some(), not_for("height_mm", "a cylinder"))?;
+            refuse_key(map, "specimen.layers", !s.layers.is_empty(), not_for("layers", "a block"))?;
+            if s.regions.is_empty() && s.material.is_none() {
+                return Err(map.invalid(
+                    "specimen.regions",
+                    "missing required key for shape = \"surface\": map each surface region to a material (or give `material`)",
+                ));
+            }
+        }
+    }
+    if s.shape != Shape::Surface {
+        refuse_key(map, "specimen.surface", s.surface.is_some(), not_for("surface", "shape = \"surface\""))?;
+        refuse_key(map, "specimen.regions", !s.regions.is_empty(), not_for("regions", "shape = \"surface\""))?;
+    }
+    // Material or layers.
+    if s.shape == Shape::Block {
+        match (s.material.is_some(), s.layers.is_empty()) {
+            (true, false) => {
+                return Err(
+                    map.invalid("specimen.material", "give either `material` or `[[specimen.layers]]`, not both")
+                )
+            }
+            (false, true) => {
+                return Err(map.invalid(
+                    "specimen.material",
+                    "missing required key: a block needs `material` or `[[specimen.layers]]`",
+                ))
+            }
+            _ => {}
+        }
+    } else if s.shape == Shape::Cylinder {
+        require(map, "specimen.material", s.material.as_ref(), "for shape = \"cylinder\"")?;
+    }
+    if !s.layers.is_empty() {
+        for (i, layer) in s.layers.iter().enumerate() {
+            positive(map, &format!("specimen.layers[{i}].thickness_mm"), Some(layer.thickness_mm), "a length")?;
+        }
+        let sum: f64 = s.layers.iter().map(|l| l.thickness_mm).sum();
+        let h = s.block_size().map_or(f64::NAN, |b| b[1]);
+        let sums_to_h = (sum - h).abs() <= LAYER_SUM_TOLERANCE_MM; // false for NaN
+        if !sums_to_h {
+            return Err(map.invalid(
+                "specimen.layers",
+                format!(
+                    "the layer thicknesses sum to {sum} mm but H = size_mm[1] = {h} mm; they must agree within {LAYER_SUM_TOLERANCE_MM} mm"
+                ),
+            ));
+        }
+    }
+    // Every material named is defined.
+    let mut refs: Vec<(String, &str)> = Vec::new();
+    if let Some(m) = &s.material {
+        refs.push(("specimen.material".into(), m));
+    }
+    for (i, l) in s.layers.iter().enumerate() {
+        refs.push((format!("specimen.layers[{i}].material"), &l.material));
+    }
+    for (region, m) in &s.regions {
+        refs.push((format!("specimen.regions.{region}"), m));
+    }
+    for (field, name) in refs {
+        if !e.materials.contains_key(name) {
+            return Err(map.invalid(
+                &field,
+                format!("material \"{name}\" is not defined (no [materials.{name}] here or in a materials file)"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn validate_protocol(e: &Experiment, map: &SourceMap) -> Result<(), BundleError> {
+    let p = &e.protocol;
+    let tool = format!("tool = \"{}\"", p.tool.as_str());
+    match p.tool {
+        Tool::Plate => {
+            refuse_key(map, "protocol.tool_radius_mm", p.tool_radius_mm.is_some(), format!("not used by {tool}"))?;
+            refuse_key(map, "protocol.tool_surface", p.tool_surface.is_some(), format!("not used by {tool}"))?;
+        }
+        Tool::Sphere | Tool::Punch => {
+            let r = require(map, "protocol.tool_radius_mm", p.tool_radius_mm, &format!("for {tool}"))?;
+            positive(map, "protocol.tool_radius_mm", Some(r), "a length")?;
+            refuse_key(map, "protocol.tool_surface", p.tool_surface.is_some(), format!("not used by {tool}"))?;
+        }
+        Tool::Surface => {
+            let f = require(map, "protocol.tool_surface", p.tool_surface.as_deref(), &format!("for {tool}"))?;
+            if f.trim().is_empty() {
+                return Err(map.invalid("protocol.tool_surface", "empty file name"));
+            }
+            refuse_key(map, "protocol.tool_radius_mm", p.tool_radius_mm.is_some(), format!("not used by {tool}"))?;
+        }
+    }
+    let uses_friction = p.tool_contact == Contact::Friction || p.support == Contact::Friction;
+    if uses_friction {
+        let mu = require(map, "protocol.friction", p.friction, "when tool_contact or support is \"friction\"")?;
+        if !(mu.is_finite() && mu >= 0.0) {
+            return Err(map.invalid("protocol.friction", format!("{mu} is not a friction coefficient >= 0")));
+        }
+    } else {
+        refuse_key(
+            map,
+            "protocol.friction",
+            p.friction.is_some(),
+            "given, but neither tool_contact nor support is \"friction\"".into(),
+        )?;
+    }
+    if p.waypoints.is_empty() {
+        return Err(map.invalid("protocol.waypoints", "no waypoints; give [[t_s, d_mm], ...]"));
+    }
+    for (i, w) in p.waypoints.iter().enumerate() {
+        let field = format!("protocol.waypoints[{i}]");
+        if !(w[0].is_finite() && w[1].is_finite()) {
+            return Err(map.invalid(&field, format!("[{}, {}] is not finite", w[0], w[1])));
+        }
+        if w[0] < 0.0 {
+            return Err(map.invalid(&field, format!("negative time {} s", w[0])));
+        }
+        if i > 0 && w[0] <= p.waypoints[i - 1][0] {
+            return Err(map.invalid(
+                &field,
+                format!(
+                    "waypoints must be in increasing time: t = {} s is not after the previous t = {} s",
+                    w[0],
+                    p.waypoints[i - 1][0]
+                ),
+            ));
+        }
+    }
+    let last_push = p.last_push_s();
+    for (key, value) in [("protocol.release_s", p.release_s), ("protocol.end_s", p.end_s)] {
+        positive(map, key, Some(value), "a time")?;
+        if value < last_push {
+            return Err(map.invalid(key, format!("{value} s is before the last waypoint that pushes ({last_push} s)")));
+        }
+    }
+    Ok(())
+}
+
+/// The specimen's smallest size [mm] (block: min(W, H, T); cylinder: min(2R, H)),
+/// or `None` for a surface, whose geometry this crate does not load.
+pub(crate) fn smallest_size(e: &Experiment) -> Option<f64> {
+    let s = &e.specimen;
+    match s.shape {
+        Shape::Block => s.block_size().map(|b| b[0].min(b[1]).min(b[2])),
+        Shape::Cylinder => Some((2.0 * s.radius_mm?).min(s.height_mm?)),
+        Shape::Surface => None,
+    }
+}
+
+/// Distance [mm] from `p` to the specimen's surface (3D) or to its rectangle
+/// `[0, W] x [0, H]` (2D, zero inside); `None` for a surface specimen.
+pub(crate) fn distance_to_surface(e: &Experiment, p: &[f64]) -> Option<f64> {
+    let s = &e.specimen;
+    let outside = |v: f64, lo: f64, hi: f64| (lo - v).max(v - hi).max(0.0);
+    match (s.shape, e.dimension) {
+        (Shape::Block, 2) => {
+            let [w, h, _] = s.block_size()?;
+            Some(outside(p[0], 0.0, w).hypot(outside(p[1], 0.0, h)))
+        }
+        (Shape::Block, _) => {
+            let b = s.block_size()?;
+            let out = (0..3).map(|k| outside(p[k], 0.0, b[k]).powi(2)).sum::<f64>().sqrt();
+            if out > 0.0 {
+                return Some(out);
+            }
+            Some((0..3).map(|k| p[k].min(b[k] - p[k])).fold(f64::INFINITY, f64::min))
+        }
+        (Shape::Cylinder, _) => {
+            let (r, h) = (s.radius_mm?, s.height_mm?);
+            let radial = p[0].hypot(p[2]);
+            let (dr, dy) = (radial - r, (-p[1]).max(p[1] - h));
+            if dr <= 0.0 && dy <= 0.0 {
+                Some((-dr).min(-dy))
+            } else {
+                Some(dr.max(0.0).hypot(dy.max(0.0)))
+            }
+        }
+        (Shape::Surface, _) => None,
+    }
+}
+
+/// Refuses markers whose initial position is farther from the surface than
+/// [`MARKER_SURFACE_TOLERANCE`] of the smallest size.
+pub(crate) fn validate_marker_positions(
+    e: &Experiment,
+    file: &std::path::Path,
+    markers: &[(MarkerSeries, usize)],
+) -> Result<(), BundleError> {
+    let Some(size) = smallest_size(e) else {
+        return Ok(());
+    };
+    let tolerance = MARKER_SURFACE_TOLERANCE * size;
+    for (m, line) in markers {
+        let Some(p) = m.initial_position() else {
+            continue;
+        };
+        let Some(d) = distance_to_surface(e, p) else {
+            continue;
+        };
+        let on_surface = d <= tolerance; // false for NaN
+        if !on_surface {
+            let place =
+                if e.dimension == 2 { "the specimen's rectangle [0, W] x [0, H]" } else { "the specimen's surface" };
+            return Err(BundleError::Invalid {
+                file: file.to_path_buf(),
+                line: *line,
+                field: format!("marker {}", m.name),
+                cause: format!(
+                    "initial position {p:?} mm is {d:.4} mm from {place}; at most {tolerance} mm (1 % of its smallest size, {size} mm) is allowed"
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Merges `external` materials over the experiment's own (a table of the same
+/// name in `external` replaces the bundle's).
+pub(crate) fn merge_materials(e: &mut Experiment, external: &BTreeMap<String, MaterialSpec>) {
+    for (name, spec) in external {
+        e.materials.insert(name.clone(), spec.clone());
+    }
+}

@@ -1,0 +1,230 @@
+//! From a bundle to fem-core's press problem.
+
+mod common;
+
+use common::*;
+use fem_core::element::Formulation;
+use fem_core::press::{AnyPress, Attachment};
+use wagashi_io::{read_bundle, read_bundle_with, read_materials_file, BundleError};
+
+fn solid(p: AnyPress) -> fem_core::press::SolidPress {
+    match p {
+        AnyPress::Solid(p) => p,
+        AnyPress::Plane(_) => panic!("expected a 3D problem"),
+    }
+}
+
+fn plane(p: AnyPress) -> fem_core::press::PlanePress {
+    match p {
+        AnyPress::Plane(p) => p,
+        AnyPress::Solid(_) => panic!("expected a 2D problem"),
+    }
+}
+
+#[test]
+fn block_3d_with_mass_markers_and_protocol() {
+    let b = with_experiment(EXPERIMENT);
+    let bundle = read_bundle(&b.dir).unwrap();
+    let p = solid(bundle.to_press(10.0).unwrap());
+    assert_eq!(p.formulation, Formulation::Solid);
+    assert_eq!(p.mesh.region_names, vec!["mat1".to_string()]);
+    assert_eq!(p.materials, vec![fem_core::material::Material::seed_mat1_force()]);
+    let volume = 58.0 * 59.5 * 12.0;
+    assert!((p.mesh.measure() - volume).abs() < 1e-9 * volume);
+    // 52.43 g in 41 412 mm^3 = 1.266 g/cm^3 = 1.266e-9 t/mm^3.
+    let rho = 52.43 / volume * 1e-6;
+    assert!((p.density_t_mm3 - rho).abs() < 1e-12 * rho, "{}", p.density_t_mm3);
+    assert!((p.density_t_mm3 - 1.266e-9).abs() < 1e-12);
+    assert_eq!(p.protocol.waypoints, vec![[0.0, 0.0], [28.87, 5.774], [210.93, 5.774]]);
+    assert_eq!((p.protocol.release_s, p.protocol.end_s), (210.93, 400.0));
+    assert_eq!(
+        (p.protocol.plate, p.protocol.support, p.protocol.gravity),
+        (Attachment::Glued, Attachment::Glued, false)
+    );
+    assert_eq!(p.markers.len(), 2);
+    assert_eq!(p.markers[0].name, "m01");
+    assert_eq!(p.markers[0].position, vec![5.0, 5.0, 12.0]);
+    assert_eq!(p.markers[0].times, vec![0.0, 210.9, 400.0]);
+    assert!(p.snapshot_times.is_empty());
+}
+
+#[test]
+fn block_2d_is_plane_stress_with_the_thickness() {
+    let toml = edit(EXPERIMENT, "dimension = 3", "dimension = 2");
+    let toml = edit(&toml, "mass_g = 52.43", "density_g_cm3 = 1.1");
+    let toml = edit(
+        &toml,
+        "tool_contact = \"glued\"\nsupport = \"glued\"",
+        "tool_contact = \"frictionless\"\nsupport = \"glued\"\ngravity = true",
+    );
+    let markers = "marker,t_s,x_mm,y_mm\nm01,0.0,0.0,30.0\nm01,5.0,0.1,30.0\n";
+    let b = bundle(&[("experiment.toml", &toml), ("force.csv", FORCE), ("markers.csv", markers)]);
+    let p = plane(read_bundle(&b.dir).unwrap().to_press(10.0).unwrap());
+    assert_eq!(p.formulation, Formulation::PlaneStress { thickness_mm: 12.0 });
+    assert!((p.mesh.measure() - 58.0 * 59.5).abs() < 1e-9 * 58.0 * 59.5);
+    assert!((p.density_t_mm3 - 1.1e-9).abs() < 1e-24);
+    assert_eq!(
+        (p.protocol.plate, p.protocol.support, p.protocol.gravity),
+        (Attachment::Frictionless, Attachment::Glued, true)
+    );
+    assert_eq!(p.markers[0].position, vec![0.0, 30.0]);
+    assert_eq!(p.markers[0].times, vec![0.0, 5.0]);
+}
+
+#[test]
+fn default_density_is_one_g_per_cm3() {
+    let toml = edit(EXPERIMENT, "mass_g = 52.43\n", "");
+    let p = solid(read_bundle(with_experiment(&toml).dir).unwrap().to_press(20.0).unwrap());
+    assert!((p.density_t_mm3 - 1e-9).abs() < 1e-24);
+}
+
+#[test]
+fn layers_become_regions_in_order() {
+    let toml = edit(
+        EXPERIMENT,
+        "material = \"mat1\"\n",
+        "[[specimen.layers]]\nmaterial = \"soft\"\nthickness_mm = 20.0\n[[specimen.layers]]\nmaterial = \"mat1\"\nthickness_mm = 19.5\n[[specimen.layers]]\nmaterial = \"soft\"\nthickness_mm = 20.0\n",
+    );
+    let toml = format!("{toml}\n[materials.soft]\nmodel = \"elastic\"\nE_MPa = 0.02\npoisson = 0.45\n");
+    let b = with_experiment(&toml);
+    let bundle = read_bundle(&b.dir).unwrap();
+    for dim in [3, 2] {
+        let p = if dim == 3 {
+            solid(bundle.to_press(10.0).unwrap()).materials
+        } else {
+            let toml2 = edit(&toml, "dimension = 3", "dimension = 2");
+            let b2 = bundle_files(&toml2);
+            let p = plane(read_bundle(&b2.dir).unwrap().to_press(10.0).unwrap());
+            assert_eq!(p.mesh.region_names, vec!["soft".to_string(), "mat1".to_string()]);
+            p.materials
+        };
+        assert_eq!(p.len(), 2);
+        assert_eq!(p[0].rheology, fem_core::material::Rheology::Elastic { e_mpa: 0.02 });
+        assert_eq!(p[1], fem_core::material::Material::seed_mat1_force());
+    }
+    let p = solid(bundle.to_press(10.0).unwrap());
+    assert_eq!(p.mesh.region_names, vec!["soft".to_string(), "mat1".to_string()]);
+}
+
+fn bundle_files(toml: &str) -> TestBundle {
+    let markers = if toml.contains("dimension = 2") { "marker,t_s,x_mm,y_mm\n" } else { MARKERS };
+    bundle(&[("experiment.toml", toml), ("force.csv", FORCE), ("markers.csv", markers)])
+}
+
+#[test]
+fn cylinder() {
+    let toml = r#"format = "wagashi-experiment/1"
+name = "gel"
+dimension = 3
+[specimen]
+shape = "cylinder"
+radius_mm = 4.0
+height_mm = 9.0
+mass_g = 0.5
+material = "gel"
+[materials.gel]
+model = "three-element"
+poisson = 0.45
+E1_MPa = 0.05
+c1_MPa_s = 0.3
+c3_MPa_s = 12.0
+[protocol]
+tool = "plate"
+tool_contact = "frictionless"
+support = "frictionless"
+waypoints = [[0.0, 0.0], [2.0, 0.9]]
+release_s = 2.0
+end_s = 10.0
+"#;
+    let b = bundle(&[("experiment.toml", toml)]);
+    let p = solid(read_bundle(&b.dir).unwrap().to_press(1.0).unwrap());
+    assert_eq!(p.mesh.region_names, vec!["gel".to_string()]);
+    let v = std::f64::consts::PI * 16.0 * 9.0;
+    assert!((p.density_t_mm3 - 0.5 / v * 1e-6).abs() < 1e-12 * p.density_t_mm3);
+    let (lo, hi) = p.mesh.bounding_box();
+    assert!((hi[1] - 9.0).abs() < 1e-12 && lo[1].abs() < 1e-12 && (hi[0] - 4.0).abs() < 1e-12);
+}
+
+fn assert_unsupported(toml: &str, field: &str, needle: &str, arrives: &str) {
+    let b = bundle_files(toml);
+    let bundle = read_bundle(&b.dir).unwrap();
+    let err = bundle.to_press(10.0).unwrap_err();
+    let msg = err.to_string();
+    let prefix = format!("{}:{}: {field}: ", b.file("experiment.toml").display(), line_of(toml, needle));
+    assert!(matches!(err, BundleError::Unsupported { .. }), "{err:?}");
+    assert!(msg.starts_with(&prefix) && msg.contains(arrives), "expected `{prefix}...{arrives}`, got `{msg}`");
+}
+
+#[test]
+fn other_tools_are_valid_but_not_simulated_yet() {
+    let toml = edit(EXPERIMENT, "tool = \"plate\"", "tool = \"sphere\"\ntool_radius_mm = 5.0");
+    assert_unsupported(&toml, "protocol.tool", "tool = \"sphere\"", "rigid-tool contact");
+    let toml = edit(EXPERIMENT, "tool = \"plate\"", "tool = \"surface\"\ntool_surface = \"tool.obj\"");
+    assert_unsupported(&toml, "protocol.tool", "tool = \"surface\"", "rigid-tool contact");
+}
+
+#[test]
+fn friction_is_valid_but_not_simulated_yet() {
+    let toml = edit(EXPERIMENT, "support = \"glued\"", "support = \"friction\"\nfriction = 0.4");
+    assert_unsupported(&toml, "protocol.support", "support", "rigid-tool contact");
+    let toml = edit(EXPERIMENT, "tool_contact = \"glued\"", "tool_contact = \"friction\"\nfriction = 0.4");
+    assert_unsupported(&toml, "protocol.tool_contact", "tool_contact", "rigid-tool contact");
+}
+
+#[test]
+fn surface_shape_is_valid_but_not_simulated_yet() {
+    let toml = edit(
+        EXPERIMENT,
+        "shape = \"block\"\nsize_mm = [58.0, 59.5, 12.0]",
+        "shape = \"surface\"\nsurface = \"daifuku.obj\"",
+    );
+    assert_unsupported(&toml, "specimen.shape", "shape", "surface meshing");
+}
+
+#[test]
+fn a_material_with_unknowns_cannot_be_simulated() {
+    let toml = edit(EXPERIMENT, "c3_MPa_s = 29.719\n", "");
+    let b = with_experiment(&toml);
+    let bundle = read_bundle(&b.dir).unwrap();
+    assert_invalid(
+        bundle.to_press(10.0),
+        &b.file("experiment.toml"),
+        line_of(&toml, "[materials.mat1]"),
+        "materials.mat1.c3_MPa_s",
+    );
+}
+
+#[test]
+fn a_material_with_unknowns_from_a_materials_file_names_that_file() {
+    let (_, rest) = EXPERIMENT.split_once("[materials.mat1]").unwrap();
+    let (mat1, _) = rest.split_once("[protocol]").unwrap();
+    let toml = EXPERIMENT.replacen(&format!("[materials.mat1]{mat1}"), "", 1);
+    let b = with_experiment(&toml);
+    let path = b.root.path().join("fit.toml");
+    std::fs::write(&path, "# held fixed\n\n[materials.mat1]\nmodel = \"elastic\"\npoisson = 0.3\n").unwrap();
+    let lib = read_materials_file(&path).unwrap();
+    let bundle = read_bundle_with(&b.dir, &lib).unwrap();
+    let msg = assert_invalid(bundle.to_press(10.0), &path, 3, "materials.mat1.E_MPa");
+    assert!(msg.contains("elastic"), "{msg}");
+}
+
+#[test]
+fn bad_element_size() {
+    let bundle = read_bundle(with_experiment(EXPERIMENT).dir).unwrap();
+    for h in [0.0, -1.0, f64::NAN] {
+        assert!(matches!(bundle.to_press(h), Err(BundleError::ElementSize { .. })));
+    }
+}
+
+#[test]
+fn edits_after_reading_are_checked_again() {
+    let b = with_experiment(EXPERIMENT);
+    let mut bundle = read_bundle(&b.dir).unwrap();
+    bundle.experiment.specimen.size_mm = Some(vec![1.0, 2.0]);
+    assert_invalid(
+        bundle.to_press(10.0),
+        &b.file("experiment.toml"),
+        line_of(EXPERIMENT, "size_mm"),
+        "specimen.size_mm",
+    );
+}
