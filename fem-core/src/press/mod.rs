@@ -7,8 +7,8 @@
 //! bottom reaction (what the seed's tactile sensor measured) and the plate force.
 //!
 //! Integrators ([`Integrator`]): the quasi-static implicit scheme with the exact
-//! exponential history update (design.md 3.3, the default), a dynamic Newmark
-//! scheme (average acceleration, lumped mass), and the seed's own scheme (eq. 8:
+//! exponential history update (design.md 3.3, the default), a dynamic
+//! generalized-alpha scheme (lumped mass), and the seed's own scheme (eq. 8:
 //! dynamics, constraint stabilisation with psi = 2000, explicit Runge-Kutta), kept
 //! as a reference.
 

@@ -127,7 +127,7 @@ pub enum Integrator {
     /// Quasi-static implicit with the exact exponential history update (default).
     #[default]
     QuasiStatic,
-    /// Dynamic, Newmark average acceleration with a lumped mass.
+    /// Dynamic, generalized-alpha with a lumped mass.
     Dynamic,
     /// The seed's scheme: dynamics, constraint stabilisation (psi = 2000), explicit RK.
     Seed,
@@ -147,11 +147,21 @@ pub struct Settings {
     pub max_dt_s: Option<f64>,
     /// The constraint stabilisation frequency of the seed's scheme [1/s]; default 2000.
     pub seed_psi: f64,
+    /// Spectral radius at infinite frequency of the dynamic generalized-alpha
+    /// scheme, in [0, 1]; default 0.5 (1 is Newmark's trapezoidal rule).
+    pub rho_inf: f64,
 }
 
 impl Default for Settings {
     fn default() -> Self {
-        Self { integrator: Integrator::QuasiStatic, rtol: 1e-3, fixed_dt_s: None, max_dt_s: None, seed_psi: 2000.0 }
+        Self {
+            integrator: Integrator::QuasiStatic,
+            rtol: 1e-3,
+            fixed_dt_s: None,
+            max_dt_s: None,
+            seed_psi: 2000.0,
+            rho_inf: 0.5,
+        }
     }
 }
 

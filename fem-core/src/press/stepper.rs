@@ -1,4 +1,4 @@
-//! The implicit integrators: quasi-static (default) and dynamic Newmark.
+//! The implicit integrators: quasi-static (default) and dynamic generalized-alpha.
 //!
 //! Quasi-static step from `t0` to `t1 = t0 + dt` (design.md 3.3). With the strain
 //! linear in time inside the step, each cell's history `h_k` updates exactly,
@@ -13,9 +13,13 @@
 //! matrix is `g(dt) K`, so `K` is factored once per constraint set and every step is
 //! one solve; otherwise a factorization is kept per step size (a sqrt(2) ladder).
 //!
-//! Dynamic: the same internal force plus a lumped mass, Newmark average
-//! acceleration (beta = 1/4, gamma = 1/2). Held dofs move with the plate exactly
-//! (their acceleration is zero between kinks), so reactions carry no spurious inertia.
+//! Dynamic: the same internal force plus a lumped mass, generalized-alpha
+//! (Chung & Hulbert 1993) with the spectral radius `rho_inf` at infinite frequency
+//! (default 0.5): second order, and it damps the stiff, overdamped modes that the
+//! viscous term `B2 K` makes against the mass, which the trapezoidal rule (Newmark
+//! average acceleration, `rho_inf = 1`) leaves ringing. Held dofs move with the
+//! plate exactly (their acceleration is zero between kinks), so reactions carry no
+//! spurious inertia.
 //!
 //! Step control: the local error of the displacement is estimated against an
 //! extrapolation of the previous steps (quadratic for BDF2 steps, linear for BDF1
@@ -36,8 +40,26 @@ use crate::element::{cell_strain, nodal_force, ReferenceSimplex, Simplex};
 use crate::material::phi1;
 use crate::solve::{Factor, ReducedSystem};
 
-const NEWMARK_BETA: f64 = 0.25;
-const NEWMARK_GAMMA: f64 = 0.5;
+/// Generalized-alpha parameters for a spectral radius `rho_inf` in [0, 1].
+#[derive(Debug, Clone, Copy)]
+struct GeneralizedAlpha {
+    alpha_m: f64,
+    alpha_f: f64,
+    beta: f64,
+    gamma: f64,
+}
+
+impl GeneralizedAlpha {
+    /// Chung & Hulbert's optimal choice; quasi-static steps use `alpha_m = alpha_f = 0`.
+    fn new(rho_inf: f64) -> Self {
+        let alpha_m = (2.0 * rho_inf - 1.0) / (rho_inf + 1.0);
+        let alpha_f = rho_inf / (rho_inf + 1.0);
+        let gamma = 0.5 - alpha_m + alpha_f;
+        Self { alpha_m, alpha_f, beta: 0.25 * (1.0 - alpha_m + alpha_f).powi(2), gamma }
+    }
+
+    const QUASI_STATIC: GeneralizedAlpha = GeneralizedAlpha { alpha_m: 0.0, alpha_f: 0.0, beta: 0.25, gamma: 0.5 };
+}
 /// The first step after a kink, as a fraction of the time to the next kink: small,
 /// because it cannot be checked (the estimator needs two steps of one segment).
 const FIRST_STEP_FRACTION: f64 = 1e-6;
@@ -66,6 +88,8 @@ struct State<const S: usize> {
     /// The strain one step back (for BDF2).
     strain_prev: Vec<SVector<f64, S>>,
     history: Vec<[SVector<f64, S>; 2]>,
+    /// Internal force at this time (dynamic runs only; empty otherwise) [N].
+    f_int: Vec<f64>,
 }
 
 /// Per-region scalars of one step size.
@@ -155,7 +179,9 @@ where
         strain: vec![SVector::zeros(); ncell],
         strain_prev: vec![SVector::zeros(); ncell],
         history: vec![[SVector::zeros(); 2]; ncell],
+        f_int: if dynamic { vec![0.0; ndof] } else { Vec::new() },
     };
+    let ga = if dynamic { GeneralizedAlpha::new(settings.rho_inf) } else { GeneralizedAlpha::QUASI_STATIC };
     // Displacements one and two steps back in this segment, with the step that left them.
     let mut back: Vec<(Vec<f64>, f64)> = Vec::new();
     let mut steps = Vec::new();
@@ -207,10 +233,13 @@ where
             let terms: Vec<(f64, &[f64])> = model
                 .groups
                 .iter()
-                .map(|g| (if single_group { 1.0 } else { step_factor(&g.kernel, h, bdf) }, g.stiffness.as_slice()))
+                .map(|g| {
+                    let c = if single_group { 1.0 } else { (1.0 - ga.alpha_f) * step_factor(&g.kernel, h, bdf) };
+                    (c, g.stiffness.as_slice())
+                })
                 .collect();
             let mass_term: Option<Vec<f64>> =
-                dynamic.then(|| model.mass.iter().map(|m| m / (NEWMARK_BETA * h * h)).collect());
+                dynamic.then(|| model.mass.iter().map(|m| m * (1.0 - ga.alpha_m) / (ga.beta * h * h)).collect());
             let factor = system.factor(&terms, mass_term.as_deref()).map_err(|e| PressError::Singular {
                 step: step_index + 1,
                 time_s: t1,
@@ -226,7 +255,7 @@ where
         let factor = &cache.last().unwrap().1;
 
         let mut outcome =
-            step(&model, &state, h, bdf, t1, constraints, system, factor, single_group, dynamic, step_index + 1)?;
+            step(&model, &state, h, bdf, t1, constraints, system, factor, single_group, ga, dynamic, step_index + 1)?;
         if !constraints.plate_attached {
             let start = segments.last().map_or([0.0; 2], |l: &ForceSegment| l.eval(l.dt));
             outcome.segment.detached_ends = Some([start, outcome.segment.eval_formula(h)]);
@@ -340,6 +369,9 @@ where
 }
 
 fn check_settings(s: &Settings) -> Result<(), PressError> {
+    if !(0.0..=1.0).contains(&s.rho_inf) {
+        return Err(PressError::BadSettings(format!("rho_inf = {} must lie in [0, 1]", s.rho_inf)));
+    }
     if !(s.rtol.is_finite() && s.rtol > 0.0) {
         return Err(PressError::BadSettings(format!("rtol = {} must be > 0", s.rtol)));
     }
@@ -377,6 +409,7 @@ fn step<const D: usize, const N: usize, const S: usize>(
     system: &ReducedSystem,
     factor: &Factor<'_>,
     single_group: bool,
+    ga: GeneralizedAlpha,
     dynamic: bool,
     step_index: usize,
 ) -> Result<StepOutcome<S>, PressError>
@@ -417,23 +450,25 @@ where
         std::array::from_fn(|a| nodal_force::<D, N, S>(&model.geometry[e], &sigma, a))
     });
     let ndof = model.num_dofs();
-    let mut rhs = vec![0.0; ndof];
-    assemble_vector::<D, N>(&model.topology, &cell_forces, &mut rhs);
+    let mut f_hist = vec![0.0; ndof];
+    assemble_vector::<D, N>(&model.topology, &cell_forces, &mut f_hist);
     drop(cell_forces);
-    for (r, b) in rhs.iter_mut().zip(&model.body_force) {
-        *r += b;
-    }
-    let inv_bdt2 = 1.0 / (NEWMARK_BETA * dt * dt);
+    // Right-hand side: f_body + (1 - af) f_hist - af f_int,n + inertia terms.
+    let (am, af) = (ga.alpha_m, ga.alpha_f);
+    let inv_bdt2 = 1.0 / (ga.beta * dt * dt);
+    let mut rhs: Vec<f64> = (0..ndof).map(|d| model.body_force[d] + (1.0 - af) * f_hist[d]).collect();
     if dynamic {
         for d in 0..ndof {
-            rhs[d] += model.mass[d] * (inv_bdt2 * (s0.u[d] + dt * s0.v[d]) + (0.5 / NEWMARK_BETA - 1.0) * s0.a[d]);
+            let newmark = inv_bdt2 * (s0.u[d] + dt * s0.v[d]) + (0.5 / ga.beta - 1.0) * s0.a[d];
+            rhs[d] += model.mass[d] * ((1.0 - am) * newmark - am * s0.a[d]) - af * s0.f_int[d];
         }
     }
 
     // Held values, then the coupling of held dofs into the free rows.
     let mut u1 = vec![0.0; ndof];
     model.prescribe(constraints, t1, &mut u1);
-    let apply = |x: &[f64], y: &mut [f64]| {
+    // `stiffness_only` gives sum_g g_g K_g x, the elastic part of the internal force.
+    let stiffness_only = |x: &[f64], y: &mut [f64]| {
         let mut tmp = vec![0.0; ndof];
         y.iter_mut().for_each(|v| *v = 0.0);
         for g in &model.groups {
@@ -443,9 +478,14 @@ where
                 *yi += c * ti;
             }
         }
-        if dynamic {
-            for d in 0..ndof {
-                y[d] += model.mass[d] * inv_bdt2 * x[d];
+    };
+    // `apply` is the step matrix: (1 - af) sum_g g_g K_g + (1 - am) M / (beta dt^2).
+    let apply = |x: &[f64], y: &mut [f64]| {
+        stiffness_only(x, y);
+        for d in 0..ndof {
+            y[d] *= 1.0 - af;
+            if dynamic {
+                y[d] += model.mass[d] * (1.0 - am) * inv_bdt2 * x[d];
             }
         }
     };
@@ -542,12 +582,16 @@ where
 
     // Dynamic state update (held dofs move with the plate at constant velocity).
     let (mut v1, mut a1) = (vec![0.0; ndof], vec![0.0; ndof]);
+    let mut f_int = Vec::new();
     if dynamic {
         for &d in &system.dof_of_free {
             let d = d as usize;
-            a1[d] = inv_bdt2 * (u1[d] - s0.u[d] - dt * s0.v[d]) - (0.5 / NEWMARK_BETA - 1.0) * s0.a[d];
-            v1[d] = s0.v[d] + dt * ((1.0 - NEWMARK_GAMMA) * s0.a[d] + NEWMARK_GAMMA * a1[d]);
+            a1[d] = inv_bdt2 * (u1[d] - s0.u[d] - dt * s0.v[d]) - (0.5 / ga.beta - 1.0) * s0.a[d];
+            v1[d] = s0.v[d] + dt * ((1.0 - ga.gamma) * s0.a[d] + ga.gamma * a1[d]);
         }
+        f_int = vec![0.0; ndof];
+        stiffness_only(&u1, &mut f_int);
+        f_int.iter_mut().zip(&f_hist).for_each(|(f, h)| *f -= h);
         let vel = model.problem.protocol.velocity(0.5 * (s0.t + t1));
         for &d in &constraints.plate_dofs {
             v1[d] = -vel;
@@ -564,7 +608,7 @@ where
     }
     let strain_prev = s0.strain.clone();
     Ok(StepOutcome {
-        state: State { t: t1, u: u1, v: v1, a: a1, strain, strain_prev, history },
+        state: State { t: t1, u: u1, v: v1, a: a1, strain, strain_prev, history, f_int },
         stress,
         segment,
         residual,
