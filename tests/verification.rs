@@ -78,7 +78,7 @@ proptest! {
                 u[3 * n as usize + k] = f[k];
             }
         }
-        let sys = ReducedSystem::new(&pat, &held).unwrap();
+        let sys = ReducedSystem::new(&pat, &held, None).unwrap();
         let factor = sys.factor(&[(1.0, &k)], None).unwrap();
         let mut ku = vec![0.0; pat.num_dofs()];
         pat.mul_vec(&k, &u, &mut ku);

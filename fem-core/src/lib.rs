@@ -45,6 +45,7 @@ pub mod assembly;
 pub mod element;
 pub mod material;
 pub mod mesh;
+pub mod ordering;
 pub mod parallel;
 pub mod press;
 pub mod solve;

@@ -68,6 +68,8 @@ pub(crate) struct Model<'p, const D: usize, const N: usize, const S: usize> {
     pub markers: Vec<LocatedMarker<N>>,
     /// Displacement scale for error control [mm].
     pub displacement_scale: f64,
+    /// Nested-dissection elimination order of the nodes.
+    pub node_order: Vec<u32>,
 }
 
 impl<'p, const D: usize, const N: usize, const S: usize> Model<'p, D, N, S>
@@ -158,7 +160,9 @@ where
         let dmax = problem.protocol.waypoints.iter().map(|w| w[1].abs()).fold(0.0, f64::max);
         let displacement_scale = dmax.max(1e-3 * size);
 
+        let node_order = crate::ordering::nested_dissection(&mesh.nodes, &topology);
         Ok(Self {
+            node_order,
             problem,
             geometry,
             topology,

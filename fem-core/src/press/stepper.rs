@@ -154,17 +154,13 @@ where
     let single_group = model.groups.len() == 1 && !dynamic;
     let ladder = settings.fixed_dt_s.is_none() && !single_group;
 
-    let sys_attached = ReducedSystem::new(&model.pattern, &model.attached.held).map_err(|e| PressError::Singular {
-        step: 0,
-        time_s: 0.0,
-        detail: e.to_string(),
-    })?;
+    let sys_attached = ReducedSystem::new(&model.pattern, &model.attached.held, Some(&model.node_order))
+        .map_err(|e| PressError::Singular { step: 0, time_s: 0.0, detail: e.to_string() })?;
     let sys_released = if protocol.release_s < end {
-        Some(ReducedSystem::new(&model.pattern, &model.released.held).map_err(|e| PressError::Singular {
-            step: 0,
-            time_s: protocol.release_s,
-            detail: e.to_string(),
-        })?)
+        Some(
+            ReducedSystem::new(&model.pattern, &model.released.held, Some(&model.node_order))
+                .map_err(|e| PressError::Singular { step: 0, time_s: protocol.release_s, detail: e.to_string() })?,
+        )
     } else {
         None
     };
@@ -221,6 +217,11 @@ where
             Some(&(_, h_prev)) if h <= 2.0 * h_prev * (1.0 + 1e-9) => Bdf::two(h / h_prev),
             _ => Bdf::ONE,
         };
+        // Constraint sets only ever change from attached to released: drop the
+        // attached factors then, so that two factors of a large mesh never coexist.
+        if !constraints.plate_attached {
+            cache.retain(|(k, _)| !k.0);
+        }
         // Numeric factor for this constraint set and step size.
         let key =
             (constraints.plate_attached, if single_group { (0, 0) } else { (h.to_bits(), bdf.alpha[0].to_bits()) });
