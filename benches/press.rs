@@ -59,8 +59,13 @@ fn bench_blocks(c: &mut Criterion) {
 
 fn bench_schemes(c: &mut Criterion) {
     let m = mesh::rectangle(58.0, 59.5, 20.0, "mat1").unwrap();
-    let mut p = PlanePress::new_2d(m, 12.0, vec![Material::seed_mat1_force()], Protocol::ramp_hold_release(0.2, 2.0, 6.0, 10.0))
-        .unwrap();
+    let mut p = PlanePress::new_2d(
+        m,
+        12.0,
+        vec![Material::seed_mat1_force()],
+        Protocol::ramp_hold_release(0.2, 2.0, 6.0, 10.0),
+    )
+    .unwrap();
     p.density_t_mm3 = 1.27e-9;
     let mut group = c.benchmark_group("scheme");
     group.sample_size(10).measurement_time(Duration::from_secs(30));
@@ -68,7 +73,12 @@ fn bench_schemes(c: &mut Criterion) {
     let seed = Settings { integrator: Integrator::Seed, ..Settings::default() };
     let rf = press::simulate(&p, &fast, &mut |_| {}).unwrap();
     let rs = press::simulate(&p, &seed, &mut |_| {}).unwrap();
-    eprintln!("scheme: {} cells; fast {} steps; seed {} recorded samples", p.mesh.num_cells(), rf.steps.len(), rs.steps.len());
+    eprintln!(
+        "scheme: {} cells; fast {} steps; seed {} recorded samples",
+        p.mesh.num_cells(),
+        rf.steps.len(),
+        rs.steps.len()
+    );
     group.bench_function("fast", |b| b.iter(|| press::simulate(&p, &fast, &mut |_| {}).unwrap()));
     group.bench_function("seed", |b| b.iter(|| press::simulate(&p, &seed, &mut |_| {}).unwrap()));
     group.finish();

@@ -1,1 +1,91 @@
-fn main() {}
+//! `wagashi`: the command-line tool of the wagashi finite-element engine for soft
+//! rheological foods.
+//!
+//! The binary only wires `wagashi-io` (bundles, VTU, atomic outputs) to
+//! `wagashi-fem-core` (the engine) and formats what they return; it holds no
+//! physics and no numerics. Commands:
+//!
+//! - `wagashi press BUNDLE -o OUT` ([`press`]): simulate an experiment bundle and
+//!   write the results as a bundle plus a summary, a step log, shapes and a plot.
+//! - `wagashi demo` ([`demo`]): the seed paper's material 1 trial, embedded, run
+//!   through the same code path.
+//!
+//! Errors: `main` prints one line, `error: CAUSE` (the causes joined with `: `),
+//! and exits with status 1; argument errors are clap's (status 2).
+
+mod demo;
+mod plot;
+mod press;
+mod progress;
+mod summary;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// The `wagashi` command line.
+#[derive(Debug, Parser)]
+#[command(
+    name = "wagashi",
+    version,
+    about = "A finite-element engine for soft rheological foods (five-element rheology, 2D and 3D)",
+    after_help = "Example:\n  wagashi demo\n  wagashi press examples/paper/mat1 -o out/mat1\n\nRun `wagashi help COMMAND` for a command's options."
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    Press(press::PressArgs),
+    Demo(demo::DemoArgs),
+}
+
+fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Press(args) => press::run(&args),
+        Command::Demo(args) => demo::run(&args),
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        // Output piped into a program that stopped reading (`| head`): not an error.
+        Err(err) if is_broken_pipe(&err) => ExitCode::SUCCESS,
+        Err(err) => {
+            // One line, as ripgrep does: the context chain joined with ": ".
+            eprintln!("error: {}", one_line(&format!("{err:#}")));
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn is_broken_pipe(err: &anyhow::Error) -> bool {
+    err.chain().any(|e| e.downcast_ref::<std::io::Error>().is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe))
+}
+
+/// `text` on one line: lines trimmed and joined with a space (the messages of
+/// wagashi's libraries are one line already and pass unchanged).
+fn one_line(text: &str) -> String {
+    text.lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join(" ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    #[test]
+    fn errors_are_one_line() {
+        assert_eq!(one_line("a: b"), "a: b");
+        assert_eq!(one_line("a:\n  b\n\n"), "a: b");
+    }
+
+    #[test]
+    fn the_command_line_is_well_formed() {
+        Cli::command().debug_assert();
+    }
+}

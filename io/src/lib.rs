@@ -84,7 +84,7 @@ pub mod vtu;
 
 pub use atomic::{write_atomic, AtomicDir};
 pub use bundle::{
-    read_bundle, read_bundle_with, read_materials_file, write_bundle, Bundle, BundleWrite, Experiment, ForceSample,
-    ForceSeries, MarkerSample, MarkerSeries, MaterialSpec, Model,
+    read_bundle, read_bundle_from_str, read_bundle_with, read_materials_file, write_bundle, Bundle, BundleWrite,
+    Experiment, ForceSample, ForceSeries, MarkerSample, MarkerSeries, MaterialSpec, Model,
 };
 pub use error::{BundleError, WriteError};

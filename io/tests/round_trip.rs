@@ -2,10 +2,13 @@
 
 mod common;
 
+use std::collections::BTreeMap;
+use std::path::Path;
+
 use common::*;
 use wagashi_io::{
-    read_bundle, read_bundle_with, read_materials_file, write_bundle, BundleWrite, ForceSample, ForceSeries,
-    MarkerSample, MarkerSeries,
+    read_bundle, read_bundle_from_str, read_bundle_with, read_materials_file, write_bundle, BundleWrite, ForceSample,
+    ForceSeries, MarkerSample, MarkerSeries,
 };
 
 fn awkward_force() -> ForceSeries {
@@ -131,4 +134,37 @@ fn bad_data_is_refused_before_anything_is_written() {
     let force = ForceSeries { samples: vec![ForceSample { t_s: 0.0, force_n: f64::NAN }] };
     assert!(write_bundle(&out, &BundleWrite::simulated(&input, "x", &force, &[])).is_err());
     assert!(!out.exists());
+}
+
+/// A bundle parsed from text (the demo's embedded bundle) is the same as one read
+/// from a folder, and its messages name the folder it stands for.
+#[test]
+fn a_bundle_from_text_equals_the_one_read_from_disk() {
+    let text = edit(EXPERIMENT, "[data]\nforce = \"force.csv\"\nmarkers = \"markers.csv\"\nforce_tared = true\n", "");
+    let b = with_experiment(&text);
+    let from_disk = read_bundle(&b.dir).unwrap();
+    let from_text = read_bundle_from_str(&b.dir, &text, &BTreeMap::new()).unwrap();
+    assert_eq!(from_text.experiment, from_disk.experiment);
+    assert_eq!(from_text.dir, from_disk.dir);
+    assert!(from_text.force.is_none() && from_text.markers.is_empty());
+
+    // Nothing is read from disk without `[data]`: the folder need not exist.
+    let virtual_dir = Path::new("embedded/mat1");
+    let bundle = read_bundle_from_str(virtual_dir, &text, &BTreeMap::new()).unwrap();
+    assert_eq!(bundle.experiment_file(), virtual_dir.join("experiment.toml"));
+
+    // Refusals name the stated folder, line and field.
+    let bad = edit(&text, "size_mm = [58.0, 59.5, 12.0]", "size_mm = [58.0, -59.5, 12.0]");
+    let msg = read_bundle_from_str(virtual_dir, &bad, &BTreeMap::new()).unwrap_err().to_string();
+    let want = format!("{}:7: specimen.size_mm: ", virtual_dir.join("experiment.toml").display());
+    assert!(msg.starts_with(&want), "{msg}");
+}
+
+/// Data files named by a bundle given as text are read from its folder.
+#[test]
+fn a_bundle_from_text_reads_its_data_files_from_the_folder() {
+    let b = bundle(&[("force.csv", FORCE), ("markers.csv", MARKERS)]);
+    let bundle = read_bundle_from_str(&b.dir, EXPERIMENT, &BTreeMap::new()).unwrap();
+    assert_eq!(bundle.force.unwrap().samples.len(), 4);
+    assert_eq!(bundle.markers.len(), 2);
 }

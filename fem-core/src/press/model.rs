@@ -148,7 +148,7 @@ where
         let functionals =
             [functional(&geometry, &topology, &bottom, 1.0), functional(&geometry, &topology, &top, -1.0)];
         let body_reaction = [
-            -bottom.iter().map(|&i| body_force[i as usize * D + 1]).sum::<f64>(),
+            0.0 - bottom.iter().map(|&i| body_force[i as usize * D + 1]).sum::<f64>(),
             top.iter().map(|&i| body_force[i as usize * D + 1]).sum::<f64>(),
         ];
 

@@ -7,7 +7,8 @@ pub struct StepRecord {
     pub dt_s: f64,
     /// Wall time spent in factorization and solve [s].
     pub solve_s: f64,
-    /// Relative residual of the linear solve, `|A x - b| / |b|` (0 when b = 0).
+    /// Relative residual of the step's linear solve on the free rows, `|A u - b|`
+    /// over the size of the balancing terms `(|b|^2 + |A_held u_held|^2)^(1/2)`.
     pub residual: f64,
     /// Whether the step needed a new numeric factorization.
     pub refactored: bool,
@@ -140,7 +141,11 @@ pub struct PressResult {
 
 impl PressResult {
     fn forces_at(&self, t: f64) -> [f64; 2] {
-        if !self.segments.is_empty() {
+        if let Some(first) = self.segments.first() {
+            // Left limits at kinks (as the closed forms): nothing has moved at t <= 0.
+            if t <= first.t0 {
+                return first.constant;
+            }
             // The segment whose interval contains t (the first one at a shared end).
             let i = self.segments.partition_point(|s| s.t0 + s.dt < t).min(self.segments.len() - 1);
             let s = &self.segments[i];

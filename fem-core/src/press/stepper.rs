@@ -521,13 +521,16 @@ where
     // Residual of the free rows.
     let mut y = vec![0.0; ndof];
     apply(&u1, &mut y);
+    // Relative to the size of the terms that balance on the free rows: the history
+    // right-hand side and the held dofs' coupling (each may vanish alone, e.g. both
+    // the history and A u1 are zero at the start of a push).
     let (mut rr, mut bb) = (0.0, 0.0);
     for &d in &system.dof_of_free {
         let d = d as usize;
         rr += (y[d] - rhs[d]).powi(2);
-        bb += rhs[d].powi(2);
+        bb += rhs[d].powi(2) + coupling[d].powi(2);
     }
-    let residual = if bb > 0.0 { (rr / bb).sqrt() } else { rr.sqrt() };
+    let residual = if bb > 0.0 { (rr / bb).sqrt() } else { 0.0 };
 
     // Cell update: strain, exact history, stress, inversion check.
     let updated: Vec<CellUpdate<S>> = map_collect(mesh.num_cells(), |e| {

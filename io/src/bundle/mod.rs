@@ -2,7 +2,9 @@
 //! `experiment.toml` and the CSV files it names.
 //!
 //! - [`read_bundle`] / [`read_bundle_with`] read and check a bundle into a
-//!   [`Bundle`]; [`read_materials_file`] reads a `--materials FILE`.
+//!   [`Bundle`]; [`read_bundle_from_str`] does the same for an `experiment.toml`
+//!   given as text (a bundle embedded in a binary); [`read_materials_file`] reads
+//!   a `--materials FILE`.
 //! - [`Bundle::to_press`] builds the engine's press problem.
 //! - [`write_bundle`] writes a simulation's results as a bundle.
 //!
@@ -40,7 +42,7 @@ mod write;
 
 pub use experiment::{Contact, DataSpec, Experiment, Layer, ProtocolSpec, Shape, Specimen, Tool, FORMAT_V1};
 pub use material_spec::{read_materials_file, MaterialSpec, MissingParameter, Model};
-pub use read::{read_bundle, read_bundle_with, Bundle, EXPERIMENT_FILE};
+pub use read::{read_bundle, read_bundle_from_str, read_bundle_with, Bundle, EXPERIMENT_FILE};
 pub use series::{markers_header, ForceSample, ForceSeries, MarkerSample, MarkerSeries, FORCE_HEADER};
 pub use to_press::G_CM3_IN_T_MM3;
 pub use validate::{LAYER_SUM_TOLERANCE_MM, MARKER_SURFACE_TOLERANCE};

@@ -70,8 +70,23 @@ pub fn read_bundle_with(
     let dir = dir.as_ref();
     let file = dir.join(EXPERIMENT_FILE);
     let text = std::fs::read_to_string(&file).map_err(|source| BundleError::Read { file: file.clone(), source })?;
-    let map = Arc::new(SourceMap::parse(&file, &text)?);
-    let mut experiment: Experiment = toml::from_str(&text).map_err(|e| map.toml_error(&e))?;
+    read_bundle_from_str(dir, &text, external)
+}
+
+/// Reads a bundle whose `experiment.toml` is the text `experiment_toml` (e.g.
+/// embedded in a binary with `include_str!`), as if it stood in `dir`: messages
+/// name `dir/experiment.toml`, and the data files it names are read from `dir`
+/// (a bundle without `[data]` reads nothing from disk). `external` as in
+/// [`read_bundle_with`].
+pub fn read_bundle_from_str(
+    dir: impl AsRef<Path>,
+    experiment_toml: &str,
+    external: &BTreeMap<String, MaterialSpec>,
+) -> Result<Bundle, BundleError> {
+    let dir = dir.as_ref();
+    let file = dir.join(EXPERIMENT_FILE);
+    let map = Arc::new(SourceMap::parse(&file, experiment_toml)?);
+    let mut experiment: Experiment = toml::from_str(experiment_toml).map_err(|e| map.toml_error(&e))?;
     attach_origins(&mut experiment.materials, &map);
     merge_materials(&mut experiment, external);
     validate_experiment(&experiment, &map)?;

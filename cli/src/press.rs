@@ -1,0 +1,527 @@
+//! `wagashi press`: simulate an experiment bundle.
+//!
+//! Reading, meshing and simulating belong to `wagashi-io` and `fem-core`; this
+//! module chooses the defaults of the command line, drives the progress bar and
+//! writes the output folder (atomically, through [`wagashi_io::AtomicDir`]):
+//!
+//! | file               | what                                                              |
+//! |--------------------|-------------------------------------------------------------------|
+//! | `experiment.toml`  | the input trial under the name `NAME-sim`, naming the files below |
+//! | `force.csv`        | `t_s,force_N`: the simulated bottom force at the measured times, or every `--output-dt` |
+//! | `markers.csv`      | the bundle's markers, simulated, at their measured times (when it has markers) |
+//! | `summary.json`     | sizes, counts, timings and the results printed on stdout          |
+//! | `steps.csv`        | one row per accepted time step                                    |
+//! | `keep.vtu`         | the keep shape (at `release_s`): displacement, region, stress     |
+//! | `final.vtu`        | the final shape (at `end_s`)                                      |
+//! | `force.svg`        | simulated (and measured) force against time                       |
+//! | `shapes.pvd`, `shapes/` | with `--pvd N`: N + 1 shapes evenly spaced in time           |
+//!
+//! The output folder is itself a bundle: `wagashi press OUT -o OUT2` reads it back
+//! as if measured and reports the difference.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{bail, Context};
+use clap::{Args, ValueEnum};
+use fem_core::press::{simulate_any, AnyPress, Integrator, PressResult, Settings, Snapshot};
+use wagashi_io::bundle::Shape;
+use wagashi_io::vtu::{write_pvd, write_vtu, VtuFields};
+use wagashi_io::{
+    read_bundle_with, read_materials_file, write_atomic, write_bundle, AtomicDir, Bundle, BundleWrite, ForceSeries,
+    MarkerSeries, WriteError,
+};
+
+use crate::plot::force_svg;
+use crate::progress::SimulationBar;
+use crate::summary::{steps_csv, ForceComparison, Summary};
+
+/// The most force samples `--output-dt` may ask for.
+const MAX_OUTPUT_SAMPLES: f64 = 1e7;
+
+const PRESS_AFTER_HELP: &str = "\
+Examples:
+  # The seed paper's material 1 trial, default element size (a quarter of the smallest side):
+  wagashi press examples/paper/mat1 -o out/mat1
+
+  # A coarse, quick run of a layered trial, shapes every 40 s for ParaView:
+  wagashi press examples/paper/mat1+2 -o out/mat1+2 --size-mm 10 --pvd 10
+
+  # The material 1 trial with the seed's shape parameters (x_shape) from a materials file:
+  wagashi press examples/paper/mat1 --materials examples/paper/x-shape.toml -o out/mat1-shape
+
+  # Run again into the same folder (replaces the previous output):
+  wagashi press examples/paper/mat1 -o out/mat1 --force";
+
+/// `wagashi press BUNDLE -o OUT`.
+#[derive(Debug, Args)]
+#[command(
+    about = "Simulate a compression trial described by an experiment bundle",
+    long_about = "Simulate a compression trial described by an experiment bundle (a folder holding \
+experiment.toml, see experiment-format.md) and write the results into OUT: the simulated trial as a \
+bundle (experiment.toml, force.csv, markers.csv), summary.json, steps.csv, the keep and final shapes \
+(keep.vtu, final.vtu, for ParaView) and force.svg. OUT is written atomically; the input bundle is never \
+modified.",
+    after_help = PRESS_AFTER_HELP
+)]
+pub struct PressArgs {
+    /// The experiment bundle: a folder holding experiment.toml.
+    #[arg(value_name = "BUNDLE")]
+    pub bundle: PathBuf,
+
+    /// The output folder; refused if it exists and is not a previous wagashi output.
+    #[arg(short = 'o', long = "output", value_name = "OUT")]
+    pub output: PathBuf,
+
+    /// Target element size [mm]; default: a quarter of the specimen's smallest
+    /// dimension (min(W, H, T) / 4 for a block, min(R, H) / 4 for a cylinder).
+    #[arg(long = "size-mm", value_name = "H", value_parser = positive_number, allow_negative_numbers = true)]
+    pub size_mm: Option<f64>,
+
+    /// Time integrator: implicit (quasi-static, exact history update), dynamic
+    /// (Newmark, lumped mass) or seed (the seed paper's explicit scheme; slow).
+    #[arg(long, value_enum, default_value_t = IntegratorArg::Implicit)]
+    pub integrator: IntegratorArg,
+
+    /// Local error tolerance of the adaptive time steps, relative to the largest
+    /// plate displacement.
+    #[arg(long, value_name = "R", default_value_t = Settings::default().rtol, value_parser = positive_number, allow_negative_numbers = true)]
+    pub rtol: f64,
+
+    /// A fixed time step [s] instead of adaptive steps (steps still land on the
+    /// protocol's kinks).
+    #[arg(long = "dt", value_name = "S", value_parser = positive_number, allow_negative_numbers = true)]
+    pub dt_s: Option<f64>,
+
+    /// A TOML file of [materials.NAME] tables; each replaces the bundle's
+    /// material of the same name.
+    #[arg(long, value_name = "FILE")]
+    pub materials: Option<PathBuf>,
+
+    /// Spacing [s] of the simulated force samples when the bundle has no measured
+    /// force (with measured force, the measured times are used).
+    #[arg(long = "output-dt", value_name = "S", default_value_t = 0.1, value_parser = positive_number, allow_negative_numbers = true)]
+    pub output_dt_s: f64,
+
+    /// Also write N + 1 shapes evenly spaced in time from 0 to end_s
+    /// (shapes/shape-*.vtu) and shapes.pvd, a time series for ParaView.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    pub pvd: Option<u32>,
+
+    /// Replace OUT when it holds a previous wagashi output (a folder with
+    /// summary.json); any other existing folder is never replaced.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// `--integrator`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum IntegratorArg {
+    /// Quasi-static implicit steps with the exact history update (default).
+    Implicit,
+    /// Dynamic Newmark steps with a lumped mass.
+    Dynamic,
+    /// The seed paper's scheme: dynamics, constraint stabilisation, explicit Runge-Kutta.
+    Seed,
+}
+
+impl IntegratorArg {
+    fn integrator(self) -> Integrator {
+        match self {
+            IntegratorArg::Implicit => Integrator::QuasiStatic,
+            IntegratorArg::Dynamic => Integrator::Dynamic,
+            IntegratorArg::Seed => Integrator::Seed,
+        }
+    }
+
+    /// The name as the command line spells it.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            IntegratorArg::Implicit => "implicit",
+            IntegratorArg::Dynamic => "dynamic",
+            IntegratorArg::Seed => "seed",
+        }
+    }
+}
+
+fn positive_number(s: &str) -> Result<f64, String> {
+    let x: f64 = s.trim().parse().map_err(|_| format!("`{s}` is not a number"))?;
+    if x.is_finite() && x > 0.0 {
+        Ok(x)
+    } else {
+        Err(format!("{s} must be a finite number > 0"))
+    }
+}
+
+/// Everything one simulation needs besides the bundle: what `press` reads from
+/// its flags and `demo` fixes.
+#[derive(Debug, Clone)]
+pub struct PressOptions {
+    /// Element size [mm]; `None`: a quarter of the smallest dimension.
+    pub size_mm: Option<f64>,
+    /// Where a given `size_mm` comes from, for the report (e.g. `--size-mm`).
+    pub size_origin: &'static str,
+    /// The integrator.
+    pub integrator: IntegratorArg,
+    /// Relative tolerance of the adaptive steps.
+    pub rtol: f64,
+    /// Fixed step [s], if any.
+    pub dt_s: Option<f64>,
+    /// Force sample spacing [s] when nothing was measured.
+    pub output_dt_s: f64,
+    /// Number of intervals of the `--pvd` time series.
+    pub pvd: Option<u32>,
+    /// The output folder.
+    pub output: PathBuf,
+    /// Replace a previous wagashi output in `output`.
+    pub replace: bool,
+}
+
+/// `wagashi press`.
+pub fn run(args: &PressArgs) -> anyhow::Result<()> {
+    let external = match &args.materials {
+        Some(path) => read_materials_file(path)?,
+        None => Default::default(),
+    };
+    let dir = bundle_dir(&args.bundle)?;
+    let bundle = read_bundle_with(&dir, &external)?;
+    let options = PressOptions {
+        size_mm: args.size_mm,
+        size_origin: "--size-mm",
+        integrator: args.integrator,
+        rtol: args.rtol,
+        dt_s: args.dt_s,
+        output_dt_s: args.output_dt_s,
+        pvd: args.pvd,
+        output: args.output.clone(),
+        replace: args.force,
+    };
+    let mut out = std::io::stdout().lock();
+    let summary = press_bundle(&bundle, &options, &mut out)?;
+    print_results(&summary, &mut out)?;
+    Ok(())
+}
+
+/// The bundle folder of a BUNDLE argument: the folder itself, or the folder of a
+/// given `experiment.toml`.
+fn bundle_dir(path: &Path) -> anyhow::Result<PathBuf> {
+    if path.is_dir() {
+        return Ok(path.to_path_buf());
+    }
+    if path.is_file() && path.file_name().is_some_and(|n| n == wagashi_io::bundle::EXPERIMENT_FILE) {
+        let parent = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        return Ok(parent.to_path_buf());
+    }
+    if path.exists() {
+        bail!("{}: not a bundle: a bundle is a folder holding experiment.toml", path.display());
+    }
+    bail!("{}: no such folder (a bundle is a folder holding experiment.toml)", path.display());
+}
+
+/// The default element size [mm]: a quarter of the smallest dimension (min(W, H, T)
+/// for a block, min(R, H) for a cylinder); `None` for a surface specimen.
+pub fn default_size_mm(bundle: &Bundle) -> Option<f64> {
+    let s = &bundle.experiment.specimen;
+    let smallest = match s.shape {
+        Shape::Block => s.block_size().map(|[w, h, t]| w.min(h).min(t)),
+        Shape::Cylinder => Some(s.radius_mm?.min(s.height_mm?)),
+        Shape::Surface => None,
+    };
+    smallest.map(|d| d / 4.0)
+}
+
+/// Simulates `bundle` with `options` and writes the output folder; reports the
+/// mesh and progress on the way (`out`: stdout; the bar: stderr). Both `press`
+/// and `demo` go through here.
+pub fn press_bundle(bundle: &Bundle, options: &PressOptions, out: &mut dyn Write) -> anyhow::Result<Summary> {
+    let clock = Instant::now();
+    let protocol = &bundle.experiment.protocol;
+    let end_s = protocol.end_s;
+    let keep_time_s = protocol.release_s.min(end_s);
+
+    // Refuse a bad output folder before the (possibly long) simulation.
+    let output = prepare_output(bundle, &options.output, options.replace)?;
+
+    let (size_mm, size_origin) = match (options.size_mm, default_size_mm(bundle)) {
+        (Some(h), _) => (h, options.size_origin),
+        (None, Some(h)) => (h, "default: a quarter of the smallest dimension"),
+        // A surface specimen: `to_press` refuses it (not simulated yet) before
+        // meshing, naming the file and line; the size is never used.
+        (None, None) => (1.0, "default"),
+    };
+    let mut problem = bundle.to_press(size_mm)?;
+    let pvd_times: Vec<f64> = match options.pvd {
+        Some(n) => (0..=n).map(|i| if i == n { end_s } else { end_s * f64::from(i) / f64::from(n) }).collect(),
+        None => Vec::new(),
+    };
+    set_snapshot_times(&mut problem, &pvd_times);
+    let mesh = MeshInfo::of(&problem)?;
+    writeln!(
+        out,
+        "{}: {}D, {size_mm} mm elements ({size_origin}), {} {}, {} nodes",
+        bundle.experiment.name, mesh.dimension, mesh.num_cells, mesh.cell_kind, mesh.num_nodes
+    )?;
+
+    let settings = Settings {
+        integrator: options.integrator.integrator(),
+        rtol: options.rtol,
+        fixed_dt_s: options.dt_s,
+        ..Settings::default()
+    };
+    let bar = SimulationBar::new(end_s);
+    let sim_clock = Instant::now();
+    let result = simulate_any(&problem, &settings, &mut |p| bar.update(p));
+    bar.finish();
+    let result = result.with_context(|| format!("simulating {}", bundle.experiment_file().display()))?;
+    let wall_time_s = sim_clock.elapsed().as_secs_f64();
+
+    // Force samples: at the measured times, else on the --output-dt grid.
+    let measured = bundle.force.as_ref().filter(|m| !m.samples.is_empty());
+    let times = match measured {
+        Some(m) => m.samples.iter().map(|s| s.t_s).collect(),
+        None => uniform_times(end_s, options.output_dt_s)?,
+    };
+    let force = ForceSeries::sampled(&result, &times);
+    let comparison = measured.map(|m| ForceComparison::new(&force, m));
+    let markers = MarkerSeries::from_tracks(&result.markers);
+
+    let keep = snapshot(&result, keep_time_s)?;
+    let last = snapshot(&result, end_s)?;
+    let name = format!("{}-sim", bundle.experiment.name);
+    let dir = output.path();
+    write_bundle(dir, &BundleWrite::simulated(bundle, &name, &force, &markers))?;
+    write_atomic(dir.join("steps.csv"), steps_csv(&result.steps).as_bytes())?;
+    write_shape(&dir.join("keep.vtu"), &problem, keep)?;
+    write_shape(&dir.join("final.vtu"), &problem, last)?;
+    write_atomic(dir.join("force.svg"), force_svg(&bundle.experiment.name, &force, measured)?.as_bytes())?;
+    let mut files: Vec<String> = ["experiment.toml", "force.csv"].map(String::from).to_vec();
+    if !markers.is_empty() {
+        files.push("markers.csv".into());
+    }
+    files.extend(["summary.json", "steps.csv", "keep.vtu", "final.vtu", "force.svg"].map(String::from));
+    if !pvd_times.is_empty() {
+        write_time_series(dir, &problem, &result, &pvd_times)?;
+        files.extend(["shapes.pvd".to_string(), "shapes/".to_string()]);
+    }
+
+    let summary = Summary {
+        wagashi_version: env!("CARGO_PKG_VERSION"),
+        name: bundle.experiment.name.clone(),
+        input: bundle.dir.display().to_string(),
+        output: options.output.display().to_string(),
+        dimension: mesh.dimension,
+        cells: mesh.num_cells,
+        nodes: mesh.num_nodes,
+        free_dofs: result.num_free_dofs,
+        integrator: options.integrator.as_str(),
+        rtol: options.rtol,
+        dt_s: options.dt_s,
+        size_mm,
+        steps: result.steps.len(),
+        factorizations: result.num_factorizations,
+        factor_nonzeros: result.factor_nonzeros,
+        wall_time_s,
+        total_time_s: 0.0,
+        peak_force_n: result.peak_force(),
+        force_end_of_hold_n: result.bottom_force_at(keep_time_s),
+        keep_height_loss_mm: mesh.height_loss_mm(keep),
+        final_height_loss_mm: mesh.height_loss_mm(last),
+        keep_time_s,
+        final_time_s: end_s,
+        force_samples: force.samples.len(),
+        markers: markers.len(),
+        measured_force_samples: measured.map(|m| m.samples.len()),
+        force_rms_diff_n: comparison.map(|c| c.rms_n),
+        force_max_abs_diff_n: comparison.map(|c| c.max_abs_n),
+        files,
+    };
+    // summary.json marks the folder as a wagashi output: it goes in last.
+    let summary = Summary { total_time_s: clock.elapsed().as_secs_f64(), ..summary };
+    write_atomic(dir.join("summary.json"), summary.to_json()?.as_bytes())?;
+    output.commit()?;
+    Ok(summary)
+}
+
+/// Prints the results of a run (the same for `press` and `demo`).
+pub fn print_results(s: &Summary, out: &mut dyn Write) -> anyhow::Result<()> {
+    writeln!(
+        out,
+        "simulated {} s in {} steps ({} factorizations, {} free dofs) in {:.2} s",
+        s.final_time_s, s.steps, s.factorizations, s.free_dofs, s.wall_time_s
+    )?;
+    writeln!(out, "peak force            {:.4} N", s.peak_force_n)?;
+    writeln!(out, "force at end of hold  {:.4} N (t = {} s)", s.force_end_of_hold_n, s.keep_time_s)?;
+    writeln!(out, "final height loss     {:.4} mm (t = {} s)", s.final_height_loss_mm, s.final_time_s)?;
+    if let (Some(rms), Some(max)) = (s.force_rms_diff_n, s.force_max_abs_diff_n) {
+        writeln!(out, "simulated - measured  rms {rms:.4} N, max {max:.4} N")?;
+    }
+    writeln!(out, "output                {}", s.output)?;
+    Ok(())
+}
+
+/// Checks `target` and starts building it. Refused: a target that is the bundle,
+/// lies inside it or holds it; an existing previous output unless `replace`; and
+/// (by [`AtomicDir`]) any other existing, non-empty folder or file.
+fn prepare_output(bundle: &Bundle, target: &Path, replace: bool) -> anyhow::Result<AtomicDir> {
+    // An embedded bundle's folder does not exist and cannot overlap.
+    if let Ok(input) = bundle.dir.canonicalize() {
+        let output = resolve(target)?;
+        if output.starts_with(&input) || input.starts_with(&output) {
+            bail!(
+                "{}: the output folder may not be, contain or lie inside the input bundle {} (inputs are never modified)",
+                target.display(),
+                bundle.dir.display()
+            );
+        }
+    }
+    let previous = target.join(wagashi_io::atomic::OUTPUT_MARKER_FILE).is_file();
+    if previous && !replace {
+        bail!("{}: exists (a previous wagashi output); pass --force to replace it", target.display());
+    }
+    Ok(AtomicDir::new(target)?)
+}
+
+/// `path` made absolute with symbolic links resolved as far as it exists.
+fn resolve(path: &Path) -> anyhow::Result<PathBuf> {
+    let absolute = std::path::absolute(path).with_context(|| format!("{}: cannot resolve", path.display()))?;
+    let mut existing = absolute.as_path();
+    let mut rest = Vec::new();
+    while !existing.exists() {
+        match (existing.parent(), existing.file_name()) {
+            (Some(parent), Some(name)) => {
+                rest.push(name.to_os_string());
+                existing = parent;
+            }
+            _ => break,
+        }
+    }
+    let mut resolved = existing.canonicalize().unwrap_or_else(|_| existing.to_path_buf());
+    resolved.extend(rest.iter().rev());
+    Ok(resolved)
+}
+
+/// `0, dt, 2 dt, ...` up to `end_s`, and `end_s` itself when it is not on the grid.
+fn uniform_times(end_s: f64, dt_s: f64) -> anyhow::Result<Vec<f64>> {
+    let n = (end_s / dt_s + 1e-9).floor();
+    if n > MAX_OUTPUT_SAMPLES {
+        bail!("--output-dt {dt_s} s gives {n:.0} force samples over {end_s} s; at most {MAX_OUTPUT_SAMPLES:.0} are written");
+    }
+    let n = n as usize;
+    let mut times: Vec<f64> = (0..=n).map(|i| (i as f64 * dt_s).min(end_s)).collect();
+    if end_s - times[n] > 1e-9 * end_s {
+        times.push(end_s);
+    } else {
+        times[n] = end_s;
+    }
+    Ok(times)
+}
+
+fn set_snapshot_times(problem: &mut AnyPress, times: &[f64]) {
+    let t: Vec<f64> = times.iter().copied().filter(|&t| t > 0.0).collect();
+    match problem {
+        AnyPress::Plane(p) => p.snapshot_times = t,
+        AnyPress::Solid(p) => p.snapshot_times = t,
+    }
+}
+
+fn snapshot(result: &PressResult, t_s: f64) -> anyhow::Result<&Snapshot> {
+    result.snapshot_at(t_s).with_context(|| format!("the engine kept no shape at t = {t_s} s"))
+}
+
+fn write_shape(path: &Path, problem: &AnyPress, snapshot: &Snapshot) -> Result<(), WriteError> {
+    let fields = VtuFields::from_snapshot(snapshot);
+    match problem {
+        AnyPress::Plane(p) => write_vtu(path, &p.mesh, &fields),
+        AnyPress::Solid(p) => write_vtu(path, &p.mesh, &fields),
+    }
+}
+
+/// `shapes/shape-NNNN.vtu` at `times` and `shapes.pvd`. The shape at t = 0 is the
+/// engine's initial state: zero displacement and stress.
+fn write_time_series(dir: &Path, problem: &AnyPress, result: &PressResult, times: &[f64]) -> anyhow::Result<()> {
+    let shapes = dir.join("shapes");
+    std::fs::create_dir(&shapes).with_context(|| format!("{}: cannot create", shapes.display()))?;
+    let initial = |num_nodes: usize, num_cells: usize| Snapshot {
+        t_s: 0.0,
+        displacement: vec![0.0; result.dim * num_nodes],
+        cell_stress: vec![0.0; result.num_stress * num_cells],
+    };
+    let mut entries = Vec::with_capacity(times.len());
+    for (i, &t) in times.iter().enumerate() {
+        let name = format!("shape-{i:04}.vtu");
+        let zero;
+        let snap = if t > 0.0 {
+            snapshot(result, t)?
+        } else {
+            let (nodes, cells) = match problem {
+                AnyPress::Plane(p) => (p.mesh.num_nodes(), p.mesh.num_cells()),
+                AnyPress::Solid(p) => (p.mesh.num_nodes(), p.mesh.num_cells()),
+            };
+            zero = initial(nodes, cells);
+            &zero
+        };
+        write_shape(&shapes.join(&name), problem, snap)?;
+        entries.push((t, PathBuf::from("shapes").join(name)));
+    }
+    write_pvd(dir.join("shapes.pvd"), &entries)?;
+    Ok(())
+}
+
+/// What the output reports about the mesh.
+struct MeshInfo {
+    dimension: usize,
+    num_cells: usize,
+    num_nodes: usize,
+    cell_kind: &'static str,
+    /// The node set `top` (the face under the plate).
+    top: Vec<u32>,
+}
+
+impl MeshInfo {
+    fn of(problem: &AnyPress) -> anyhow::Result<Self> {
+        let (dimension, num_cells, num_nodes, cell_kind, top) = match problem {
+            AnyPress::Plane(p) => (2, p.mesh.num_cells(), p.mesh.num_nodes(), "triangles", p.mesh.node_set("top")),
+            AnyPress::Solid(p) => (3, p.mesh.num_cells(), p.mesh.num_nodes(), "tetrahedra", p.mesh.node_set("top")),
+        };
+        let top = top.context("the mesh")?.to_vec();
+        Ok(Self { dimension, num_cells, num_nodes, cell_kind, top })
+    }
+
+    /// Minus the mean y displacement of the top face [mm] in `snapshot`.
+    fn height_loss_mm(&self, snapshot: &Snapshot) -> f64 {
+        let d = self.dimension;
+        let sum: f64 = self.top.iter().map(|&n| snapshot.displacement[d * n as usize + 1]).sum();
+        -sum / self.top.len().max(1) as f64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn uniform_times_cover_zero_to_end() {
+        let t = uniform_times(400.0, 0.1).unwrap();
+        assert_eq!(t.len(), 4001);
+        assert_eq!((t[0], t[4000]), (0.0, 400.0));
+        let t = uniform_times(1.05, 0.5).unwrap();
+        assert_eq!(t, vec![0.0, 0.5, 1.0, 1.05]);
+        assert!(uniform_times(400.0, 1e-9).is_err());
+    }
+
+    #[test]
+    fn positive_numbers_only() {
+        assert_eq!(positive_number("2.5"), Ok(2.5));
+        for bad in ["0", "-1", "nan", "inf", "x"] {
+            assert!(positive_number(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn resolve_keeps_missing_components() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a/b");
+        assert_eq!(resolve(&p).unwrap(), dir.path().canonicalize().unwrap().join("a/b"));
+    }
+}
