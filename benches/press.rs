@@ -1,4 +1,4 @@
-//! Benchmarks of the engine issue (criterion; `cargo bench`).
+//! Benchmarks of the engine issue (criterion; `cargo bench -p wagashi-workspace-tests`).
 //!
 //! - `seed_mat1_glued_3d/N`: the seed's material 1 trial (Table I protocol, Table
 //!   II x_force, glued plates) on 3D blocks of about N tetrahedra, end to end

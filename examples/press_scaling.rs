@@ -6,7 +6,7 @@
 //! benchmarks (`cargo bench`) measure the same runs; this example is the quick way
 //! to see one size, including the 1M case that takes minutes.
 //!
-//! Run: `cargo run --release --example press_scaling -- 10000 100000`
+//! Run: `cargo run --release -p wagashi-workspace-tests --example press_scaling -- 10000 100000`
 //!
 //! Steps: 1. pick the element size that gives about N cells on the 58 x 59.5 x 12 mm
 //! block; 2. build the problem; 3. simulate; 4. print the figures and the peak

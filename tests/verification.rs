@@ -391,3 +391,15 @@ fn bad_parameters_are_refused_with_their_name() {
     let err = SolidPress::new_3d(m, vec![mat1()], protocol).unwrap_err();
     assert!(err.to_string().contains("release_s"), "{err}");
 }
+
+/// A node that belongs to no cell has no stiffness: the step matrix is singular
+/// and the run stops with an error naming the step and the time, not a panic.
+#[test]
+fn a_singular_step_matrix_is_reported() {
+    let mut m = mesh::block([10.0, 10.0, 10.0], 5.0, "m").unwrap();
+    m.nodes.push([5.0, 5.0, 5.0]); // dangling: in no cell
+    let p = SolidPress::new_3d(m, vec![mat1()], seed_protocol()).unwrap();
+    let err = press::simulate(&p, &Settings::default(), &mut |_| {}).unwrap_err();
+    assert!(matches!(err, PressError::Singular { step: 1, .. }), "{err}");
+    assert!(err.to_string().contains("step 1 at t = "), "{err}");
+}

@@ -80,7 +80,7 @@ pub struct PressArgs {
     pub size_mm: Option<f64>,
 
     /// Time integrator: implicit (quasi-static, exact history update), dynamic
-    /// (Newmark, lumped mass) or seed (the seed paper's explicit scheme; slow).
+    /// (generalized-alpha, lumped mass) or seed (the seed paper's explicit scheme; slow).
     #[arg(long, value_enum, default_value_t = IntegratorArg::Implicit)]
     pub integrator: IntegratorArg,
 
@@ -120,7 +120,7 @@ pub struct PressArgs {
 pub enum IntegratorArg {
     /// Quasi-static implicit steps with the exact history update (default).
     Implicit,
-    /// Dynamic Newmark steps with a lumped mass.
+    /// Dynamic generalized-alpha steps (rho_inf = 0.5) with a lumped mass.
     Dynamic,
     /// The seed paper's scheme: dynamics, constraint stabilisation, explicit Runge-Kutta.
     Seed,

@@ -102,6 +102,7 @@ where
     emit_markers(&model, &mut tracks, &mut marker_next, &y[..ndof], &y[..ndof], 0.0, 0.0, true);
     let mut num_steps = 0usize;
     let mut last_record = 0.0;
+    let (mut last_force, mut peak_force) = (0.0f64, 0.0f64);
     let clock = Instant::now();
     let mut constraints = model.constraints_at(1e-300);
     let mut reactions = [0.0; 2];
@@ -152,7 +153,13 @@ where
         let prev_t = t;
         t = t1;
         // The reactions at t1 come with the last stage's evaluation (at t1, y1).
-        if t - last_record >= record_every || lands {
+        // Record every `record_every` seconds, at kinks, and whenever the force has
+        // moved by more than 0.1 % of the largest so far (so that the fast drop at
+        // release, about 1/psi long, is resolved in the kept samples).
+        let moved = (reactions[0] - last_force).abs() > 1e-3 * peak_force.max(f64::MIN_POSITIVE);
+        if t - last_record >= record_every || lands || moved {
+            last_force = reactions[0];
+            peak_force = peak_force.max(reactions[0].abs());
             steps.push(StepRecord {
                 t_s: t,
                 dt_s: t - prev_t,
