@@ -426,7 +426,9 @@ fn glued_block_recovers_like_the_chain() {
             let uy = snap.displacement[3 * n as usize + 1];
             assert!((uy - want).abs() < 1e-4 * h, "t = {t}, node {n}: {uy} vs {want}");
             // Flat and unsheared: no lateral motion of the (formerly glued) top.
-            assert!(snap.displacement[3 * n as usize].abs() < 1e-9 && snap.displacement[3 * n as usize + 2].abs() < 1e-9);
+            assert!(
+                snap.displacement[3 * n as usize].abs() < 1e-9 && snap.displacement[3 * n as usize + 2].abs() < 1e-9
+            );
         }
     }
 }

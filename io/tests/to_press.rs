@@ -72,6 +72,19 @@ fn block_2d_is_plane_stress_with_the_thickness() {
 }
 
 #[test]
+fn plane_strain_is_a_2d_option_and_refused_in_3d() {
+    let toml2 = edit(EXPERIMENT, "dimension = 3", "dimension = 2");
+    let toml2 = edit(&toml2, "mass_g = 52.43", "mass_g = 52.43\nplane = \"strain\"");
+    let b = with_experiment(&toml2);
+    let p = plane(read_bundle(&b.dir).unwrap().to_press(10.0).unwrap());
+    assert_eq!(p.formulation, Formulation::PlaneStrain { thickness_mm: 12.0 });
+    let toml3 = edit(EXPERIMENT, "mass_g = 52.43", "mass_g = 52.43\nplane = \"stress\"");
+    let b3 = with_experiment(&toml3);
+    let err = read_bundle(&b3.dir).unwrap_err().to_string();
+    assert!(err.contains("experiment.toml:") && err.contains("specimen.plane"), "{err}");
+}
+
+#[test]
 fn default_density_is_one_g_per_cm3() {
     let toml = edit(EXPERIMENT, "mass_g = 52.43\n", "");
     let p = solid(read_bundle(with_experiment(&toml).dir).unwrap().to_press(20.0).unwrap());

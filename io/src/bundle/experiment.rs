@@ -81,6 +81,10 @@ pub struct Specimen {
     /// takes `mass_g` / volume, or else 1 g/cm^3.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub density_g_cm3: Option<f64>,
+    /// Project extension, 2D only: `"stress"` (plane stress with thickness T, the
+    /// seed's choice; the default) or `"strain"` (plane strain, forces per T).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plane: Option<Plane>,
     /// The one material of an unlayered block or cylinder (or of a whole surface).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub material: Option<String>,
@@ -93,6 +97,16 @@ pub struct Specimen {
     /// Surface only: surface region (OBJ object/group, glTF mesh) -> material name.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub regions: BTreeMap<String, String>,
+}
+
+/// The 2D kinematic assumption (`[specimen] plane`, a project extension).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Plane {
+    /// Plane stress with the specimen's thickness T (the seed's choice).
+    Stress,
+    /// Plane strain; forces are per thickness T.
+    Strain,
 }
 
 impl Specimen {

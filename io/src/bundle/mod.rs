@@ -15,6 +15,8 @@
 //!
 //! - `[specimen] density_g_cm3` (optional, > 0) and `[protocol] gravity` (optional,
 //!   default false).
+//! - `[specimen] plane = "stress" | "strain"` (optional, `dimension = 2` only;
+//!   default `"stress"`, the seed's plane stress with thickness T).
 //! - Required keys: `format`, `name`, `dimension`, `[specimen] shape`, the shape's
 //!   size keys (`size_mm`; `radius_mm` and `height_mm`; `surface`), a block's
 //!   `material` or `[[specimen.layers]]` (not both), a cylinder's `material`, a
@@ -40,7 +42,7 @@ mod to_press;
 mod validate;
 mod write;
 
-pub use experiment::{Contact, DataSpec, Experiment, Layer, ProtocolSpec, Shape, Specimen, Tool, FORMAT_V1};
+pub use experiment::{Contact, DataSpec, Experiment, Layer, Plane, ProtocolSpec, Shape, Specimen, Tool, FORMAT_V1};
 pub use material_spec::{read_materials_file, MaterialSpec, MissingParameter, Model};
 pub use read::{read_bundle, read_bundle_from_str, read_bundle_with, Bundle, EXPERIMENT_FILE};
 pub use series::{markers_header, ForceSample, ForceSeries, MarkerSample, MarkerSeries, FORCE_HEADER};

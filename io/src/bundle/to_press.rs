@@ -212,7 +212,10 @@ impl Bundle {
                 let materials = self.materials_for(&mesh.region_names)?;
                 AnyPress::Plane(PlanePress {
                     mesh,
-                    formulation: Formulation::PlaneStress { thickness_mm: t },
+                    formulation: match self.experiment.specimen.plane {
+                        Some(crate::bundle::Plane::Strain) => Formulation::PlaneStrain { thickness_mm: t },
+                        _ => Formulation::PlaneStress { thickness_mm: t },
+                    },
                     materials,
                     density_t_mm3,
                     protocol,

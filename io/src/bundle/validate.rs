@@ -68,6 +68,9 @@ fn validate_specimen(e: &Experiment, map: &SourceMap) -> Result<(), BundleError>
     let not_for = |key: &str, belongs: &str| format!("{key} belongs to {belongs}, not to {shape}");
     positive(map, "specimen.mass_g", s.mass_g, "a mass")?;
     positive(map, "specimen.density_g_cm3", s.density_g_cm3, "a density")?;
+    if e.dimension != 2 && s.plane.is_some() {
+        return Err(map.invalid("specimen.plane", "plane stress or strain is for dimension = 2 only"));
+    }
     match s.shape {
         Shape::Block => {
             let size = require(map, "specimen.size_mm", s.size_mm.as_ref(), "for shape = \"block\"")?;
