@@ -75,7 +75,8 @@ fn block_2d_is_plane_stress_with_the_thickness() {
 fn plane_strain_is_a_2d_option_and_refused_in_3d() {
     let toml2 = edit(EXPERIMENT, "dimension = 3", "dimension = 2");
     let toml2 = edit(&toml2, "mass_g = 52.43", "mass_g = 52.43\nplane = \"strain\"");
-    let b = with_experiment(&toml2);
+    let markers = "marker,t_s,x_mm,y_mm\nm01,0.0,0.0,30.0\n";
+    let b = bundle(&[("experiment.toml", &toml2), ("force.csv", FORCE), ("markers.csv", markers)]);
     let p = plane(read_bundle(&b.dir).unwrap().to_press(10.0).unwrap());
     assert_eq!(p.formulation, Formulation::PlaneStrain { thickness_mm: 12.0 });
     let toml3 = edit(EXPERIMENT, "mass_g = 52.43", "mass_g = 52.43\nplane = \"stress\"");
