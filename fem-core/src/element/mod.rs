@@ -14,7 +14,7 @@ mod constitutive;
 mod simplex;
 
 pub use constitutive::{unit_young_matrix, Formulation};
-pub use simplex::{outward_facet, signed_measure, ReferenceSimplex, Simplex};
+pub use simplex::{jacobian, outward_facet, signed_measure, ReferenceSimplex, Simplex};
 
 use nalgebra::{SMatrix, SVector};
 
@@ -36,12 +36,7 @@ pub fn cell_geometry<const D: usize, const N: usize>(
 where
     Simplex<D, N>: ReferenceSimplex<D, N>,
 {
-    let mut jac = SMatrix::<f64, D, D>::zeros();
-    for i in 0..D {
-        for k in 0..D {
-            jac[(k, i)] = x[i + 1][k] - x[0][k];
-        }
-    }
+    let jac = jacobian(x);
     let (det, inv) = <Simplex<D, N> as ReferenceSimplex<D, N>>::det_and_inverse(&jac);
     let measure = det * <Simplex<D, N> as ReferenceSimplex<D, N>>::MEASURE_FACTOR;
     // Relative degeneracy guard: a cell whose measure is tiny against its edge lengths.

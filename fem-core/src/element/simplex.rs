@@ -26,18 +26,18 @@ impl ReferenceSimplex<3, 4> for Simplex<3, 4> {
     }
 }
 
+/// The Jacobian of the map from the reference simplex: column `i` is `x_(i+1) - x_0`.
+pub fn jacobian<const D: usize, const N: usize>(x: &[[f64; D]; N]) -> SMatrix<f64, D, D> {
+    const { assert!(N == D + 1) };
+    SMatrix::<f64, D, D>::from_fn(|k, i| x[i + 1][k] - x[0][k])
+}
+
 /// Signed measure (area, volume) of a simplex [mm^D]; positive in VTK order.
 pub fn signed_measure<const D: usize, const N: usize>(x: &[[f64; D]; N]) -> f64
 where
     Simplex<D, N>: ReferenceSimplex<D, N>,
 {
-    let mut jac = SMatrix::<f64, D, D>::zeros();
-    for i in 0..D {
-        for k in 0..D {
-            jac[(k, i)] = x[i + 1][k] - x[0][k];
-        }
-    }
-    <Simplex<D, N> as ReferenceSimplex<D, N>>::det_and_inverse(&jac).0
+    <Simplex<D, N> as ReferenceSimplex<D, N>>::det_and_inverse(&jacobian(x)).0
         * <Simplex<D, N> as ReferenceSimplex<D, N>>::MEASURE_FACTOR
 }
 

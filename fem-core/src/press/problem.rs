@@ -234,10 +234,44 @@ pub enum PressError {
     BadSettings(String),
 }
 
+/// The times an integrator's steps must land on, and the times whose state it keeps.
+pub(crate) struct Schedule {
+    /// Protocol kinks and requested snapshot times in (0, end], sorted, unique.
+    pub landings: Vec<f64>,
+    /// Requested snapshot times, the release (when inside the trial) and the end.
+    pub snapshots: Vec<f64>,
+}
+
+impl Schedule {
+    /// Whether `t` is one of the snapshot times.
+    pub fn is_snapshot(&self, t: f64, end: f64) -> bool {
+        self.snapshots.iter().any(|&s| (s - t).abs() <= 1e-12 * end.max(1.0))
+    }
+
+    /// The first landing after `t` (the end when none is left).
+    pub fn next_landing(&self, t: f64, end: f64) -> f64 {
+        self.landings.iter().copied().find(|&k| k > t + 1e-12 * end.max(1.0)).unwrap_or(end)
+    }
+}
+
 impl<const D: usize, const N: usize, const S: usize> PressProblem<D, N, S>
 where
     Simplex<D, N>: ReferenceSimplex<D, N>,
 {
+    pub(crate) fn schedule(&self) -> Schedule {
+        let end = self.protocol.end_s;
+        let mut landings = self.protocol.kinks();
+        landings.extend(self.snapshot_times.iter().copied().filter(|&t| t > 0.0 && t < end));
+        landings.sort_by(f64::total_cmp);
+        landings.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * b.abs().max(1.0));
+        let mut snapshots: Vec<f64> = self.snapshot_times.iter().copied().filter(|&t| t > 0.0 && t <= end).collect();
+        if self.protocol.release_s <= end {
+            snapshots.push(self.protocol.release_s);
+        }
+        snapshots.push(end);
+        Schedule { landings, snapshots }
+    }
+
     /// Checks the mesh, materials, sets and protocol.
     pub fn validate(&self) -> Result<(), PressError> {
         const { assert!(N == D + 1 && S == D * (D + 1) / 2) };

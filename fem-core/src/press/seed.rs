@@ -77,16 +77,7 @@ where
             .flat_map(|(g, grp)| (0..grp.kernel.num_terms).map(move |k| (g, k)))
             .collect(),
     };
-    let mut landings = protocol.kinks();
-    landings.extend(problem.snapshot_times.iter().copied().filter(|&t| t > 0.0 && t < end));
-    landings.sort_by(f64::total_cmp);
-    landings.dedup();
-    let mut snapshot_times: Vec<f64> =
-        problem.snapshot_times.iter().copied().filter(|&t| t > 0.0 && t <= end).collect();
-    if protocol.release_s <= end {
-        snapshot_times.push(protocol.release_s);
-    }
-    snapshot_times.push(end);
+    let schedule = problem.schedule();
     let atol = 1e-9 * model.displacement_scale;
     let record_every = end / 4000.0;
 
@@ -109,7 +100,7 @@ where
     rhs(&model, &layout, constraints, settings.seed_psi, t, &y, &mut k[0], &mut reactions);
     let mut ytmp = vec![0.0; layout.len()];
     while t < end * (1.0 - 1e-13) {
-        let landing = landings.iter().copied().find(|&l| l > t + 1e-12 * end).unwrap_or(end);
+        let landing = schedule.next_landing(t, end);
         let mut step = h.min(landing - t);
         let lands = step >= (landing - t) * (1.0 - 1e-12);
         if lands {
@@ -173,7 +164,7 @@ where
             last_record = t;
             progress(Progress { t_s: t, end_s: end, steps: num_steps });
         }
-        if snapshot_times.iter().any(|&s| (s - t).abs() <= 1e-12 * end) {
+        if schedule.is_snapshot(t, end) {
             snapshots.push(Snapshot {
                 t_s: t,
                 displacement: y[..ndof].to_vec(),

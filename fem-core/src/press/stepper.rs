@@ -139,16 +139,7 @@ where
 
     // Times the steps must land on: physical kinks restart the error estimator.
     let physical_kinks = protocol.kinks();
-    let mut landings = physical_kinks.clone();
-    landings.extend(problem.snapshot_times.iter().copied().filter(|&t| t > 0.0 && t < end));
-    landings.sort_by(f64::total_cmp);
-    landings.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * b.abs().max(1.0));
-    let mut snapshot_times: Vec<f64> =
-        problem.snapshot_times.iter().copied().filter(|&t| t > 0.0 && t <= end).collect();
-    if protocol.release_s <= end {
-        snapshot_times.push(protocol.release_s);
-    }
-    snapshot_times.push(end);
+    let schedule = problem.schedule();
 
     let dt_max = settings.max_dt_s.unwrap_or(end / 20.0);
     let dt_min = 1e-10 * end;
@@ -199,7 +190,7 @@ where
     let mut instant_step = false;
 
     while state.t < end * (1.0 - 1e-13) {
-        let landing = landings.iter().copied().find(|&k| k > state.t + 1e-12 * end.max(1.0)).unwrap_or(end);
+        let landing = schedule.next_landing(state.t, end);
         let mut h = dt.min(dt_max);
         if ladder {
             h = 2f64.powf((2.0 * h.log2()).floor() / 2.0);
@@ -328,7 +319,7 @@ where
         });
         segments.push(outcome.segment);
         emit_markers(&model, &mut tracks, &mut marker_next, &state.u, &outcome.state.u, state.t, t1, false);
-        if snapshot_times.iter().any(|&s| (s - t1).abs() <= 1e-12 * end.max(1.0)) {
+        if schedule.is_snapshot(t1, end) {
             snapshots.push(Snapshot {
                 t_s: t1,
                 displacement: outcome.state.u.clone(),
