@@ -28,9 +28,10 @@ fn par() -> Par {
 /// Why a factorization failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SolveError {
-    /// The matrix is not numerically positive definite.
-    #[error("not positive definite ({0})")]
-    NotPositiveDefinite(String),
+    /// The matrix is not numerically positive definite; `dof` is the free dof (its
+    /// index in the full numbering) whose pivot failed, when faer says which.
+    #[error("not positive definite{}", dof.map_or(String::new(), |d| format!(" at dof {d}")))]
+    NotPositiveDefinite { dof: Option<usize> },
     /// faer could not allocate or set up the factorization.
     #[error("factorization failed: {0}")]
     Setup(String),
@@ -125,6 +126,18 @@ impl ReducedSystem {
         Ok(Self { free_of_dof, dof_of_free, col_ptr, row_idx, positions, diagonal, symbolic })
     }
 
+    /// The dof of a failed pivot: faer reports the pivot's position (one-based) in
+    /// the elimination order; the ordering maps it back to a reduced dof.
+    fn failed_dof(&self, e: &faer::linalg::cholesky::llt::factor::LltError) -> Option<usize> {
+        let faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index } = e;
+        let position = index.checked_sub(1)?;
+        let reduced = match self.symbolic.perm() {
+            Some(perm) => *perm.arrays().0.get(position)?,
+            None => position,
+        };
+        self.dof_of_free.get(reduced).map(|&d| d as usize)
+    }
+
     /// Number of free dofs.
     pub fn num_free(&self) -> usize {
         self.dof_of_free.len()
@@ -168,7 +181,7 @@ impl ReducedSystem {
                 MemStack::new(&mut buf),
                 Default::default(),
             )
-            .map_err(|e| SolveError::NotPositiveDefinite(format!("{e:?}")))?;
+            .map_err(|e| SolveError::NotPositiveDefinite { dof: self.failed_dof(&e) })?;
         Ok(Factor { system: self, values })
     }
 }

@@ -244,9 +244,25 @@ where
             .collect()
     }
 
-    /// The first cell holding `node` (for error messages).
-    pub fn cell_of_node(&self, node: usize) -> usize {
-        self.topology.node_cells[self.topology.cell_ptr[node]].0 as usize
+    /// The first cell holding `node` (for error messages), if any.
+    pub fn cell_of_node(&self, node: usize) -> Option<usize> {
+        let (a, b) = (self.topology.cell_ptr[node], self.topology.cell_ptr[node + 1]);
+        (a < b).then(|| self.topology.node_cells[a].0 as usize)
+    }
+
+    /// A step-matrix failure as an error naming the step, time, node and element.
+    pub fn singular(&self, step: usize, time_s: f64, e: crate::solve::SolveError) -> PressError {
+        let node = match e {
+            crate::solve::SolveError::NotPositiveDefinite { dof: Some(d) } => Some(d / D),
+            _ => None,
+        };
+        PressError::Singular {
+            step,
+            time_s,
+            node,
+            element: node.and_then(|n| self.cell_of_node(n)),
+            detail: e.to_string(),
+        }
     }
 }
 

@@ -218,8 +218,12 @@ pub enum PressError {
     MarkerOutside { name: String, position: Vec<f64>, distance_mm: f64 },
     /// The step matrix is not positive definite (an unconstrained rigid motion or a
     /// non-physical material).
-    #[error("step {step} at t = {time_s:.6} s: the step matrix is singular or not positive definite ({detail})")]
-    Singular { step: usize, time_s: f64, detail: String },
+    #[error("step {step} at t = {time_s:.6} s: the step matrix is singular or not positive definite{}", match (node, element) {
+        (Some(n), Some(e)) => format!(" at node {n} (element {e})"),
+        (Some(n), None) => format!(" at node {n}, which belongs to no element"),
+        _ => format!(" ({detail})"),
+    })]
+    Singular { step: usize, time_s: f64, node: Option<usize>, element: Option<usize>, detail: String },
     /// A NaN or infinity appeared in the solution.
     #[error("step {step} at t = {time_s:.6} s: non-finite displacement in element {element} (node {node})")]
     NonFinite { step: usize, time_s: f64, element: usize, node: usize },

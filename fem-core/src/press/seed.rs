@@ -128,7 +128,10 @@ where
             (e / scale).abs()
         });
         if !err.is_finite() {
-            return Err(PressError::NonFinite { step: num_steps + 1, time_s: t1, element: 0, node: 0 });
+            let dof = ytmp.iter().position(|v| !v.is_finite()).unwrap_or(0) % ndof;
+            let node = dof / D;
+            let element = model.cell_of_node(node).unwrap_or(usize::MAX);
+            return Err(PressError::NonFinite { step: num_steps + 1, time_s: t1, element, node });
         }
         if err > 1.0 {
             h = step * (0.9 * err.powf(-0.2)).clamp(0.2, 0.9);

@@ -148,11 +148,11 @@ where
     let ladder = settings.fixed_dt_s.is_none() && !single_group;
 
     let sys_attached = ReducedSystem::new(&model.pattern, &model.attached.held, Some(&model.node_order))
-        .map_err(|e| PressError::Singular { step: 0, time_s: 0.0, detail: e.to_string() })?;
+        .map_err(|e| model.singular(0, 0.0, e))?;
     let sys_released = if protocol.release_s < end {
         Some(
             ReducedSystem::new(&model.pattern, &model.released.held, Some(&model.node_order))
-                .map_err(|e| PressError::Singular { step: 0, time_s: protocol.release_s, detail: e.to_string() })?,
+                .map_err(|e| model.singular(0, protocol.release_s, e))?,
         )
     } else {
         None
@@ -234,11 +234,8 @@ where
                 .collect();
             let mass_term: Option<Vec<f64>> =
                 dynamic.then(|| model.mass.iter().map(|m| m * (1.0 - ga.alpha_m) / (ga.beta * h * h)).collect());
-            let factor = system.factor(&terms, mass_term.as_deref()).map_err(|e| PressError::Singular {
-                step: step_index + 1,
-                time_s: t1,
-                detail: e.to_string(),
-            })?;
+            let factor =
+                system.factor(&terms, mass_term.as_deref()).map_err(|e| model.singular(step_index + 1, t1, e))?;
             num_factorizations += 1;
             if cache.len() >= CACHE_SIZE {
                 cache.remove(0);
@@ -503,7 +500,7 @@ where
             return Err(PressError::NonFinite {
                 step: step_index,
                 time_s: t1,
-                element: model.cell_of_node(node),
+                element: model.cell_of_node(node).unwrap_or(usize::MAX),
                 node,
             });
         }
