@@ -56,8 +56,8 @@ pub enum BundleError {
         line: usize,
         /// The TOML key path.
         field: String,
-        /// The engine's reason.
-        source: PressError,
+        /// The engine's reason (boxed: the engine's error is large).
+        source: Box<PressError>,
     },
     /// The element size given to [`crate::Bundle::to_press`] is not a positive length.
     #[error("element size {size_mm} mm: must be finite and > 0")]

@@ -63,7 +63,7 @@ impl Bundle {
             }
             _ => (self.experiment_file(), self.line_of("protocol"), "protocol".to_string()),
         };
-        BundleError::Engine { file, line, field, source }
+        BundleError::Engine { file, line, field, source: Box::new(source) }
     }
 
     /// Refuses what the engine cannot simulate yet.
