@@ -205,6 +205,19 @@ impl Bundle {
         let mesh_err = |e: mesh::MeshError| self.engine_error(PressError::Mesh(e));
         let density_t_mm3 = self.density_t_mm3();
         let markers = self.marker_requests();
+        // A 3D problem on `mesh` (blocks and cylinders differ only in the mesh).
+        let solid = |mesh: mesh::TetMesh| -> Result<AnyPress, BundleError> {
+            let materials = self.materials_for(&mesh.region_names)?;
+            Ok(AnyPress::Solid(SolidPress {
+                mesh,
+                formulation: Formulation::Solid,
+                materials,
+                density_t_mm3,
+                protocol: protocol.clone(),
+                markers: markers.clone(),
+                snapshot_times: Vec::new(),
+            }))
+        };
         let problem = match (s.shape, self.dimension()) {
             (Shape::Block, 2) => {
                 let [w, _, t] = block_size()?;
@@ -225,33 +238,13 @@ impl Bundle {
             }
             (Shape::Block, _) => {
                 let [w, _, t] = block_size()?;
-                let mesh = mesh::layered_block(w, t, &layers, size_mm).map_err(mesh_err)?;
-                let materials = self.materials_for(&mesh.region_names)?;
-                AnyPress::Solid(SolidPress {
-                    mesh,
-                    formulation: Formulation::Solid,
-                    materials,
-                    density_t_mm3,
-                    protocol,
-                    markers,
-                    snapshot_times: Vec::new(),
-                })
+                solid(mesh::layered_block(w, t, &layers, size_mm).map_err(mesh_err)?)?
             }
             (Shape::Cylinder, _) => {
                 let r = s.radius_mm.ok_or_else(|| missing("specimen.radius_mm"))?;
                 let h = s.height_mm.ok_or_else(|| missing("specimen.height_mm"))?;
                 let material = s.material.as_deref().ok_or_else(|| missing("specimen.material"))?;
-                let mesh = mesh::cylinder(r, h, size_mm, material).map_err(mesh_err)?;
-                let materials = self.materials_for(&mesh.region_names)?;
-                AnyPress::Solid(SolidPress {
-                    mesh,
-                    formulation: Formulation::Solid,
-                    materials,
-                    density_t_mm3,
-                    protocol,
-                    markers,
-                    snapshot_times: Vec::new(),
-                })
+                solid(mesh::cylinder(r, h, size_mm, material).map_err(mesh_err)?)?
             }
             // Refused by `check_supported`; kept as an error, never a panic.
             (Shape::Surface, _) => return Err(self.unsupported("specimen.shape", SURFACE_UNSUPPORTED.into())),
