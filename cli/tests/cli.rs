@@ -81,18 +81,7 @@ fn a_foreign_output_folder_is_refused_untouched() {
     std::fs::write(out.join("thesis.tex"), "months of work").unwrap();
     let before_parent: Vec<_> = std::fs::read_dir(tmp.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
     for force in [false, true] {
-        let mut args = vec![
-            "press".into(),
-            example("paper/mat1").into_os_string(),
-            "-o".into(),
-            out.clone().into_os_string(),
-            "--size-mm".into(),
-            "20".into(),
-        ];
-        if force {
-            args.push("--force".into());
-        }
-        let o = wagashi_in(tmp.path(), args);
+        let o = wagashi_in(tmp.path(), press_args("paper/mat1", &out, force));
         let line = assert_one_line_error(&o);
         assert!(line.contains("refusing to overwrite") && line.contains("precious"), "{line}");
         assert_eq!(contents(&out), [("thesis.tex".into(), b"months of work".to_vec())].into_iter().collect());
@@ -113,20 +102,7 @@ fn a_foreign_output_folder_is_refused_untouched() {
 fn a_previous_output_needs_force() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("out");
-    let run = |force: bool| {
-        let mut args = vec![
-            "press".into(),
-            example("paper/mat1-2d").into_os_string(),
-            "-o".into(),
-            out.clone().into_os_string(),
-            "--size-mm".into(),
-            "20".into(),
-        ];
-        if force {
-            args.push("--force".into());
-        }
-        wagashi_in(tmp.path(), args)
-    };
+    let run = |force: bool| wagashi_in(tmp.path(), press_args("paper/mat1-2d", &out, force));
     assert_success(&run(false));
     let first = contents(&out);
     let line = assert_one_line_error(&run(false));
@@ -152,4 +128,20 @@ fn the_output_may_not_overlap_the_input() {
         assert!(line.contains("input bundle"), "{line}");
         assert_eq!(contents(&bundle), before);
     }
+}
+
+/// `press EXAMPLE -o OUT --size-mm 20 [--force]`.
+fn press_args(example_name: &str, out: &std::path::Path, force: bool) -> Vec<std::ffi::OsString> {
+    let mut args = vec![
+        "press".into(),
+        example(example_name).into_os_string(),
+        "-o".into(),
+        out.as_os_str().to_owned(),
+        "--size-mm".into(),
+        "20".into(),
+    ];
+    if force {
+        args.push("--force".into());
+    }
+    args
 }
