@@ -9,11 +9,17 @@
 //!   write the results as a bundle plus a summary, a step log, shapes and a plot.
 //! - `wagashi demo` ([`demo`]): the seed paper's material 1 trial, embedded, run
 //!   through the same code path.
+//! - `wagashi import exponent|rheometer FILE... -o OUT_DIR` ([`import`]): raw
+//!   texture-analyser exports into experiment bundles, one folder per file.
+//! - `wagashi fit BUNDLE... -o OUT` ([`fit`]): identify material parameters
+//!   (`wagashi-calibrate`): the seed's three steps or a joint fit, with intervals.
 //!
 //! Errors: `main` prints one line, `error: CAUSE` (the causes joined with `: `),
 //! and exits with status 1; argument errors are clap's (status 2).
 
 mod demo;
+mod fit;
+mod import;
 mod plot;
 mod press;
 mod progress;
@@ -40,12 +46,16 @@ struct Cli {
 enum Command {
     Press(press::PressArgs),
     Demo(demo::DemoArgs),
+    Import(import::ImportArgs),
+    Fit(fit::FitArgs),
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Press(args) => press::run(&args),
         Command::Demo(args) => demo::run(&args),
+        Command::Import(args) => import::run(&args),
+        Command::Fit(args) => fit::run(&args),
     }
 }
 

@@ -19,8 +19,10 @@ pub struct Summary {
     pub input: String,
     /// The output folder, as given.
     pub output: String,
-    /// 2 or 3.
+    /// 2 or 3 (2 for the axisymmetric section of a cylinder).
     pub dimension: usize,
+    /// `solid`, `plane-stress`, `plane-strain` or `axisymmetric` (`--axisymmetric`).
+    pub formulation: &'static str,
     /// Number of cells (triangles or tetrahedra).
     pub cells: usize,
     /// Number of nodes.
@@ -51,9 +53,10 @@ pub struct Summary {
     /// Bottom force at the end of the hold (`keep_time_s`) [N].
     #[serde(rename = "force_end_of_hold_N")]
     pub force_end_of_hold_n: f64,
-    /// Minus the mean y displacement of the top face at `keep_time_s` [mm].
+    /// Minus the mean y displacement of the top face at `keep_time_s` [mm] (mean
+    /// over the top nodes; area-weighted for an axisymmetric section).
     pub keep_height_loss_mm: f64,
-    /// Minus the mean y displacement of the top face at `final_time_s` [mm].
+    /// Minus the mean y displacement of the top face at `final_time_s` [mm] (as above).
     pub final_height_loss_mm: f64,
     /// Time of the keep shape: `release_s` (or `end_s` when that comes first) [s].
     pub keep_time_s: f64,

@@ -80,6 +80,7 @@ pub mod bundle;
 mod error;
 mod number;
 mod source_map;
+pub mod texture;
 pub mod vtu;
 
 pub use atomic::{write_atomic, AtomicDir};

@@ -10,14 +10,14 @@ use wagashi_io::{read_bundle, read_bundle_with, read_materials_file, BundleError
 fn solid(p: AnyPress) -> fem_core::press::SolidPress {
     match p {
         AnyPress::Solid(p) => p,
-        AnyPress::Plane(_) => panic!("expected a 3D problem"),
+        _ => panic!("expected a 3D problem"),
     }
 }
 
 fn plane(p: AnyPress) -> fem_core::press::PlanePress {
     match p {
         AnyPress::Plane(p) => p,
-        AnyPress::Solid(_) => panic!("expected a 2D problem"),
+        _ => panic!("expected a 2D problem"),
     }
 }
 

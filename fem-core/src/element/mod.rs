@@ -8,7 +8,43 @@
 //! Generic code is parameterised by `<const D, const N, const S>` (dimension, nodes
 //! per cell, strain components); the determinant and inverse live in the two
 //! concrete [`ReferenceSimplex`] impls so that generic code needs no nalgebra
-//! dimension bounds.
+//! dimension bounds. The formulations ([`Formulation`]) and their `<D, N, S>`:
+//!
+//! | formulation                         | cells      | `D, N, S`   | strain (Voigt)               | weight `w` of a cell |
+//! |-------------------------------------|------------|-------------|------------------------------|----------------------|
+//! | [`Formulation::Solid`]              | tetrahedra | `3, 4, 6`   | `[xx, yy, zz, xy, xz, yz]`   | volume `V`           |
+//! | [`Formulation::PlaneStress`]/`Strain` | triangles | `2, 3, 3`  | `[xx, yy, xy]`               | area `A` x thickness `t` |
+//! | [`Formulation::Axisymmetric`]       | triangles  | `2, 3, 4`   | `[rr, yy, θθ, ry]`           | `2π r_c A`           |
+//!
+//! ## Axisymmetric triangles
+//!
+//! The specimen is a body of revolution about the y axis; a triangle lives in the
+//! `r-y` half-plane (`r = x >= 0`) and stands for the ring it sweeps. The
+//! displacement is `(u_r, u_y)`, independent of the angle θ (torsionless). Its
+//! strain has one more component than plane strain's, the hoop strain
+//! `e_θθ = u_r / r`, so the strain-displacement block of node `a` is
+//!
+//! ```text
+//!         | dN_a/dr      0     |   e_rr
+//!   B_a = |    0      dN_a/dy  |   e_yy
+//!         | N_a/r        0     |   e_θθ
+//!         | dN_a/dy   dN_a/dr  |   e_ry (engineering shear)
+//! ```
+//!
+//! Integrals over the ring are `int_ring f dV = int_A f 2π r dA`. One-point
+//! (centroid) quadrature is the standard choice for linear triangles: `N_a/r` is
+//! evaluated at the centroid, where `N_a = 1/3` and `r = r_c` (the mean of the
+//! nodes' radii), and the weight becomes `w = 2π r_c A`. The rule integrates the
+//! terms of `K` that are linear in `r` exactly, so a uniform stress state with
+//! `s_rr = s_θθ` (the axisymmetric patch test: `u_r = a r`, `u_y = c + d y`) is
+//! reproduced exactly; `e_θθ` is exact for `u_r = a r`. A triangle of positive
+//! area in `r >= 0` has `r_c > 0`, so cells touching the axis are fine. Forces
+//! are full-circle forces (the `2π r` weight). The material matrix is the 3D
+//! isotropic one restricted to `[rr, yy, θθ, ry]` ([`unit_young_matrix`]).
+//! The shape data the hoop row needs travel in [`CellGeometry::gradients`]
+//! ([`ShapeGradients::hoop`], zero for the other formulations), so that
+//! [`strain_block`], [`cell_strain`], [`nodal_force`] and [`stiffness_block`]
+//! serve every formulation with one signature.
 
 mod constitutive;
 mod simplex;
@@ -18,17 +54,56 @@ pub use simplex::{jacobian, outward_facet, signed_measure, ReferenceSimplex, Sim
 
 use nalgebra::{SMatrix, SVector};
 
-/// Per-cell geometry for P1 kernels: barycentric gradients and the integration weight.
+/// Whether `S` strain components fit a `D`-dimensional formulation: `D (D + 1)/2`
+/// (plane, solid) or, for `D = 2`, 4 (axisymmetric: the hoop strain added).
+pub const fn valid_strain_size(dim: usize, num_strains: usize) -> bool {
+    num_strains == dim * (dim + 1) / 2 || (dim == 2 && num_strains == 4)
+}
+
+/// What the strain-displacement operator `B` of a P1 cell needs: the gradients of
+/// the shape functions and, for the axisymmetric formulation, the shape functions
+/// over the radius at the quadrature point (the hoop row).
+///
+/// Dereferences to the gradient matrix, so `g[(a, k)]` is `dN_a/dx_k`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShapeGradients<const D: usize, const N: usize> {
+    /// Row `a` is the gradient of shape function `a` [1/mm].
+    pub grad: SMatrix<f64, N, D>,
+    /// `N_a(x_q) / r_q` at the quadrature point [1/mm]: the hoop row of the
+    /// axisymmetric `B`, `e_θθ = sum_a hoop[a] u_r,a`; zero for the other formulations.
+    pub hoop: SVector<f64, N>,
+}
+
+impl<const D: usize, const N: usize> ShapeGradients<D, N> {
+    /// Gradients with no hoop row (plane and solid formulations).
+    pub fn planar(grad: SMatrix<f64, N, D>) -> Self {
+        Self { grad, hoop: SVector::zeros() }
+    }
+}
+
+impl<const D: usize, const N: usize> std::ops::Deref for ShapeGradients<D, N> {
+    type Target = SMatrix<f64, N, D>;
+    fn deref(&self) -> &Self::Target {
+        &self.grad
+    }
+}
+
+/// Per-cell geometry for P1 kernels: shape gradients (and the hoop row) and the
+/// integration weight.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CellGeometry<const D: usize, const N: usize> {
-    /// Row `a` is the gradient of shape function `a` [1/mm].
-    pub gradients: SMatrix<f64, N, D>,
-    /// Measure times the out-of-plane thickness in 2D [mm^3].
+    /// The shape gradients [1/mm] (row `a`: shape function `a`) and, axisymmetric
+    /// only, the hoop row `N_a / r` at the centroid [1/mm].
+    pub gradients: ShapeGradients<D, N>,
+    /// The cell's integration weight: volume in 3D [mm^3], area times the
+    /// out-of-plane thickness in plane 2D [mm^3], `2π r_c` times the area for
+    /// axisymmetric cells [mm^3].
     pub weight: f64,
 }
 
 /// Barycentric gradients and signed measure of a simplex, or `Err(measure)` when
-/// the simplex is inverted or degenerate.
+/// the simplex is inverted or degenerate. The weight is the measure times
+/// `thickness` (1 in 3D); there is no hoop row (see [`cell_geometry_in`]).
 pub fn cell_geometry<const D: usize, const N: usize>(
     x: &[[f64; D]; N],
     thickness: f64,
@@ -53,25 +128,65 @@ where
             gradients[(0, k)] -= inv[(i, k)];
         }
     }
-    Ok(CellGeometry { gradients, weight: measure * thickness })
+    Ok(CellGeometry { gradients: ShapeGradients::planar(gradients), weight: measure * thickness })
 }
 
-/// The strain-displacement block of node `a`: `e = sum_a B_a u_a`.
+/// The geometry of a cell in `formulation`: [`cell_geometry`] with the
+/// formulation's thickness for solid and plane cells; for an axisymmetric
+/// triangle (`x[a][0]` the radius) the weight `2π r_c A` and the hoop row
+/// `N_a(centroid) / r_c = 1 / (3 r_c)` (one-point quadrature, see the module docs).
+/// `Err` carries the (signed) measure of an inverted or degenerate cell, or the
+/// weight of an axisymmetric cell that does not lie in `r > 0`.
+pub fn cell_geometry_in<const D: usize, const N: usize>(
+    formulation: Formulation,
+    x: &[[f64; D]; N],
+) -> Result<CellGeometry<D, N>, f64>
+where
+    Simplex<D, N>: ReferenceSimplex<D, N>,
+{
+    match formulation {
+        Formulation::Axisymmetric => {
+            assert!(D == 2, "the axisymmetric formulation is two-dimensional (r, y)");
+            let mut g = cell_geometry::<D, N>(x, 1.0)?;
+            let r_c = x.iter().map(|p| p[0]).sum::<f64>() / N as f64;
+            let weight = std::f64::consts::TAU * r_c * g.weight;
+            if !(r_c > 0.0) {
+                return Err(weight);
+            }
+            g.weight = weight;
+            g.gradients.hoop = SVector::repeat(1.0 / (N as f64 * r_c));
+            Ok(g)
+        }
+        _ => cell_geometry::<D, N>(x, formulation.thickness()),
+    }
+}
+
+/// Whether `<D, S>` is the axisymmetric layout (the hoop strain at index `D`).
+const fn has_hoop(dim: usize, num_strains: usize) -> bool {
+    dim == 2 && num_strains == 4
+}
+
+/// The strain-displacement block of node `a`: `e = sum_a B_a u_a`. For `D = 2, S = 4`
+/// (axisymmetric) row 2 is the hoop row `[N_a / r, 0]` (module docs).
 #[inline]
 pub fn strain_block<const D: usize, const N: usize, const S: usize>(
-    gradients: &SMatrix<f64, N, D>,
+    gradients: &ShapeGradients<D, N>,
     a: usize,
 ) -> SMatrix<f64, S, D> {
-    const { assert!(S == D * (D + 1) / 2, "S must count the symmetric strain components") };
+    const { assert!(valid_strain_size(D, S), "S must count the strain components of a formulation") };
     let mut b = SMatrix::<f64, S, D>::zeros();
     for k in 0..D {
-        b[(k, k)] = gradients[(a, k)];
+        b[(k, k)] = gradients.grad[(a, k)];
     }
     let mut row = D;
+    if has_hoop(D, S) {
+        b[(row, 0)] = gradients.hoop[a];
+        row += 1;
+    }
     for i in 0..D {
         for j in i + 1..D {
-            b[(row, i)] = gradients[(a, j)];
-            b[(row, j)] = gradients[(a, i)];
+            b[(row, i)] = gradients.grad[(a, j)];
+            b[(row, j)] = gradients.grad[(a, i)];
             row += 1;
         }
     }
@@ -81,16 +196,16 @@ pub fn strain_block<const D: usize, const N: usize, const S: usize>(
 /// The (constant) strain of a cell from its nodal displacements.
 #[inline]
 pub fn cell_strain<const D: usize, const N: usize, const S: usize>(
-    gradients: &SMatrix<f64, N, D>,
+    gradients: &ShapeGradients<D, N>,
     u: &[SVector<f64, D>; N],
 ) -> SVector<f64, S> {
-    const { assert!(S == D * (D + 1) / 2) };
+    const { assert!(valid_strain_size(D, S), "S must count the strain components of a formulation") };
     // Displacement gradient H = sum_a u_a (grad N_a)^T.
     let mut h = SMatrix::<f64, D, D>::zeros();
     for a in 0..N {
         for i in 0..D {
             for j in 0..D {
-                h[(i, j)] += u[a][i] * gradients[(a, j)];
+                h[(i, j)] += u[a][i] * gradients.grad[(a, j)];
             }
         }
     }
@@ -99,6 +214,10 @@ pub fn cell_strain<const D: usize, const N: usize, const S: usize>(
         e[k] = h[(k, k)];
     }
     let mut row = D;
+    if has_hoop(D, S) {
+        e[row] = (0..N).map(|a| gradients.hoop[a] * u[a][0]).sum();
+        row += 1;
+    }
     for i in 0..D {
         for j in i + 1..D {
             e[row] = h[(i, j)] + h[(j, i)];
@@ -238,6 +357,121 @@ mod tests {
             for k in 0..6 {
                 prop_assert!((e[k] - expected[k]).abs() < 1e-9);
             }
+        }
+    }
+
+    /// Triangles in the half-plane r = x > 0 (some touching the axis r = 0).
+    fn axisymmetric_points() -> impl Strategy<Value = [[f64; 2]; 3]> {
+        prop::array::uniform3((0.0f64..2.0, -1.0f64..1.0).prop_map(|(r, y)| [if r < 0.2 { 0.0 } else { r }, y]))
+            .prop_filter("non-degenerate", |x| signed_measure::<2, 3>(x).abs() > 1e-2)
+            .prop_map(|mut x| {
+                if signed_measure::<2, 3>(&x) < 0.0 {
+                    x.swap(1, 2);
+                }
+                x
+            })
+    }
+
+    fn axisymmetric(x: &[[f64; 2]; 3]) -> CellGeometry<2, 3> {
+        cell_geometry_in::<2, 3>(Formulation::Axisymmetric, x).unwrap()
+    }
+
+    proptest! {
+        /// Axisymmetric kernel: K symmetric; a rigid translation along the axis (y)
+        /// gives no force; a translation in r is not rigid: it stretches the hoop by
+        /// `1 / r_c`.
+        #[test]
+        fn axisymmetric_kernel_invariants(x in axisymmetric_points(), nu in -0.9f64..0.49) {
+            let g = axisymmetric(&x);
+            let c = unit_young_matrix::<4>(Formulation::Axisymmetric, nu);
+            let km = element_matrix::<2, 3, 4>(&g, &c);
+            prop_assert!((&km - km.transpose()).amax() < 1e-12 * km.amax());
+            let along_y = nalgebra::DVector::from_fn(6, |i, _| if i % 2 == 1 { 1.0 } else { 0.0 });
+            prop_assert!((&km * along_y).amax() < 1e-12 * km.amax());
+            let along_r = [SVector::<f64, 2>::new(1.0, 0.0); 3];
+            let r_c = (x[0][0] + x[1][0] + x[2][0]) / 3.0;
+            let e = cell_strain::<2, 3, 4>(&g.gradients, &along_r);
+            prop_assert!((e - SVector::<f64, 4>::new(0.0, 0.0, 1.0 / r_c, 0.0)).amax() < 1e-12 / r_c);
+            // The weight is 2 pi r_c A.
+            let w = std::f64::consts::TAU * r_c * signed_measure::<2, 3>(&x);
+            prop_assert!((g.weight - w).abs() < 1e-14 * w);
+        }
+
+        /// A uniform radial expansion `u_r = a r` (with any axial stretch `u_y = c + d y`)
+        /// gives the exact strain `(a, d, a, 0)`; `e = sum_a B_a u_a` agrees with
+        /// `cell_strain` for any nodal displacement.
+        #[test]
+        fn axisymmetric_strain_is_exact_for_radial_expansion(
+            x in axisymmetric_points(),
+            (a, c, d) in (-1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0),
+            u in prop::array::uniform6(-1.0f64..1.0),
+        ) {
+            let g = axisymmetric(&x);
+            let field = x.map(|p| SVector::<f64, 2>::new(a * p[0], c + d * p[1]));
+            let e = cell_strain::<2, 3, 4>(&g.gradients, &field);
+            let expected = [a, d, a, 0.0];
+            for k in 0..4 {
+                prop_assert!((e[k] - expected[k]).abs() < 1e-12, "component {}: {} != {}", k, e[k], expected[k]);
+            }
+            let nodal: [SVector<f64, 2>; 3] = std::array::from_fn(|n| SVector::<f64, 2>::new(u[2 * n], u[2 * n + 1]));
+            let via_b: SVector<f64, 4> = (0..3).map(|n| strain_block::<2, 3, 4>(&g.gradients, n) * nodal[n]).sum();
+            prop_assert!((via_b - cell_strain::<2, 3, 4>(&g.gradients, &nodal)).amax() < 1e-12);
+        }
+    }
+
+    /// The axisymmetric patch test: on a distorted mesh of the section `[0, 2] x [0, 2]`
+    /// (cells touching the axis included), boundary values of `u_r = a r`,
+    /// `u_y = c + d y` (uniform stress with `s_rr = s_θθ`, in equilibrium without body
+    /// force) give the same field at every interior node, to round-off (1e-12 of the
+    /// field's size). Centroid quadrature integrates every term of the interior rows
+    /// exactly for this field (they are linear in r per cell).
+    #[test]
+    fn axisymmetric_patch_test() {
+        let mut m = crate::mesh::rectangle(2.0, 2.0, 0.4, "m").unwrap();
+        let on_boundary = |p: &[f64; 2]| p.iter().any(|&c| c < 1e-9 || c > 2.0 - 1e-9);
+        for (i, p) in m.nodes.iter_mut().enumerate() {
+            if !on_boundary(p) {
+                // Up to 0.1 of the 0.4 spacing along each axis: no cell inverts.
+                p[0] += 0.04 * ((i * 7919) % 11) as f64 / 5.0 - 0.04;
+                p[1] += 0.04 * ((i * 104729) % 13) as f64 / 6.0 - 0.04;
+            }
+        }
+        m.validate().unwrap();
+        let (a, c, d) = (0.013, -0.2, -0.031);
+        let exact = |p: &[f64; 2]| [a * p[0], c + d * p[1]];
+        let nu = 0.3746;
+        let cm = unit_young_matrix::<4>(Formulation::Axisymmetric, nu);
+        let n = m.num_nodes() * 2;
+        let mut k = nalgebra::DMatrix::<f64>::zeros(n, n);
+        for (e, cell) in m.cells.iter().enumerate() {
+            let g = axisymmetric(&m.cell_coordinates(e));
+            for (ia, &va) in cell.iter().enumerate() {
+                for (ib, &vb) in cell.iter().enumerate() {
+                    let kab = stiffness_block::<2, 3, 4>(&g, &cm, ia, ib);
+                    for i in 0..2 {
+                        for j in 0..2 {
+                            k[(va as usize * 2 + i, vb as usize * 2 + j)] += kab[(i, j)];
+                        }
+                    }
+                }
+            }
+        }
+        let free: Vec<usize> = (0..n).filter(|&dof| !on_boundary(&m.nodes[dof / 2])).collect();
+        let held: Vec<usize> = (0..n).filter(|&dof| on_boundary(&m.nodes[dof / 2])).collect();
+        let value = |dof: usize| exact(&m.nodes[dof / 2])[dof % 2];
+        let kff = nalgebra::DMatrix::from_fn(free.len(), free.len(), |i, j| k[(free[i], free[j])]);
+        let rhs = nalgebra::DVector::from_fn(free.len(), |i, _| {
+            -held.iter().map(|&h| k[(free[i], h)] * value(h)).sum::<f64>()
+        });
+        let u = kff.cholesky().expect("SPD with the boundary held").solve(&rhs);
+        let worst = free.iter().zip(u.iter()).map(|(&dof, &ui)| (ui - value(dof)).abs()).fold(0.0, f64::max);
+        assert!(worst < 1e-12 * c.abs().max(2.0 * a.abs()), "patch test error {worst:e}");
+        // And the cells carry the exact strain.
+        for e in 0..m.num_cells() {
+            let g = axisymmetric(&m.cell_coordinates(e));
+            let ue = m.cells[e].map(|v| SVector::<f64, 2>::from(exact(&m.nodes[v as usize])));
+            let s = cell_strain::<2, 3, 4>(&g.gradients, &ue);
+            assert!((s - SVector::<f64, 4>::new(a, d, a, 0.0)).amax() < 1e-12);
         }
     }
 

@@ -9,7 +9,7 @@
 
 mod rheology;
 
-pub use rheology::{phi1, ChainElement, MaterialError, RelaxationKernel, Rheology};
+pub use rheology::{phi1, phi1_derivative, ChainElement, MaterialError, RelaxationKernel, Rheology};
 
 /// A material: a rheological chain and a Poisson ratio.
 #[derive(Debug, Clone, PartialEq)]

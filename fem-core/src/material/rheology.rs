@@ -132,54 +132,181 @@ impl Rheology {
 
     /// The relaxation function of the chain (design.md 3.1).
     pub fn relaxation(&self) -> RelaxationKernel {
-        match *self {
-            Rheology::Elastic { e_mpa } => RelaxationKernel {
-                viscous: 0.0,
-                equilibrium: e_mpa,
-                num_terms: 0,
-                amplitudes: [0.0; 2],
-                rates: [0.0; 2],
-            },
-            Rheology::ThreeElement { e1_mpa: e1, c1_mpa_s: c1, c3_mpa_s: c3 } => {
-                // Q(s)/s = B2 + a/(s + k): B2 = c1 c3/(c1+c3), a = E1 c3^2/(c1+c3)^2, k = E1/(c1+c3).
-                let sum = c1 + c3;
+        let p: Vec<f64> = self.parameters().iter().map(|&(_, v)| v).collect();
+        let k = kernel_of(*self, &p);
+        RelaxationKernel {
+            viscous: k.viscous,
+            equilibrium: k.equilibrium,
+            num_terms: k.num_terms,
+            amplitudes: k.amplitudes,
+            rates: k.rates,
+        }
+    }
+
+    /// The derivatives of [`Self::relaxation`] with respect to each parameter, in
+    /// the order of [`Self::parameters`]: `d viscous/d p_i`, `d a_k/d p_i`, ...,
+    /// exact (forward-mode dual numbers through the same formulas).
+    pub fn relaxation_derivatives(&self) -> Vec<RelaxationKernel> {
+        let values: Vec<f64> = self.parameters().iter().map(|&(_, v)| v).collect();
+        (0..values.len())
+            .map(|i| {
+                let p: Vec<Dual> =
+                    values.iter().enumerate().map(|(j, &v)| Dual { v, d: if i == j { 1.0 } else { 0.0 } }).collect();
+                let k = kernel_of(*self, &p);
                 RelaxationKernel {
-                    viscous: c1 * c3 / sum,
-                    equilibrium: 0.0,
-                    num_terms: 1,
-                    amplitudes: [e1 * c3 * c3 / (sum * sum), 0.0],
-                    rates: [e1 / sum, 0.0],
+                    viscous: k.viscous.d,
+                    equilibrium: k.equilibrium.d,
+                    num_terms: k.num_terms,
+                    amplitudes: [k.amplitudes[0].d, k.amplitudes[1].d],
+                    rates: [k.rates[0].d, k.rates[1].d],
                 }
+            })
+            .collect()
+    }
+}
+
+/// The arithmetic the kernel formulas need: `f64`, and [`Dual`] for their derivatives.
+trait KernelScalar:
+    Copy
+    + std::ops::Add<Output = Self>
+    + std::ops::Sub<Output = Self>
+    + std::ops::Mul<Output = Self>
+    + std::ops::Div<Output = Self>
+{
+    fn constant(v: f64) -> Self;
+    fn value(self) -> f64;
+    fn sqrt(self) -> Self;
+}
+
+impl KernelScalar for f64 {
+    fn constant(v: f64) -> Self {
+        v
+    }
+    fn value(self) -> f64 {
+        self
+    }
+    fn sqrt(self) -> Self {
+        f64::sqrt(self)
+    }
+}
+
+/// A forward-mode dual number `v + d eps` (`eps^2 = 0`).
+#[derive(Debug, Clone, Copy)]
+struct Dual {
+    v: f64,
+    d: f64,
+}
+
+impl std::ops::Add for Dual {
+    type Output = Dual;
+    fn add(self, o: Dual) -> Dual {
+        Dual { v: self.v + o.v, d: self.d + o.d }
+    }
+}
+impl std::ops::Sub for Dual {
+    type Output = Dual;
+    fn sub(self, o: Dual) -> Dual {
+        Dual { v: self.v - o.v, d: self.d - o.d }
+    }
+}
+impl std::ops::Mul for Dual {
+    type Output = Dual;
+    fn mul(self, o: Dual) -> Dual {
+        Dual { v: self.v * o.v, d: self.d * o.v + self.v * o.d }
+    }
+}
+impl std::ops::Div for Dual {
+    type Output = Dual;
+    fn div(self, o: Dual) -> Dual {
+        Dual { v: self.v / o.v, d: (self.d * o.v - self.v * o.d) / (o.v * o.v) }
+    }
+}
+impl KernelScalar for Dual {
+    fn constant(v: f64) -> Self {
+        Dual { v, d: 0.0 }
+    }
+    fn value(self) -> f64 {
+        self.v
+    }
+    fn sqrt(self) -> Self {
+        let r = self.v.sqrt();
+        Dual { v: r, d: if r > 0.0 { 0.5 * self.d / r } else { 0.0 } }
+    }
+}
+
+/// [`RelaxationKernel`] over a scalar type.
+struct KernelOf<T> {
+    viscous: T,
+    equilibrium: T,
+    num_terms: usize,
+    amplitudes: [T; 2],
+    rates: [T; 2],
+}
+
+impl KernelOf<f64> {
+    #[cfg(test)]
+    fn into_f64(self) -> RelaxationKernel {
+        RelaxationKernel {
+            viscous: self.viscous,
+            equilibrium: self.equilibrium,
+            num_terms: self.num_terms,
+            amplitudes: self.amplitudes,
+            rates: self.rates,
+        }
+    }
+}
+
+/// The relaxation function of `model` with the parameter values `p` (in the order
+/// of [`Rheology::parameters`]), written once for values and derivatives.
+fn kernel_of<T: KernelScalar>(model: Rheology, p: &[T]) -> KernelOf<T> {
+    let zero = T::constant(0.0);
+    match model {
+        Rheology::Elastic { .. } => {
+            KernelOf { viscous: zero, equilibrium: p[0], num_terms: 0, amplitudes: [zero; 2], rates: [zero; 2] }
+        }
+        Rheology::ThreeElement { .. } => {
+            // Q(s)/s = B2 + a/(s + k): B2 = c1 c3/(c1+c3), a = E1 c3^2/(c1+c3)^2, k = E1/(c1+c3).
+            let (e1, c1, c3) = (p[0], p[1], p[2]);
+            let sum = c1 + c3;
+            KernelOf {
+                viscous: c1 * c3 / sum,
+                equilibrium: zero,
+                num_terms: 1,
+                amplitudes: [e1 * c3 * c3 / (sum * sum), zero],
+                rates: [e1 / sum, zero],
             }
-            Rheology::FourElement { e1_mpa: e1, c1_mpa_s: c1, e2_mpa: e2, c3_mpa_s: c3 } => {
-                // Q(s)/s = (E2 s + E1 E2/c1) / (s^2 + A1 s + A0).
-                let a1 = (c3 * e1 + e2 * c3 + e2 * c1) / (c1 * c3);
-                let a0 = e1 * e2 / (c1 * c3);
-                second_order(0.0, e2, e1 * e2 / c1, a1, a0)
-            }
-            Rheology::FiveElement { e1_mpa: e1, e2_mpa: e2, c1_mpa_s: c1, c2_mpa_s: c2, c3_mpa_s: c3 } => {
-                // The seed's eq. (3).
-                let d = c1 * c2 + c2 * c3 + c3 * c1;
-                let a0 = e1 * e2 / d;
-                let a1 = (e1 * (c2 + c3) + e2 * (c1 + c3)) / d;
-                let b0 = e1 * e2 * c3 / d;
-                let b1 = (e1 * c2 * c3 + c1 * e2 * c3) / d;
-                let b2 = c1 * c2 * c3 / d;
-                second_order(b2, b1 - b2 * a1, b0 - b2 * a0, a1, a0)
-            }
+        }
+        Rheology::FourElement { .. } => {
+            // Q(s)/s = (E2 s + E1 E2/c1) / (s^2 + A1 s + A0).
+            let (e1, e2, c1, c3) = (p[0], p[1], p[2], p[3]);
+            let a1 = (c3 * e1 + e2 * c3 + e2 * c1) / (c1 * c3);
+            let a0 = e1 * e2 / (c1 * c3);
+            second_order(zero, e2, e1 * e2 / c1, a1, a0)
+        }
+        Rheology::FiveElement { .. } => {
+            // The seed's eq. (3).
+            let (e1, e2, c1, c2, c3) = (p[0], p[1], p[2], p[3], p[4]);
+            let d = c1 * c2 + c2 * c3 + c3 * c1;
+            let a0 = e1 * e2 / d;
+            let a1 = (e1 * (c2 + c3) + e2 * (c1 + c3)) / d;
+            let b0 = e1 * e2 * c3 / d;
+            let b1 = (e1 * c2 * c3 + c1 * e2 * c3) / d;
+            let b2 = c1 * c2 * c3 / d;
+            second_order(b2, b1 - b2 * a1, b0 - b2 * a0, a1, a0)
         }
     }
 }
 
 /// `Q(s)/s = b2 + (p s + q)/(s^2 + a1 s + a0)` split into two exponentials.
-fn second_order(b2: f64, p: f64, q: f64, a1: f64, a0: f64) -> RelaxationKernel {
+fn second_order<T: KernelScalar>(b2: T, p: T, q: T, a1: T, a0: T) -> KernelOf<T> {
     // Roots of x^2 + a1 x + a0, m > n > 0, computed without cancellation.
-    let disc = (a1 * a1 - 4.0 * a0).max(0.0).sqrt();
-    let m = 0.5 * (a1 + disc);
+    let disc2 = a1 * a1 - T::constant(4.0) * a0;
+    let disc = if disc2.value() > 0.0 { disc2.sqrt() } else { T::constant(0.0) };
+    let m = T::constant(0.5) * (a1 + disc);
     let n = a0 / m;
     let a = (q - p * m) / (n - m);
     let b = (q - p * n) / (m - n);
-    RelaxationKernel { viscous: b2, equilibrium: 0.0, num_terms: 2, amplitudes: [a, b], rates: [m, n] }
+    KernelOf { viscous: b2, equilibrium: T::constant(0.0), num_terms: 2, amplitudes: [a, b], rates: [m, n] }
 }
 
 /// `(1 - exp(-x))/x`, accurate for small `x`.
@@ -188,6 +315,15 @@ pub fn phi1(x: f64) -> f64 {
         1.0 - 0.5 * x
     } else {
         -(-x).exp_m1() / x
+    }
+}
+
+/// `d phi1/dx = (exp(-x) - phi1(x))/x`, accurate for small `x`.
+pub fn phi1_derivative(x: f64) -> f64 {
+    if x.abs() < 1e-4 {
+        -0.5 + x / 3.0 - x * x / 8.0
+    } else {
+        ((-x).exp() - phi1(x)) / x
     }
 }
 
@@ -290,6 +426,49 @@ mod tests {
                 }
                 assert!((sg * j - 1.0).abs() < 1e-12, "{model:?} at s = {s}: {}", sg * j);
             }
+        }
+    }
+
+    /// The dual-number derivatives of the kernel against central differences
+    /// (relative step 1e-6: truncation and rounding both near 1e-9 relative).
+    #[test]
+    fn relaxation_derivatives_match_finite_differences() {
+        let models = [
+            mat1(),
+            Rheology::ThreeElement { e1_mpa: 0.05, c1_mpa_s: 0.3, c3_mpa_s: 12.0 },
+            Rheology::FourElement { e1_mpa: 0.05, c1_mpa_s: 0.3, e2_mpa: 0.02, c3_mpa_s: 12.0 },
+            Rheology::Elastic { e_mpa: 0.7 },
+        ];
+        let flat =
+            |k: &RelaxationKernel| [k.viscous, k.equilibrium, k.amplitudes[0], k.amplitudes[1], k.rates[0], k.rates[1]];
+        for model in models {
+            let exact = model.relaxation_derivatives();
+            let values: Vec<f64> = model.parameters().iter().map(|p| p.1).collect();
+            for (i, d) in exact.iter().enumerate() {
+                let h = 1e-6 * values[i];
+                let at = |x: f64| {
+                    let mut p = values.clone();
+                    p[i] = x;
+                    flat(&kernel_of(model, &p).into_f64())
+                };
+                let (up, down) = (at(values[i] + h), at(values[i] - h));
+                let base = flat(&model.relaxation());
+                for (c, (&dx, (&u, &l))) in flat(d).iter().zip(up.iter().zip(&down)).enumerate() {
+                    let fd = (u - l) / (2.0 * h);
+                    // Scale: the component's size over the parameter's size.
+                    let scale = (base[c].abs() / values[i]).max(1e-300);
+                    assert!((dx - fd).abs() <= 1e-6 * scale, "{model:?} d[{c}]/d p{i}: {dx} vs {fd}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn phi1_derivative_is_continuous_and_exact() {
+        for x in [1e-9f64, 1e-5, 9.9e-5, 1.01e-4, 0.3, 4.0, 50.0] {
+            let h = 1e-6 * x.max(1e-3);
+            let fd = (phi1(x + h) - phi1(x - h)) / (2.0 * h);
+            assert!((phi1_derivative(x) - fd).abs() < 1e-7, "x = {x}: {} vs {fd}", phi1_derivative(x));
         }
     }
 

@@ -5,6 +5,8 @@
 //! Blocks are split into six tetrahedra per hexahedral cell along one main
 //! diagonal (Kuhn/Freudenthal), rectangles into two triangles per quad, so
 //! neighbouring cells always conform. Layers stack along y, bottom first.
+//! The axisymmetric section of a cylinder is the rectangle `[0, R] x [0, H]` in
+//! the `r-y` plane (x = r), with the node set `axis` (r = 0) as well.
 
 use super::{MeshError, TetMesh, TriMesh};
 use std::collections::BTreeMap;
@@ -93,6 +95,26 @@ pub fn layered_rectangle(width_mm: f64, layers: &[Layer], size_mm: f64) -> Resul
     let mut mesh =
         TriMesh { nodes, cells, cell_regions, region_names, node_sets: BTreeMap::new(), face_sets: BTreeMap::new() };
     add_bottom_top(&mut mesh, height);
+    Ok(mesh)
+}
+
+/// The axisymmetric section `[0, R] x [0, H]` (x = r, y up) of a cylinder of
+/// `radius` and `height` with its axis along y, for
+/// [`crate::element::Formulation::Axisymmetric`]: a [`rectangle`] with the node set
+/// `axis` (the nodes on r = 0) besides `bottom` and `top`.
+pub fn axisymmetric_section(radius_mm: f64, height_mm: f64, size_mm: f64, region: &str) -> Result<TriMesh, MeshError> {
+    layered_axisymmetric_section(radius_mm, &[Layer { region: region.into(), thickness_mm: height_mm }], size_mm)
+}
+
+/// The axisymmetric section of a cylinder of layers stacked along y (see
+/// [`axisymmetric_section`]).
+pub fn layered_axisymmetric_section(radius_mm: f64, layers: &[Layer], size_mm: f64) -> Result<TriMesh, MeshError> {
+    let mut mesh = layered_rectangle(radius_mm, layers, size_mm).map_err(|e| match e {
+        MeshError::BadGeometry(m) => MeshError::BadGeometry(m.replace("width", "radius")),
+        other => other,
+    })?;
+    // Grid nodes at r = 0 are exactly 0.0.
+    mesh.add_node_set("axis", |p| p[0] == 0.0);
     Ok(mesh)
 }
 
@@ -335,6 +357,21 @@ mod tests {
         m.validate().unwrap();
         assert!((m.measure() - 58.0 * 59.5).abs() < 1e-9 * 58.0 * 59.5);
         assert!(m.node_sets["top"].iter().all(|&i| (m.nodes[i as usize][1] - 59.5).abs() < 1e-12));
+    }
+
+    #[test]
+    fn axisymmetric_section_has_its_axis() {
+        let m = axisymmetric_section(4.0, 9.0, 1.0, "gel").unwrap();
+        m.validate().unwrap();
+        assert!((m.measure() - 36.0).abs() < 1e-12 * 36.0);
+        let axis = &m.node_sets["axis"];
+        assert_eq!(axis.len(), 10);
+        assert!(axis.iter().all(|&i| m.nodes[i as usize][0] == 0.0));
+        assert_eq!(m.nodes.iter().filter(|p| p[0] == 0.0).count(), axis.len());
+        assert!(m.node_sets["bottom"].len() == 5 && m.node_sets["top"].len() == 5);
+        assert!(
+            matches!(axisymmetric_section(-1.0, 9.0, 1.0, "gel"), Err(MeshError::BadGeometry(m)) if m.contains("radius"))
+        );
     }
 
     #[test]

@@ -6,6 +6,12 @@
 //! specimen recovers until `end_s`. Forces are reported compression positive: the
 //! bottom reaction (what the seed's tactile sensor measured) and the plate force.
 //!
+//! Formulations: 3D tetrahedra ([`SolidPress`]), plane triangles ([`PlanePress`])
+//! and axisymmetric triangles ([`AxisymmetricPress`]): the `r-y` section of a body
+//! of revolution about the push axis y, whose nodes on the axis (node set `axis`)
+//! hold `u_r = 0` at all times and whose reactions are full-circle forces. Markers
+//! of an axisymmetric problem are located, and tracked, in the section: `(r, y)`.
+//!
 //! Integrators ([`Integrator`]): the quasi-static implicit scheme with the exact
 //! exponential history update (design.md 3.3, the default), a dynamic
 //! generalized-alpha scheme (lumped mass), and the seed's own scheme (eq. 8:
@@ -16,13 +22,15 @@ mod model;
 mod problem;
 mod result;
 mod seed;
+mod sensitivity;
 mod stepper;
 
 pub use problem::{
-    AnyPress, Attachment, Integrator, MarkerRequest, PlanePress, PressError, PressProblem, Protocol, Settings,
-    SolidPress,
+    AnyPress, Attachment, AxisymmetricPress, Integrator, MarkerRequest, PlanePress, PressError, PressProblem, Protocol,
+    Settings, SolidPress,
 };
 pub use result::{MarkerTrack, PressResult, Progress, Snapshot, StepRecord};
+pub use sensitivity::{ParameterKind, Sensitivities, SensitivityParameter};
 
 /// Runs a press problem; `progress` is called after every step.
 pub fn simulate<const D: usize, const N: usize, const S: usize>(
@@ -34,12 +42,12 @@ where
     crate::element::Simplex<D, N>: crate::element::ReferenceSimplex<D, N>,
 {
     match settings.integrator {
-        Integrator::QuasiStatic | Integrator::Dynamic => stepper::run(problem, settings, progress),
+        Integrator::QuasiStatic | Integrator::Dynamic => stepper::run(problem, settings, &[], progress).map(|r| r.0),
         Integrator::Seed => seed::run(problem, settings, progress),
     }
 }
 
-/// Runs either dimension.
+/// Runs a problem of any formulation.
 pub fn simulate_any(
     problem: &AnyPress,
     settings: &Settings,
@@ -48,5 +56,39 @@ pub fn simulate_any(
     match problem {
         AnyPress::Plane(p) => simulate(p, settings, progress),
         AnyPress::Solid(p) => simulate(p, settings, progress),
+        AnyPress::Axisymmetric(p) => simulate(p, settings, progress),
+    }
+}
+
+/// Runs a press problem with the quasi-static scheme and differentiates its
+/// reactions and marker positions by `parameters` (forward sensitivities: one extra
+/// solve per parameter and step with the step's own factorization).
+pub fn simulate_with_sensitivities<const D: usize, const N: usize, const S: usize>(
+    problem: &PressProblem<D, N, S>,
+    settings: &Settings,
+    parameters: &[SensitivityParameter],
+    progress: &mut dyn FnMut(Progress),
+) -> Result<(PressResult, Sensitivities), PressError>
+where
+    crate::element::Simplex<D, N>: crate::element::ReferenceSimplex<D, N>,
+{
+    if parameters.is_empty() {
+        return Err(PressError::BadSettings("no sensitivity parameter given".into()));
+    }
+    let (result, sensitivities) = stepper::run(problem, settings, parameters, progress)?;
+    Ok((result, sensitivities.expect("parameters were given")))
+}
+
+/// [`simulate_with_sensitivities`] for either dimension.
+pub fn simulate_any_with_sensitivities(
+    problem: &AnyPress,
+    settings: &Settings,
+    parameters: &[SensitivityParameter],
+    progress: &mut dyn FnMut(Progress),
+) -> Result<(PressResult, Sensitivities), PressError> {
+    match problem {
+        AnyPress::Plane(p) => simulate_with_sensitivities(p, settings, parameters, progress),
+        AnyPress::Solid(p) => simulate_with_sensitivities(p, settings, parameters, progress),
+        AnyPress::Axisymmetric(p) => simulate_with_sensitivities(p, settings, parameters, progress),
     }
 }

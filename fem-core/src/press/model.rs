@@ -1,13 +1,22 @@
 //! What every integrator shares: cell geometry, the assembled unit stiffness of
 //! each kernel group, the lumped mass, the constraint sets, the reaction
 //! functionals and the located markers.
+//!
+//! Axisymmetric problems differ only in data: the cell weights are `2π r_c A` (so
+//! masses, gravity and reactions are full-circle quantities), the nodes of the set
+//! `axis` hold `u_r = 0` in every constraint set, and no pins against rigid
+//! motions in r are added (the axis holds them: a radial translation is not a
+//! rigid motion of a body of revolution).
 
 use nalgebra::{SMatrix, SVector};
 use rayon::prelude::*;
 
 use super::{Attachment, PressError, PressProblem};
 use crate::assembly::{assemble_stiffness, CsrPattern, Topology};
-use crate::element::{cell_geometry, strain_block, unit_young_matrix, CellGeometry, ReferenceSimplex, Simplex};
+use crate::element::{
+    cell_geometry, cell_geometry_in, strain_block, unit_young_matrix, CellGeometry, Formulation, ReferenceSimplex,
+    Simplex,
+};
 use crate::material::RelaxationKernel;
 use crate::mesh::MeshError;
 
@@ -79,11 +88,10 @@ where
     pub fn new(problem: &'p PressProblem<D, N, S>) -> Result<Self, PressError> {
         problem.validate()?;
         let mesh = &problem.mesh;
-        let thickness = problem.formulation.thickness();
         let geometry = (0..mesh.num_cells())
             .into_par_iter()
             .map(|e| {
-                cell_geometry::<D, N>(&mesh.cell_coordinates(e), thickness)
+                cell_geometry_in::<D, N>(problem.formulation, &mesh.cell_coordinates(e))
                     .map_err(|measure| MeshError::InvertedElement { element: e, measure })
             })
             .collect::<Result<Vec<_>, _>>()?;
@@ -142,8 +150,13 @@ where
 
         let bottom = mesh.node_set("bottom")?.to_vec();
         let top = mesh.node_set("top")?.to_vec();
-        let attached = constraints::<D, N>(mesh, &bottom, &top, problem.protocol.support, Some(problem.protocol.plate));
-        let released = constraints::<D, N>(mesh, &bottom, &top, problem.protocol.support, None);
+        let axis = match problem.formulation {
+            Formulation::Axisymmetric => Some(mesh.node_set("axis")?),
+            _ => None,
+        };
+        let attached =
+            constraints::<D, N>(mesh, &bottom, &top, axis, problem.protocol.support, Some(problem.protocol.plate));
+        let released = constraints::<D, N>(mesh, &bottom, &top, axis, problem.protocol.support, None);
 
         let functionals =
             [functional(&geometry, &topology, &bottom, 1.0), functional(&geometry, &topology, &top, -1.0)];
@@ -213,9 +226,12 @@ where
         self.problem.mesh.cells[e].map(|v| SVector::<f64, D>::from_fn(|k, _| u[v as usize * D + k]))
     }
 
-    /// `det(I + grad u)` of cell `e`: the deformed-to-initial volume ratio.
+    /// `det(I + grad u)` of cell `e`: the deformed-to-initial volume ratio; for an
+    /// axisymmetric cell times the hoop stretch `1 + u_r/r` at its centroid.
     pub fn volume_ratio(&self, e: usize, u: &[SVector<f64, D>; N]) -> f64 {
         let g = &self.geometry[e].gradients;
+        // Zero hoop row except for axisymmetric cells.
+        let hoop_stretch = 1.0 + (0..N).map(|a| g.hoop[a] * u[a][0]).sum::<f64>();
         let mut f = SMatrix::<f64, D, D>::identity();
         for a in 0..N {
             for i in 0..D {
@@ -225,7 +241,7 @@ where
             }
         }
         let (det, _) = <Simplex<D, N> as ReferenceSimplex<D, N>>::det_and_inverse(&f);
-        det
+        det * hoop_stretch
     }
 
     /// Marker positions for the displacement `u`.
@@ -266,10 +282,14 @@ where
     }
 }
 
+/// The held dofs: the floor's (bottom), the plate's (top, when `plate` is given),
+/// `u_r` on the `axis` nodes of an axisymmetric problem, and otherwise, when no
+/// face is glued, the pins against rigid motions in the x(-z) plane.
 fn constraints<const D: usize, const N: usize>(
     mesh: &crate::mesh::SimplexMesh<D, N>,
     bottom: &[u32],
     top: &[u32],
+    axis: Option<&[u32]>,
     support: Attachment,
     plate: Option<Attachment>,
 ) -> Constraints
@@ -297,11 +317,18 @@ where
             }
         }
     }
+    // Axisymmetric: the axis nodes hold u_r = 0 always. There is no rigid motion in
+    // r to pin (a radial translation stretches the hoop), so no pins follow.
+    if let Some(axis) = axis {
+        for &i in axis {
+            held[i as usize * D] = true;
+        }
+    }
     // Statically determinate pins against the rigid motions in the x(-z) plane when
     // no face is glued: node A (min x, then min z) holds x and z; in 3D node B (max x
     // at A's z) holds z. They carry no load, so they add no stress.
     let some_face_glued = support == Attachment::Glued || plate == Some(Attachment::Glued);
-    if !some_face_glued {
+    if !some_face_glued && axis.is_none() {
         let key = |i: u32| {
             let p = mesh.nodes[i as usize];
             (p[0], if D == 3 { p[2] } else { 0.0 })

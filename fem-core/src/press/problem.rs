@@ -1,6 +1,6 @@
 use thiserror::Error;
 
-use crate::element::{Formulation, ReferenceSimplex, Simplex};
+use crate::element::{valid_strain_size, Formulation, ReferenceSimplex, Simplex};
 use crate::material::Material;
 use crate::mesh::{MeshError, SimplexMesh, TetMesh, TriMesh};
 
@@ -115,7 +115,8 @@ impl Protocol {
 pub struct MarkerRequest {
     /// The marker's name.
     pub name: String,
-    /// Initial position [mm], `D` components.
+    /// Initial position [mm], `D` components; `(r, y)` in the section of an
+    /// axisymmetric problem (its tracks are `(r, y)` too).
     pub position: Vec<f64>,
     /// Times at which to report its position [s].
     pub times: Vec<f64>,
@@ -150,6 +151,10 @@ pub struct Settings {
     /// Spectral radius at infinite frequency of the dynamic generalized-alpha
     /// scheme, in [0, 1]; default 0.5 (1 is Newmark's trapezoidal rule).
     pub rho_inf: f64,
+    /// Replay these step ends [s] (e.g. an earlier run's `steps[i].t_s`) instead of
+    /// choosing steps: the quasi-static and dynamic schemes then take exactly those
+    /// steps, with no error control. For finite-difference checks of sensitivities.
+    pub step_ends_s: Option<Vec<f64>>,
 }
 
 impl Default for Settings {
@@ -161,6 +166,7 @@ impl Default for Settings {
             max_dt_s: None,
             seed_psi: 2000.0,
             rho_inf: 0.5,
+            step_ends_s: None,
         }
     }
 }
@@ -168,9 +174,11 @@ impl Default for Settings {
 /// A press problem in `D` dimensions with `N`-node cells and `S` strain components.
 #[derive(Debug, Clone)]
 pub struct PressProblem<const D: usize, const N: usize, const S: usize> {
-    /// The specimen; needs the node sets `bottom` and `top`.
+    /// The specimen; needs the node sets `bottom` and `top` (and `axis` when
+    /// axisymmetric: the nodes on r = 0, which hold `u_r = 0`).
     pub mesh: SimplexMesh<D, N>,
-    /// 3D solid, or 2D plane stress/strain with a thickness.
+    /// 3D solid, 2D plane stress/strain with a thickness, or 2D axisymmetric (the
+    /// `r-y` section of a body of revolution about y, `x = r >= 0`).
     pub formulation: Formulation,
     /// One material per mesh region (indexed like `mesh.region_names`).
     pub materials: Vec<Material>,
@@ -188,14 +196,19 @@ pub struct PressProblem<const D: usize, const N: usize, const S: usize> {
 pub type PlanePress = PressProblem<2, 3, 3>;
 /// A 3D (solid) press problem.
 pub type SolidPress = PressProblem<3, 4, 6>;
+/// A 2D axisymmetric press problem: triangles in the `r-y` section, strains
+/// `[rr, yy, θθ, ry]`, full-circle forces.
+pub type AxisymmetricPress = PressProblem<2, 3, 4>;
 
-/// A press problem of either dimension.
+/// A press problem of any formulation.
 #[derive(Debug, Clone)]
 pub enum AnyPress {
     /// Triangles, plane stress or plane strain.
     Plane(PlanePress),
     /// Tetrahedra.
     Solid(SolidPress),
+    /// Axisymmetric triangles (a body of revolution about y).
+    Axisymmetric(AxisymmetricPress),
 }
 
 /// Why a press problem was refused or failed.
@@ -213,6 +226,10 @@ pub enum PressError {
     /// The protocol was refused.
     #[error("protocol: {0}")]
     BadProtocol(String),
+    /// The formulation does not fit the problem's dimensions or mesh (e.g. an
+    /// axisymmetric mesh with nodes at r < 0).
+    #[error("formulation: {0}")]
+    BadFormulation(String),
     /// A marker that is not inside the specimen.
     #[error("marker `{name}` at {position:?} mm is not inside the specimen (nearest cell {distance_mm:.3e} mm away)")]
     MarkerOutside { name: String, position: Vec<f64>, distance_mm: f64 },
@@ -276,12 +293,24 @@ where
         Schedule { landings, snapshots }
     }
 
-    /// Checks the mesh, materials, sets and protocol.
+    /// Checks the mesh, materials, sets and protocol; for the axisymmetric
+    /// formulation also that the mesh lies in `r = x >= 0` and that its node set
+    /// `axis` holds exactly the nodes on `r = 0` (within 1e-9 of the mesh's size).
     pub fn validate(&self) -> Result<(), PressError> {
-        const { assert!(N == D + 1 && S == D * (D + 1) / 2) };
+        const { assert!(N == D + 1 && valid_strain_size(D, S)) };
+        if self.formulation.num_strains() != S {
+            return Err(PressError::BadFormulation(format!(
+                "{:?} has {} strain components, the problem {S}",
+                self.formulation,
+                self.formulation.num_strains()
+            )));
+        }
         self.mesh.validate()?;
         self.mesh.node_set("bottom")?;
         self.mesh.node_set("top")?;
+        if self.formulation == Formulation::Axisymmetric {
+            self.validate_axis()?;
+        }
         if self.materials.len() != self.mesh.region_names.len() {
             return Err(PressError::MaterialCount {
                 regions: self.mesh.region_names.len(),
@@ -299,6 +328,42 @@ where
     }
 }
 
+impl<const D: usize, const N: usize, const S: usize> PressProblem<D, N, S>
+where
+    Simplex<D, N>: ReferenceSimplex<D, N>,
+{
+    /// The radius below which a node lies on the axis [mm]: 1e-9 of the mesh's size.
+    pub(crate) fn axis_tolerance(&self) -> f64 {
+        let (lo, hi) = self.mesh.bounding_box();
+        1e-9 * (0..D).map(|k| hi[k] - lo[k]).fold(1.0, f64::max)
+    }
+
+    fn validate_axis(&self) -> Result<(), PressError> {
+        let tol = self.axis_tolerance();
+        if let Some((i, p)) = self.mesh.nodes.iter().enumerate().find(|(_, p)| !(p[0] >= -tol)) {
+            return Err(PressError::BadFormulation(format!(
+                "axisymmetric: node {i} lies at r = x = {} mm < 0 (the section is r >= 0)",
+                p[0]
+            )));
+        }
+        let axis = self.mesh.node_set("axis")?;
+        if let Some(&i) = axis.iter().find(|&&i| self.mesh.nodes[i as usize][0] > tol) {
+            return Err(PressError::BadFormulation(format!(
+                "axisymmetric: node {i} of the set `axis` lies at r = {} mm, off the axis",
+                self.mesh.nodes[i as usize][0]
+            )));
+        }
+        if let Some(i) = (0..self.mesh.num_nodes())
+            .find(|&i| self.mesh.nodes[i][0] <= tol && axis.binary_search(&(i as u32)).is_err())
+        {
+            return Err(PressError::BadFormulation(format!(
+                "axisymmetric: node {i} lies on the axis (r = 0) but not in the node set `axis`"
+            )));
+        }
+        Ok(())
+    }
+}
+
 impl PlanePress {
     /// A plane-stress problem of the given thickness, density 1 g/cm^3, no markers.
     pub fn new_2d(
@@ -310,6 +375,25 @@ impl PlanePress {
         let p = Self {
             mesh,
             formulation: Formulation::PlaneStress { thickness_mm },
+            materials,
+            density_t_mm3: 1e-9,
+            protocol,
+            markers: Vec::new(),
+            snapshot_times: Vec::new(),
+        };
+        p.validate()?;
+        Ok(p)
+    }
+}
+
+impl AxisymmetricPress {
+    /// An axisymmetric problem on the `r-y` section `mesh` (with the node sets
+    /// `bottom`, `top` and `axis`, e.g. from [`crate::mesh::axisymmetric_section`]),
+    /// density 1 g/cm^3, no markers.
+    pub fn new_axisymmetric(mesh: TriMesh, materials: Vec<Material>, protocol: Protocol) -> Result<Self, PressError> {
+        let p = Self {
+            mesh,
+            formulation: Formulation::Axisymmetric,
             materials,
             density_t_mm3: 1e-9,
             protocol,

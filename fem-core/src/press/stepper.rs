@@ -34,6 +34,7 @@ use nalgebra::{SMatrix, SVector};
 
 use super::model::{Constraints, Model};
 use super::result::{ForceSegment, RegionTerms};
+use super::sensitivity::{check_parameters, Sensitivities, SensitivityParameter, StepView, Tracker};
 use super::{Integrator, MarkerTrack, PressError, PressProblem, PressResult, Progress, Settings, Snapshot, StepRecord};
 use crate::assembly::assemble_vector;
 use crate::element::{cell_strain, nodal_force, ReferenceSimplex, Simplex};
@@ -124,13 +125,23 @@ fn step_factor(k: &crate::material::RelaxationKernel, dt: f64, bdf: Bdf) -> f64 
 pub(crate) fn run<const D: usize, const N: usize, const S: usize>(
     problem: &PressProblem<D, N, S>,
     settings: &Settings,
+    parameters: &[SensitivityParameter],
     progress: &mut dyn FnMut(Progress),
-) -> Result<PressResult, PressError>
+) -> Result<(PressResult, Option<Sensitivities>), PressError>
 where
     Simplex<D, N>: ReferenceSimplex<D, N>,
 {
     check_settings(settings)?;
     let model = Model::new(problem)?;
+    let mut tracker = if parameters.is_empty() {
+        None
+    } else {
+        if settings.integrator != Integrator::QuasiStatic {
+            return Err(PressError::BadSettings("sensitivities need the quasi-static integrator".into()));
+        }
+        check_parameters(problem, parameters)?;
+        Some(Tracker::new(&model, parameters))
+    };
     let protocol = &problem.protocol;
     let end = protocol.end_s;
     let dynamic = settings.integrator == Integrator::Dynamic;
@@ -192,16 +203,23 @@ where
     while state.t < end * (1.0 - 1e-13) {
         let landing = schedule.next_landing(state.t, end);
         let mut h = dt.min(dt_max);
-        if ladder {
+        // Replay: the next given step end after t (the end time if none is left).
+        let replay_end = settings
+            .step_ends_s
+            .as_ref()
+            .map(|ends| ends.iter().copied().find(|&t| t > state.t * (1.0 + 1e-12) + 1e-300).unwrap_or(end));
+        if let Some(next) = replay_end {
+            h = next - state.t;
+        } else if ladder {
             h = 2f64.powf((2.0 * h.log2()).floor() / 2.0);
         }
         let remaining = landing - state.t;
         if h >= remaining * (1.0 - 1e-9) {
             h = remaining;
-        } else if settings.fixed_dt_s.is_none() && h > 0.6 * remaining {
+        } else if settings.fixed_dt_s.is_none() && replay_end.is_none() && h > 0.6 * remaining {
             h = 0.5 * remaining;
         }
-        let t1 = if h == remaining { landing } else { state.t + h };
+        let t1 = if h == remaining { landing } else { replay_end.unwrap_or(state.t + h) };
         let constraints = model.constraints_at(t1);
         let system =
             if constraints.plate_attached { &sys_attached } else { sys_released.as_ref().expect("released system") };
@@ -262,7 +280,7 @@ where
 
         // Error control: quadratic extrapolation for BDF2 steps (local error about
         // 2/11 of the difference, exponent 1/3), linear for BDF1 ones (exponent 1/2).
-        let (error_ratio, exponent) = if settings.fixed_dt_s.is_some() {
+        let (error_ratio, exponent) = if settings.fixed_dt_s.is_some() || settings.step_ends_s.is_some() {
             (0.0, 0.5)
         } else {
             match (back.first(), back.get(1)) {
@@ -314,6 +332,23 @@ where
             plate_force_n,
             error_ratio,
         });
+        if let Some(tracker) = tracker.as_mut() {
+            let view = StepView {
+                t0: state.t,
+                dt: h,
+                alpha: bdf.alpha,
+                strain0: &state.strain,
+                strain_prev0: &state.strain_prev,
+                history0: &state.history,
+                strain1: &outcome.state.strain,
+                system,
+                factor,
+                single_group_factor: single_group.then(|| step_factor(&model.groups[0].kernel, h, bdf)),
+                continues: bdf != Bdf::ONE && !segments.is_empty(),
+                segment: &outcome.segment,
+            };
+            tracker.advance(&model, &view);
+        }
         segments.push(outcome.segment);
         emit_markers(&model, &mut tracks, &mut marker_next, &state.u, &outcome.state.u, state.t, t1, false);
         if schedule.is_snapshot(t1, end) {
@@ -351,17 +386,22 @@ where
         progress(Progress { t_s: state.t, end_s: end, steps: step_index });
     }
 
-    Ok(PressResult {
-        dim: D,
-        num_stress: S,
-        steps,
-        snapshots,
-        markers: tracks,
-        num_factorizations,
-        factor_nonzeros: sys_attached.factor_nonzeros().max(sys_released.as_ref().map_or(0, |s| s.factor_nonzeros())),
-        num_free_dofs: sys_attached.num_free().max(sys_released.as_ref().map_or(0, |s| s.num_free())),
-        segments,
-    })
+    Ok((
+        PressResult {
+            dim: D,
+            num_stress: S,
+            steps,
+            snapshots,
+            markers: tracks,
+            num_factorizations,
+            factor_nonzeros: sys_attached
+                .factor_nonzeros()
+                .max(sys_released.as_ref().map_or(0, |s| s.factor_nonzeros())),
+            num_free_dofs: sys_attached.num_free().max(sys_released.as_ref().map_or(0, |s| s.num_free())),
+            segments,
+        },
+        tracker.map(Tracker::finish),
+    ))
 }
 
 fn check_settings(s: &Settings) -> Result<(), PressError> {

@@ -12,14 +12,30 @@
 //!   [`BundleError::Unsupported`].
 //! - Markers: one request per marker at its initial position, reported at every
 //!   time the marker was measured (`t_s = 0` included). No extra snapshots.
+//!
+//! ## The axisymmetric model of a cylinder (a solver option)
+//!
+//! [`Bundle::to_press_axisymmetric`] models a `shape = "cylinder"` bundle (whose
+//! format meaning stays a 3D cylinder, `dimension = 3`) by its `r-y` section
+//! `[0, R] x [0, H]` with axisymmetric triangles (`fem_core::mesh::layered_axisymmetric_section`,
+//! [`Formulation::Axisymmetric`]): the same trial at a fraction of the cost.
+//! Forces are full-circle forces, as in 3D. A marker given at `(x, y, z)` is
+//! located in the section at `(r, y)` with `r = sqrt(x^2 + z^2)`; its simulated
+//! `(r, y)` positions go back to 3D on the marker's own azimuth
+//! ([`Bundle::simulated_markers`]): `(r cos θ, y, r sin θ)` with `cos θ = x/r0`,
+//! `sin θ = z/r0` from its initial position (θ = 0 for a marker on the axis).
+//! Other shapes are refused with the key `specimen.shape`.
 
 use fem_core::element::Formulation;
 use fem_core::material::{Material, MaterialError};
 use fem_core::mesh::{self, Layer};
-use fem_core::press::{AnyPress, Attachment, MarkerRequest, PlanePress, PressError, Protocol, SolidPress};
+use fem_core::press::{
+    AnyPress, Attachment, AxisymmetricPress, MarkerRequest, MarkerTrack, PlanePress, PressError, Protocol, SolidPress,
+};
 
 use super::experiment::{Contact, Shape, Tool};
 use super::read::Bundle;
+use super::series::{MarkerSample, MarkerSeries};
 use super::validate::validate_experiment;
 use crate::error::BundleError;
 
@@ -55,7 +71,7 @@ impl Bundle {
                     None => (self.experiment_file(), self.line_of(&field), field),
                 }
             }
-            PressError::Mesh(_) | PressError::MaterialCount { .. } => {
+            PressError::Mesh(_) | PressError::MaterialCount { .. } | PressError::BadFormulation(_) => {
                 (self.experiment_file(), self.line_of("specimen"), "specimen".to_string())
             }
             PressError::MarkerOutside { .. } => {
@@ -136,6 +152,51 @@ impl Bundle {
         })
     }
 
+    /// One request per marker in the section of the axisymmetric model: `(x, y, z)`
+    /// becomes `(r, y)` with `r = sqrt(x^2 + z^2)`.
+    fn axisymmetric_marker_requests(&self) -> Vec<MarkerRequest> {
+        self.marker_requests()
+            .into_iter()
+            .map(|mut m| {
+                if let [x, y, z] = m.position[..] {
+                    m.position = vec![x.hypot(z), y];
+                }
+                m
+            })
+            .collect()
+    }
+
+    /// The simulated marker series of `tracks` (`PressResult::markers` of a run of
+    /// `problem`, built from this bundle), in the bundle's coordinates: the tracks
+    /// as they are, except for the axisymmetric model, whose `(r, y)` tracks are
+    /// put back on each marker's azimuth, `(r cos θ, y, r sin θ)` (θ from the
+    /// marker's initial `(x, z)`; 0 on the axis).
+    pub fn simulated_markers(&self, problem: &AnyPress, tracks: &[MarkerTrack]) -> Vec<MarkerSeries> {
+        let AnyPress::Axisymmetric(_) = problem else {
+            return MarkerSeries::from_tracks(tracks);
+        };
+        tracks.iter().map(|track| self.marker_on_its_azimuth(track)).collect()
+    }
+
+    fn marker_on_its_azimuth(&self, track: &MarkerTrack) -> MarkerSeries {
+        let (cos, sin) = match self.marker(&track.name).and_then(|m| m.initial_position()) {
+            Some(&[x, _, z]) if x.hypot(z) > 0.0 => (x / x.hypot(z), z / x.hypot(z)),
+            _ => (1.0, 0.0),
+        };
+        let samples = track
+            .samples
+            .iter()
+            .map(|(t_s, p)| {
+                let position_mm = match p[..] {
+                    [r, y] => vec![r * cos, y, r * sin],
+                    _ => p.clone(),
+                };
+                MarkerSample { t_s: *t_s, position_mm }
+            })
+            .collect();
+        MarkerSeries { name: track.name.clone(), samples }
+    }
+
     /// One request per marker: its initial position, reported at every measured time.
     pub fn marker_requests(&self) -> Vec<MarkerRequest> {
         self.markers
@@ -183,14 +244,37 @@ impl Bundle {
     /// The engine's press problem at element size `size_mm` [mm], checked by the
     /// engine (`PressProblem::validate`); no extra snapshot times.
     pub fn to_press(&self, size_mm: f64) -> Result<AnyPress, BundleError> {
+        self.build_press(size_mm, false)
+    }
+
+    /// The axisymmetric model of a cylinder bundle at element size `size_mm` [mm]:
+    /// [`AnyPress::Axisymmetric`] on the section `[0, R] x [0, H]` (see the module
+    /// docs), checked by the engine; no extra snapshot times. Refused, naming
+    /// `specimen.shape`, for a specimen that is not a cylinder.
+    pub fn to_press_axisymmetric(&self, size_mm: f64) -> Result<AnyPress, BundleError> {
+        self.build_press(size_mm, true)
+    }
+
+    fn build_press(&self, size_mm: f64, axisymmetric: bool) -> Result<AnyPress, BundleError> {
         if !(size_mm.is_finite() && size_mm > 0.0) {
             return Err(BundleError::ElementSize { size_mm });
         }
         // The fields are public: check again whatever may have been edited since reading.
         validate_experiment(&self.experiment, &self.map)?;
         self.check_supported()?;
-        let protocol = self.protocol()?;
         let s = &self.experiment.specimen;
+        if axisymmetric && s.shape != Shape::Cylinder {
+            return Err(BundleError::Invalid {
+                file: self.experiment_file(),
+                line: self.line_of("specimen.shape"),
+                field: "specimen.shape".into(),
+                cause: format!(
+                    "the axisymmetric model needs shape = \"cylinder\" (a body of revolution about y); this specimen is a \"{}\"",
+                    s.shape.as_str()
+                ),
+            });
+        }
+        let protocol = self.protocol()?;
         let missing = |field: &str| self.map.invalid(field, "missing required key");
         let block_size = || s.block_size().ok_or_else(|| missing("specimen.size_mm"));
         let layers: Vec<Layer> = match &s.material {
@@ -219,6 +303,21 @@ impl Bundle {
             }))
         };
         let problem = match (s.shape, self.dimension()) {
+            (Shape::Cylinder, _) if axisymmetric => {
+                let r = s.radius_mm.ok_or_else(|| missing("specimen.radius_mm"))?;
+                s.height_mm.ok_or_else(|| missing("specimen.height_mm"))?;
+                let mesh = mesh::layered_axisymmetric_section(r, &layers, size_mm).map_err(mesh_err)?;
+                let materials = self.materials_for(&mesh.region_names)?;
+                AnyPress::Axisymmetric(AxisymmetricPress {
+                    mesh,
+                    formulation: Formulation::Axisymmetric,
+                    materials,
+                    density_t_mm3,
+                    protocol,
+                    markers: self.axisymmetric_marker_requests(),
+                    snapshot_times: Vec::new(),
+                })
+            }
             (Shape::Block, 2) => {
                 let [w, _, t] = block_size()?;
                 let mesh = mesh::layered_rectangle(w, &layers, size_mm).map_err(mesh_err)?;
@@ -252,6 +351,7 @@ impl Bundle {
         match &problem {
             AnyPress::Plane(p) => p.validate(),
             AnyPress::Solid(p) => p.validate(),
+            AnyPress::Axisymmetric(p) => p.validate(),
         }
         .map_err(|e| self.engine_error(e))?;
         Ok(problem)
@@ -287,5 +387,70 @@ mod tests {
         }
         let err = bundle.engine_error(PressError::BadProtocol("x".into()));
         assert!(err.to_string().contains(":15: protocol: protocol: x"), "{err}");
+    }
+
+    const CYLINDER: &str = "format = \"wagashi-experiment/1\"\nname = \"gel\"\ndimension = 3\n[specimen]\n\
+                            shape = \"cylinder\"\nradius_mm = 4.0\nheight_mm = 9.0\nmass_g = 0.5\nmaterial = \"gel\"\n\
+                            [materials.gel]\nmodel = \"elastic\"\npoisson = 0.45\nE_MPa = 0.05\n[protocol]\n\
+                            tool = \"plate\"\ntool_contact = \"glued\"\nsupport = \"glued\"\n\
+                            waypoints = [[0.0, 0.0], [2.0, 0.9]]\nrelease_s = 2.0\nend_s = 10.0\n\
+                            [data]\nmarkers = \"markers.csv\"\n";
+
+    /// A cylinder's axisymmetric model: the section [0, R] x [0, H] with its axis,
+    /// the same density and protocol, markers located at (r, y); tracks go back
+    /// onto each marker's azimuth.
+    #[test]
+    fn cylinder_as_its_axisymmetric_section() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("experiment.toml"), CYLINDER).unwrap();
+        let markers = "marker,t_s,x_mm,y_mm,z_mm\nside,0.0,0.0,4.5,-4.0\nside,2.0,0.0,4.5,-4.1\n\
+                       diag,0.0,2.4,9.0,3.2\ndiag,2.0,2.4,8.1,3.2\n";
+        std::fs::write(dir.path().join("markers.csv"), markers).unwrap();
+        let bundle = read_bundle(dir.path()).unwrap();
+        let AnyPress::Axisymmetric(p) = bundle.to_press_axisymmetric(1.0).unwrap() else {
+            panic!("expected the axisymmetric model")
+        };
+        assert_eq!(p.formulation, Formulation::Axisymmetric);
+        assert!((p.mesh.measure() - 36.0).abs() < 1e-12 * 36.0);
+        assert_eq!(p.mesh.node_sets["axis"].len(), 10);
+        let AnyPress::Solid(solid) = bundle.to_press(1.0).unwrap() else { panic!("expected 3D") };
+        assert_eq!(
+            (p.density_t_mm3, &p.protocol, &p.materials),
+            (solid.density_t_mm3, &solid.protocol, &solid.materials)
+        );
+        assert_eq!(p.markers[0].position, vec![4.0, 4.5]);
+        assert!((p.markers[1].position[0] - 4.0).abs() < 1e-15 && p.markers[1].position[1] == 9.0);
+        assert_eq!(p.markers[1].times, vec![0.0, 2.0]);
+
+        // Simulated (r, y) tracks back in 3D on each marker's azimuth.
+        let tracks = [
+            MarkerTrack { name: "side".into(), samples: vec![(0.0, vec![4.0, 4.5]), (2.0, vec![4.2, 4.4])] },
+            MarkerTrack { name: "diag".into(), samples: vec![(0.0, vec![4.0, 9.0]), (2.0, vec![5.0, 8.1])] },
+        ];
+        let series = bundle.simulated_markers(&AnyPress::Axisymmetric(p), &tracks);
+        let close = |a: &[f64], b: &[f64]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-12);
+        assert!(close(&series[0].samples[1].position_mm, &[0.0, 4.4, -4.2]), "{:?}", series[0]);
+        assert!(close(&series[1].samples[0].position_mm, &[2.4, 9.0, 3.2]), "{:?}", series[1]);
+        assert!(close(&series[1].samples[1].position_mm, &[3.0, 8.1, 4.0]), "{:?}", series[1]);
+    }
+
+    /// Only a cylinder has an axisymmetric model; the refusal names the key.
+    #[test]
+    fn axisymmetric_model_of_a_block_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let text = CYLINDER
+            .replace(
+                "shape = \"cylinder\"\nradius_mm = 4.0\nheight_mm = 9.0",
+                "shape = \"block\"\nsize_mm = [4.0, 9.0, 4.0]",
+            )
+            .replace("[data]\nmarkers = \"markers.csv\"\n", "");
+        std::fs::write(dir.path().join("experiment.toml"), text).unwrap();
+        let bundle = read_bundle(dir.path()).unwrap();
+        let err = bundle.to_press_axisymmetric(1.0).unwrap_err().to_string();
+        let want = format!(
+            "{}:5: specimen.shape: the axisymmetric model needs shape = \"cylinder\"",
+            bundle.experiment_file().display()
+        );
+        assert!(err.starts_with(&want) && err.contains("\"block\""), "{err}");
     }
 }

@@ -16,6 +16,10 @@
 //!   shears, not engineering). In 2D fem-core's `[xx, yy, xy]` is written with
 //!   `ZZ = YZ = XZ = 0`, exact for plane stress (plane strain's `zz` is not
 //!   in the cell stress and is written as 0 too).
+//!   An axisymmetric section (4 stresses per cell, fem-core's `[rr, yy, θθ, ry]`)
+//!   is written as the tensor at the section's plane, x = r and z the hoop
+//!   direction: `XX = rr, YY = yy, ZZ = θθ, XY = ry`, `YZ = XZ = 0`, with the
+//!   component names `RR, YY, TT, RY, YT, RT` (and an XML comment saying so).
 //!
 //! ASCII, numbers in their shortest round-trip form.
 //!

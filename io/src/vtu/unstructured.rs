@@ -28,7 +28,8 @@ pub enum Coordinates {
 pub struct VtuFields<'a> {
     /// Nodal displacements [mm], `D` per node; `None`: zero.
     pub displacement_mm: Option<&'a [f64]>,
-    /// Cell stresses [MPa], fem-core's Voigt order, `D (D + 1) / 2` per cell;
+    /// Cell stresses [MPa], fem-core's Voigt order, `D (D + 1) / 2` per cell, or
+    /// 4 per cell for an axisymmetric section (`[rr, yy, θθ, ry]`, D = 2);
     /// `None`: no `stress` array.
     pub cell_stress_mpa: Option<&'a [f64]>,
     /// Reference (default) or deformed coordinates.
@@ -53,6 +54,11 @@ fn bad(cause: String) -> WriteError {
 /// Positions in fem-core's Voigt order of VTK's `XX, YY, ZZ, XY, YZ, XZ`.
 const VOIGT_3D_TO_VTK: [usize; 6] = [0, 1, 2, 3, 5, 4];
 
+/// The stress components' names: Cartesian, and for an axisymmetric section
+/// (x = r, z = the hoop direction θ at the section's plane) the cylindrical ones.
+const CARTESIAN_NAMES: [&str; 6] = ["XX", "YY", "ZZ", "XY", "YZ", "XZ"];
+const AXISYMMETRIC_NAMES: [&str; 6] = ["RR", "YY", "TT", "RY", "YT", "RT"];
+
 /// The `.vtu` text of `mesh` with `fields` (see the module docs).
 pub fn vtu_string<const D: usize, const N: usize>(
     mesh: &SimplexMesh<D, N>,
@@ -61,7 +67,12 @@ pub fn vtu_string<const D: usize, const N: usize>(
     const { assert!((D == 2 && N == 3) || (D == 3 && N == 4), "triangles or tetrahedra") };
     let num_nodes = mesh.nodes.len();
     let num_cells = mesh.cells.len();
-    let s = D * (D + 1) / 2;
+    // Stress values per cell: D (D + 1)/2, or 4 for an axisymmetric section.
+    let mut s = D * (D + 1) / 2;
+    let axisymmetric = D == 2 && fields.cell_stress_mpa.is_some_and(|st| num_cells > 0 && st.len() == 4 * num_cells);
+    if axisymmetric {
+        s = 4;
+    }
     if let Some(u) = fields.displacement_mm {
         if u.len() != D * num_nodes {
             return Err(bad(format!("displacement has {} values; {num_nodes} nodes need {}", u.len(), D * num_nodes)));
@@ -69,7 +80,12 @@ pub fn vtu_string<const D: usize, const N: usize>(
     }
     if let Some(st) = fields.cell_stress_mpa {
         if st.len() != s * num_cells {
-            return Err(bad(format!("stress has {} values; {num_cells} cells need {}", st.len(), s * num_cells)));
+            let need = if D == 2 {
+                format!("{} (or {} axisymmetric)", s * num_cells, 4 * num_cells)
+            } else {
+                (s * num_cells).to_string()
+            };
+            return Err(bad(format!("stress has {} values; {num_cells} cells need {need}", st.len())));
         }
     }
     if mesh.cell_regions.len() != num_cells {
@@ -98,6 +114,11 @@ pub fn vtu_string<const D: usize, const N: usize>(
         }
     }
     x.push_str(" -->\n");
+    if axisymmetric {
+        x.push_str(
+            "<!-- axisymmetric section: x is the radius r, y the axis; stress components RR, YY, TT (hoop), RY -->\n",
+        );
+    }
     x.push_str(
         "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n",
     );
@@ -128,13 +149,18 @@ pub fn vtu_string<const D: usize, const N: usize>(
     x.push_str("        </DataArray>\n");
     if let Some(st) = fields.cell_stress_mpa {
         x.push_str("        <DataArray type=\"Float64\" Name=\"stress\" NumberOfComponents=\"6\"");
-        for (k, c) in ["XX", "YY", "ZZ", "XY", "YZ", "XZ"].iter().enumerate() {
+        let names = if axisymmetric { AXISYMMETRIC_NAMES } else { CARTESIAN_NAMES };
+        for (k, c) in names.iter().enumerate() {
             let _ = write!(x, " ComponentName{k}=\"{c}\"");
         }
         x.push_str(" format=\"ascii\">\n");
         for cell in st.chunks(s) {
-            let vtk: [f64; 6] =
-                if D == 2 { [cell[0], cell[1], 0.0, cell[2], 0.0, 0.0] } else { VOIGT_3D_TO_VTK.map(|k| cell[k]) };
+            let vtk: [f64; 6] = match (D, s) {
+                // [rr, yy, θθ, ry]: the section's tensor with z the hoop direction.
+                (2, 4) => [cell[0], cell[1], cell[2], cell[3], 0.0, 0.0],
+                (2, _) => [cell[0], cell[1], 0.0, cell[2], 0.0, 0.0],
+                _ => VOIGT_3D_TO_VTK.map(|k| cell[k]),
+            };
             x.push_str("          ");
             for (k, v) in vtk.iter().enumerate() {
                 push_shortest(&mut x, *v);
@@ -204,4 +230,33 @@ pub fn write_vtu<const D: usize, const N: usize>(
         other => other,
     })?;
     write_atomic(path, text.as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An axisymmetric section's `[rr, yy, θθ, ry]` is written as the tensor at the
+    /// section's plane with the hoop stress as ZZ, under cylindrical names.
+    #[test]
+    fn axisymmetric_stress_is_named_and_placed() {
+        let m = fem_core::mesh::axisymmetric_section(2.0, 1.0, 1.0, "gel").unwrap();
+        let num_cells = m.cells.len();
+        let stress: Vec<f64> = (0..4 * num_cells).map(|i| i as f64).collect();
+        let fields = VtuFields { cell_stress_mpa: Some(&stress), ..VtuFields::default() };
+        let text = vtu_string(&m, &fields).unwrap();
+        assert!(text.contains("axisymmetric section"));
+        for (k, name) in AXISYMMETRIC_NAMES.iter().enumerate() {
+            assert!(text.contains(&format!("ComponentName{k}=\"{name}\"")), "{name}");
+        }
+        // Cell 1's [rr, yy, θθ, ry] = [4, 5, 6, 7].
+        assert!(text.contains("\n          4 5 6 7 0 0\n"), "{text}");
+        // Plane cells (3 per cell) keep the Cartesian names; other counts are refused.
+        let plane: Vec<f64> = vec![1.0; 3 * num_cells];
+        let text = vtu_string(&m, &VtuFields { cell_stress_mpa: Some(&plane), ..VtuFields::default() }).unwrap();
+        assert!(text.contains("ComponentName2=\"ZZ\"") && !text.contains("axisymmetric"));
+        let bad: Vec<f64> = vec![1.0; 5 * num_cells];
+        let err = vtu_string(&m, &VtuFields { cell_stress_mpa: Some(&bad), ..VtuFields::default() }).unwrap_err();
+        assert!(err.to_string().contains("or 16 axisymmetric"), "{err}");
+    }
 }
