@@ -143,6 +143,21 @@ pub enum CampaignError {
     Invalid(String),
 }
 
+/// A measured marker position and its simulated counterpart.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MarkerPair {
+    /// The marker's name.
+    pub name: String,
+    /// Time [s].
+    pub t_s: f64,
+    /// Keep or final.
+    pub channel: Channel,
+    /// Measured position [mm].
+    pub measured: Vec<f64>,
+    /// Simulated position [mm].
+    pub simulated: Vec<f64>,
+}
+
 /// One trial prepared for fitting.
 #[derive(Debug, Clone)]
 pub struct Trial {
@@ -216,13 +231,19 @@ impl Trial {
         self.force.iter().map(|&(t, _)| result.bottom_force_at(t)).collect()
     }
 
-    /// `(name, t_s, measured, simulated)` for every marker observation (t > 0).
-    pub fn marker_pairs(&self, result: &PressResult) -> Vec<(String, f64, Channel, Vec<f64>, Vec<f64>)> {
+    /// Every marker observation (t > 0) with its simulated position in `result`.
+    pub fn marker_pairs(&self, result: &PressResult) -> Vec<MarkerPair> {
         self.markers
             .iter()
             .map(|o| {
                 let (t, sim) = &result.markers[o.marker].samples[o.sample];
-                (self.marker_names[o.marker].clone(), *t, o.channel, o.position.clone(), sim.clone())
+                MarkerPair {
+                    name: self.marker_names[o.marker].clone(),
+                    t_s: *t,
+                    channel: o.channel,
+                    measured: o.position.clone(),
+                    simulated: sim.clone(),
+                }
             })
             .collect()
     }
@@ -565,8 +586,8 @@ impl<'c> Objective<'c> {
                 c => {
                     for o in trial.markers.iter().filter(|o| o.channel == c) {
                         let sim = &result.markers[o.marker].samples[o.sample].1;
-                        for k in 0..o.position.len() {
-                            res.push((sim[k] - o.position[k]) / sigma);
+                        for (k, (&x_sim, &x_meas)) in sim.iter().zip(&o.position).enumerate() {
+                            res.push((x_sim - x_meas) / sigma);
                             if want_jacobian {
                                 let mut row = vec![0.0; n];
                                 if let Some(s) = &sens {

@@ -108,7 +108,7 @@ pub fn run(args: &FitArgs) -> anyhow::Result<()> {
     let mut bundles = Vec::new();
     for dir in &args.bundles {
         // External materials start the fit; the bundle is read with its own.
-        bundles.push(read_bundle_with(dir, &BTreeMap::new()).with_context(|| format!("reading {}", dir.display()))?);
+        bundles.push(read_bundle_with(dir, &BTreeMap::new())?);
     }
     for b in &bundles {
         if b.force.is_none() && b.markers.is_empty() {

@@ -137,15 +137,17 @@ pub fn shapes_svg(
     use calibrate::trial::Channel;
     let draw_err = |e: DrawingAreaErrorKind<std::io::Error>| anyhow!("drawing shapes.svg: {e}");
     let mut initial = Vec::new();
-    let mut points: Vec<(Channel, (f64, f64), (f64, f64))> = Vec::new();
+    // (phase, measured x-y, simulated x-y)
+    type Point = (f64, f64);
+    let mut points: Vec<(Channel, Point, Point)> = Vec::new();
     for ((trial, run), b) in campaign.trials.iter().zip(runs).zip(bundles) {
         for m in &b.markers {
             if let Some(p) = m.initial_position() {
                 initial.push((p[0], p[1]));
             }
         }
-        for (_, _, channel, measured, simulated) in trial.marker_pairs(run) {
-            points.push((channel, (measured[0], measured[1]), (simulated[0], simulated[1])));
+        for p in trial.marker_pairs(run) {
+            points.push((p.channel, (p.measured[0], p.measured[1]), (p.simulated[0], p.simulated[1])));
         }
     }
     let all = initial.iter().chain(points.iter().flat_map(|p| [&p.1, &p.2]));

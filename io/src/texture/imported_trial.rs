@@ -308,8 +308,13 @@ pub fn to_bundle(raw: &RawTest, options: &ImportOptions) -> Result<ImportedTrial
     }
 
     // The waypoints: the displacement up to the separation (the format refuses
-    // waypoints that move after release_s), simplified.
-    let points: Vec<[f64; 2]> = (start..=release).map(|i| [t[i] - t0, d[i]]).collect();
+    // waypoints that move after release_s), at each update of the position (a
+    // row repeating the previous position is the instrument holding its last
+    // reading), simplified.
+    let points: Vec<[f64; 2]> = (start..=release)
+        .filter(|&i| i == start || i == release || y[i] != y[i - 1])
+        .map(|i| [t[i] - t0, d[i]])
+        .collect();
     let waypoints: Vec<[f64; 2]> = simplify(&points, tolerance).into_iter().map(|k| points[k]).collect();
 
     // The height.
@@ -422,7 +427,8 @@ fn height(raw: &RawTest, options: &ImportOptions, touch: usize) -> Result<(f64, 
         HeightSource::StartHeight(start) => {
             let travel = s[0].tool_mm - s[touch].tool_mm;
             let h = start - travel;
-            if !(h > 0.0) {
+            let positive = h > 0.0; // false for NaN
+            if !positive {
                 return Err(ImportError::options(
                     &raw.file,
                     "height",
@@ -445,7 +451,8 @@ fn height(raw: &RawTest, options: &ImportOptions, touch: usize) -> Result<(f64, 
                 ));
             }
             let h = s[touch].tool_mm;
-            if !(h > 0.0) {
+            let positive = h > 0.0; // false for NaN
+            if !positive {
                 return Err(ImportError::invalid(
                     &raw.file,
                     s[touch].line,
@@ -619,13 +626,44 @@ mod tests {
             // 0.1 % of the largest displacement after touch, 4 mm - d(touch).
             assert!((tol - 1e-3 * (trial.facts.height_mm - 5.0)).abs() < 1e-12, "{tol}");
             let (a, b) = (p.waypoints[0][0], p.waypoints.last().unwrap()[0]);
-            for s in &raw.samples {
+            for (k, s) in raw.samples.iter().enumerate() {
                 let t = s.t_s - t0;
-                if t >= a && t <= b {
+                let update = k == 0 || s.tool_mm != raw.samples[k - 1].tool_mm;
+                if t >= a && t <= b && update {
                     let d = (9.0 - s.tool_mm) - y0;
                     let e = (interpolate(&p.waypoints, t) - d).abs();
                     assert!(e <= tol, "{stroke:?}: error {e} > {tol} at t = {t}");
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn held_positions_do_not_make_waypoints() {
+        // The position updated every 5th row and held in between (as the rheometer's
+        // gap), with 0.3 um of jitter: a staircase around the ramps.
+        let mut raw = double_compression(15);
+        let mut rng = Rng(21);
+        let exact: Vec<f64> = raw.samples.iter().map(|s| s.tool_mm).collect();
+        for (k, s) in raw.samples.iter_mut().enumerate() {
+            s.tool_mm = exact[k - k % 5] + if k % 5 == 0 { 3e-4 * rng.normal() } else { 0.0 };
+        }
+        for k in 0..raw.samples.len() {
+            if k % 5 != 0 {
+                raw.samples[k].tool_mm = raw.samples[k - k % 5].tool_mm;
+            }
+        }
+        let trial = to_bundle(&raw, &options()).unwrap();
+        let p = &trial.experiment.protocol;
+        assert!(p.waypoints.len() <= 8, "{:?}", p.waypoints);
+        // Every update lies within the tolerance (~3.7 um).
+        let (t0, y0) = (trial.facts.touch_raw_s, raw.samples[trial.facts.touch_line - 2].tool_mm);
+        let tol = trial.facts.waypoint_tolerance_mm;
+        for (k, s) in raw.samples.iter().enumerate() {
+            let t = s.t_s - t0;
+            if k % 5 == 0 && t >= 0.0 && t <= p.release_s {
+                let e = (interpolate(&p.waypoints, t) - (y0 - s.tool_mm)).abs();
+                assert!(e <= tol, "error {e} > {tol} at t = {t}");
             }
         }
     }
@@ -691,7 +729,9 @@ mod tests {
         let all_rows = to_bundle(&raw, &options()).unwrap();
         let some = to_bundle(&raw, &ImportOptions { every: 10, ..options() }).unwrap();
         let n = all_rows.force.samples.len();
-        assert_eq!(some.force.samples.len(), (n - 1) / 10 + 1 + usize::from((n - 1) % 10 != 0));
+        // Rows 0, 10, 20, ... and the last one when it is not among them.
+        let last_on_grid = (0..n).step_by(10).any(|i| i == n - 1);
+        assert_eq!(some.force.samples.len(), (0..n).step_by(10).count() + usize::from(!last_on_grid));
         assert_eq!(some.force.samples.last(), all_rows.force.samples.last());
         assert_eq!(some.force.samples[1], all_rows.force.samples[10]);
     }
@@ -847,8 +887,8 @@ mod tests {
             }
             let file = Path::new("fuzz");
             let Ok(text) = super::super::raw_test::decode(file, bytes) else { continue };
-            for parsed in [parse_rheometer(file, &text), parse_exponent(file, &text)] {
-                if let Ok(raw) = parsed {
+            for raw in [parse_rheometer(file, &text), parse_exponent(file, &text)].into_iter().flatten() {
+                {
                     for stroke in [StrokeChoice::First, StrokeChoice::Second, StrokeChoice::All] {
                         let o = ImportOptions { stroke, height: HeightSource::Given(50.0), ..options() };
                         if let Ok(trial) = to_bundle(&raw, &o) {

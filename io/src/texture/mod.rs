@@ -55,9 +55,15 @@
 //!    format refuses a tool that moves after `release_s`; once separated the
 //!    plate no longer acts on the specimen), simplified by Douglas-Peucker on
 //!    the vertical error ([`simplify`]) with tolerance `max(1 um, 0.1 % of the
-//!    largest displacement after touch)`: every measured sample lies within it
-//!    of the waypoints' polyline. Times strictly increase. `end_s` is the
-//!    window's end.
+//!    largest displacement after touch)`. The curve simplified is the position's
+//!    updates: the rows where it changes (and the window's first row and the
+//!    separation's). Instruments log faster than they update or resolve the
+//!    position (the rheometer's gap changes every ~20 ms, the Exponent's distance
+//!    in 1 um steps), and a repeated value is the last reading held, not a
+//!    measurement; kept, its staircase would cost hundreds of waypoints. Every
+//!    update lies within the tolerance of the waypoints' polyline; a held row
+//!    lies within the tolerance plus one update step. Times strictly increase.
+//!    `end_s` is the window's end.
 //! 7. **Specimen** ([`HeightSource`]): a cylinder of the given radius. Its
 //!    height is given, or the gap at first touch (rheometer), or a start height
 //!    minus the tool's travel from the first row to first touch (the Exponent's

@@ -150,7 +150,8 @@ pub(crate) fn locate_rise(
     let peak = argmax(f, range.clone());
     let rise = f[peak] - level;
     let threshold = (THRESHOLD_SIGMAS * sigma).max(THRESHOLD_PEAK_FRACTION * rise);
-    if !(rise > threshold) {
+    let rises = rise > threshold; // false for NaN
+    if !rises {
         return Err(NoTouch::NoRise { peak, level, threshold });
     }
     let band = BAND_SIGMAS * sigma;
@@ -184,7 +185,8 @@ pub fn detect_touch(force: &[f64]) -> Result<TouchDetection, NoTouch> {
     let diffs: Vec<f64> = force.windows(2).map(|w| w[1] - w[0]).collect();
     let diff_sigma = robust_level_and_sigma(&diffs).1 / std::f64::consts::SQRT_2;
     let significant = THRESHOLD_SIGMAS * diff_sigma;
-    if !(rise > significant) {
+    let rises = rise > significant; // false for NaN
+    if !rises {
         return Err(NoTouch::NoRise { peak, level: first, threshold: significant });
     }
     // 1. The leading window.
@@ -233,23 +235,35 @@ pub(crate) mod tests {
         }
     }
 
-    /// Tare + noise, then from `t0` a linear rise of `slope` up to `top`, then back down.
-    pub(crate) fn ramp(n: usize, dt: f64, t0: f64, slope: f64, top: f64, tare: f64, sigma: f64, seed: u64) -> Vec<f64> {
-        let mut rng = Rng(seed);
-        let t_top = t0 + top / slope;
-        (0..n)
-            .map(|i| {
-                let t = i as f64 * dt;
-                let clean = if t <= t0 {
-                    0.0
-                } else if t <= t_top {
-                    slope * (t - t0)
-                } else {
-                    (top - slope * (t - t_top)).max(0.0)
-                };
-                tare + clean + sigma * rng.normal()
-            })
-            .collect()
+    /// A synthetic force: `tare` + Gaussian noise `sigma`, and from `t0` a linear
+    /// rise of `slope` up to `top`, then back down at the same rate.
+    pub(crate) struct Ramp {
+        pub t0: f64,
+        pub slope: f64,
+        pub top: f64,
+        pub tare: f64,
+        pub sigma: f64,
+    }
+
+    impl Ramp {
+        /// `n` samples every `dt`, noise from `seed`.
+        pub(crate) fn sample(&self, n: usize, dt: f64, seed: u64) -> Vec<f64> {
+            let mut rng = Rng(seed);
+            let t_top = self.t0 + self.top / self.slope;
+            (0..n)
+                .map(|i| {
+                    let t = i as f64 * dt;
+                    let clean = if t <= self.t0 {
+                        0.0
+                    } else if t <= t_top {
+                        self.slope * (t - self.t0)
+                    } else {
+                        (self.top - self.slope * (t - t_top)).max(0.0)
+                    };
+                    self.tare + clean + self.sigma * rng.normal()
+                })
+                .collect()
+        }
     }
 
     #[test]
@@ -265,7 +279,7 @@ pub(crate) mod tests {
         // 100 Hz, touch at 5 s, 1 N/s to 10 N, tare 0.3 N, noise 0.01 N.
         let (dt, t0, slope, tare, sigma) = (0.01, 5.0, 1.0, 0.3, 0.01);
         for seed in 1..=20u64 {
-            let f = ramp(3000, dt, t0, slope, 10.0, tare, sigma, seed);
+            let f = Ramp { t0, slope, top: 10.0, tare, sigma }.sample(3000, dt, seed);
             let d = detect_touch(&f).unwrap();
             let t_touch = d.touch as f64 * dt;
             // Stated tolerance: 5 sigma / slope plus one sample.
@@ -280,7 +294,7 @@ pub(crate) mod tests {
 
     #[test]
     fn a_spike_before_contact_is_not_a_touch() {
-        let mut f = ramp(3000, 0.01, 5.0, 1.0, 10.0, 0.0, 0.01, 7);
+        let mut f = Ramp { t0: 5.0, slope: 1.0, top: 10.0, tare: 0.0, sigma: 0.01 }.sample(3000, 0.01, 7);
         f[200] = 5.0; // one spike at 2 s, half the peak
         let d = detect_touch(&f).unwrap();
         assert!((d.touch as f64 * 0.01 - 5.0).abs() <= 0.06, "{d:?}");
