@@ -267,7 +267,8 @@ pub struct Campaign {
 
 impl Campaign {
     /// Prepares `bundles` for fitting, with elements of `size_mm` (or a quarter of
-    /// each specimen's smallest dimension). `start` gives values for unknowns and may
+    /// each specimen's smallest dimension); `axisymmetric` models cylinders by their
+    /// r-y section (markers compared at `r = sqrt(x^2 + z^2)`). `start` gives values for unknowns and may
     /// free given ones: its parameters override the bundles' (they are starting
     /// values); parameters the bundles give and `start` does not are held fixed.
     pub fn new(
@@ -330,8 +331,7 @@ impl Campaign {
                 filled.experiment.materials.insert(name.to_string(), materials[name].clone());
             }
             let size = size_mm.unwrap_or_else(|| default_size(b));
-            let _ = axisymmetric;
-            let problem = filled.to_press(size)?;
+            let problem = if axisymmetric { filled.to_press_axisymmetric(size)? } else { filled.to_press(size)? };
             trials.push(trial_of(b, problem)?);
         }
         Ok(Self {
@@ -451,7 +451,12 @@ fn trial_of(b: &Bundle, problem: AnyPress) -> Result<Trial, CampaignError> {
             } else {
                 continue;
             };
-            markers.push(MarkerObservation { marker: m, sample: i, position: s.position_mm.clone(), channel });
+            // The axisymmetric model's markers live in its r-y section.
+            let position = match (&problem, s.position_mm.as_slice()) {
+                (AnyPress::Axisymmetric(_), &[x, y, z]) => vec![x.hypot(z), y],
+                _ => s.position_mm.clone(),
+            };
+            markers.push(MarkerObservation { marker: m, sample: i, position, channel });
         }
     }
     Ok(Trial {

@@ -19,8 +19,8 @@ use std::path::{Path, PathBuf};
 use calibrate::procedure::{run, Procedure, ProcedureOptions};
 use calibrate::trial::Campaign;
 use fem_core::press::{simulate_any, AnyPress, MarkerRequest, PressResult, Settings};
-use wagashi_io::bundle::DataSpec;
 use wagashi_io::bundle::experiment_toml;
+use wagashi_io::bundle::DataSpec;
 use wagashi_io::{read_bundle, Bundle, MaterialSpec};
 
 const FIT_SIZE_MM: f64 = 6.0;
@@ -96,7 +96,11 @@ fn measure(name: &str, dir: &Path, seed: u64) -> Bundle {
     let mut markers = String::from("marker,t_s,x_mm,y_mm\n");
     for track in &r.markers {
         for (t, pos) in &track.samples {
-            let (x, y) = if *t > 0.0 { (pos[0] + 0.05 * noise.gauss(), pos[1] + 0.05 * noise.gauss()) } else { (pos[0], pos[1]) };
+            let (x, y) = if *t > 0.0 {
+                (pos[0] + 0.05 * noise.gauss(), pos[1] + 0.05 * noise.gauss())
+            } else {
+                (pos[0], pos[1])
+            };
             writeln!(markers, "{},{t},{x},{y}", track.name).unwrap();
         }
     }
@@ -104,7 +108,11 @@ fn measure(name: &str, dir: &Path, seed: u64) -> Bundle {
     for spec in e.materials.values_mut() {
         *spec = MaterialSpec::new(spec.model);
     }
-    e.data = Some(DataSpec { force: Some("force.csv".into()), markers: Some("markers.csv".into()), force_tared: Some(true) });
+    e.data = Some(DataSpec {
+        force: Some("force.csv".into()),
+        markers: Some("markers.csv".into()),
+        force_tared: Some(true),
+    });
     std::fs::create_dir_all(dir).unwrap();
     std::fs::write(dir.join("experiment.toml"), experiment_toml(&e).unwrap()).unwrap();
     std::fs::write(dir.join("force.csv"), force).unwrap();

@@ -60,8 +60,9 @@ pub struct FitArgs {
     #[arg(long, value_enum, default_value_t = ProcedureArg::Seed)]
     pub procedure: ProcedureArg,
 
-    /// A TOML file of [materials.NAME] tables: starting values; the parameters it
-    /// gives are fitted even when a bundle gives them too.
+    /// A TOML file of [materials.NAME] tables. Each replaces the bundle's table of
+    /// the same name (as in `press`); every parameter of such a material is fitted,
+    /// the values given being start values (a table may give only its model).
     #[arg(long, value_name = "FILE")]
     pub materials: Option<PathBuf>,
 
@@ -72,6 +73,11 @@ pub struct FitArgs {
     /// Target element size [mm]; default: a quarter of each specimen's smallest dimension.
     #[arg(long = "size-mm", value_name = "H")]
     pub size_mm: Option<f64>,
+
+    /// Model cylinders (shape = "cylinder") by their axisymmetric r-y section:
+    /// the same full-circle force at a 2D cost (markers compared at r = sqrt(x^2 + z^2)).
+    #[arg(long)]
+    pub axisymmetric: bool,
 
     /// Marker noise [mm]: the standard deviation of a measured marker coordinate.
     #[arg(long = "marker-sigma-mm", value_name = "MM", default_value_t = 0.05)]
@@ -107,8 +113,8 @@ pub fn run(args: &FitArgs) -> anyhow::Result<()> {
     };
     let mut bundles = Vec::new();
     for dir in &args.bundles {
-        // External materials start the fit; the bundle is read with its own.
-        bundles.push(read_bundle_with(dir, &BTreeMap::new())?);
+        // A --materials table replaces the bundle's of the same name (as in `press`).
+        bundles.push(read_bundle_with(dir, &start)?);
     }
     for b in &bundles {
         if b.force.is_none() && b.markers.is_empty() {
@@ -116,7 +122,7 @@ pub fn run(args: &FitArgs) -> anyhow::Result<()> {
         }
     }
     let output = prepare_output(&bundles, &args.output, args.force)?;
-    let mut campaign = Campaign::new(&bundles, &start, args.size_mm, false)?;
+    let mut campaign = Campaign::new(&bundles, &start, args.size_mm, args.axisymmetric)?;
     campaign.marker_sigma_mm = args.marker_sigma_mm;
     if campaign.unknowns.is_empty() {
         bail!("every material parameter is given: nothing to fit (give a material only its model, or free parameters with --materials)");

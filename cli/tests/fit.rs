@@ -50,7 +50,8 @@ fn fits_a_simulated_trial_back_and_writes_every_output() {
     let fit: serde_json::Value = serde_json::from_slice(&std::fs::read(cwd.join("fit/fit.json")).unwrap()).unwrap();
     // Same mesh, same data: the seed's three steps recover Table II (the data are
     // noise-free; only the adaptive steps differ between the runs' parameters).
-    let truth = [("poisson", 0.3746), ("E1_MPa", 0.0349), ("E2_MPa", 0.0221), ("c1_MPa_s", 0.0071), ("c2_MPa_s", 0.1869)];
+    let truth =
+        [("poisson", 0.3746), ("E1_MPa", 0.0349), ("E2_MPa", 0.0221), ("c1_MPa_s", 0.0071), ("c2_MPa_s", 0.1869)];
     for set in ["force", "shape"] {
         for (key, value) in truth {
             let entry = &fit["sets"][set]["mat1"][key];

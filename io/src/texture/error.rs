@@ -10,12 +10,14 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 pub enum ImportError {
     /// A file that could not be read (missing, unreadable).
-    #[error("{}: cannot read: {source}", file.display())]
+    // The reason is in the message and not a `source`, so that a report of the
+    // whole chain (anyhow's `{:#}`) does not repeat it.
+    #[error("{}: cannot read: {reason}", file.display())]
     Read {
         /// The file, as the caller gave it.
         file: PathBuf,
         /// The operating system's reason.
-        source: std::io::Error,
+        reason: std::io::Error,
     },
     /// Content that the reader refuses, or a test in which the detection finds
     /// no contact, stroke or separation it needs.

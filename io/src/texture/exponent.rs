@@ -211,6 +211,13 @@ mod tests {
     }
 
     #[test]
+    fn a_missing_file_is_named_once() {
+        let err = read_exponent("no/such/file.tab").unwrap_err().to_string();
+        assert!(err.starts_with("no/such/file.tab: cannot read: "), "{err}");
+        assert_eq!(err.matches("os error").count(), 1, "{err}");
+    }
+
+    #[test]
     fn refuses_a_file_without_rows() {
         assert_eq!(refusal(HEAD), "t.tab:5: row: no data rows after the header");
     }

@@ -9,7 +9,7 @@ use super::error::ImportError;
 use super::raw_test::RawTest;
 use super::simplify::simplify;
 use super::stroke::{find_stroke, ramp_speed, Stroke, StrokeEnd};
-use super::touch::{argmax, detect_touch, locate_rise, NoTouch};
+use super::touch::{argmax, detect_touch, locate_rise, NoTouch, MIN_CONTACT_ROWS};
 use crate::bundle::{write_bundle, BundleWrite, Contact, Experiment, ProtocolSpec, Shape, Specimen, Tool, FORMAT_V1};
 use crate::error::WriteError;
 use crate::{ForceSample, ForceSeries};
@@ -226,8 +226,8 @@ pub fn to_bundle(raw: &RawTest, options: &ImportOptions) -> Result<ImportedTrial
             line(peak),
             force_column,
             format!(
-                "no contact found: the force never rises more than {} N above its pre-contact level {} N \
-                 (its largest value, {} N, is on this line)",
+                "no contact found: the force never stays more than {} N above its pre-contact level {} N \
+                 for {MIN_CONTACT_ROWS} rows (its largest value, {} N, is on this line)",
                 sig(threshold),
                 sig(level),
                 sig(f[peak])

@@ -27,7 +27,8 @@
 //!    mean, the noise sigma its 1.4826 x median absolute deviation. First touch
 //!    is where the force, having risen above `tare + max(5 sigma, 1 % of the
 //!    peak)` and staying above it up to half the peak, last lay inside the noise
-//!    band `tare + 2 sigma`. Time `t = 0` is first touch: every time in the
+//!    band `tare + 2 sigma`; a contact keeps the force above the threshold for
+//!    at least 10 rows. Time `t = 0` is first touch: every time in the
 //!    bundle is from it, and rows before it are dropped. No rise above the
 //!    threshold, or no quiet segment before it, is "no contact found".
 //! 2. **Displacement**: `d(t) = position(touch) - position(t)`, downward from

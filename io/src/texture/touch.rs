@@ -15,7 +15,8 @@
 //!    of Gaussian noise, unmoved by spikes or the start of a rise). The
 //!    threshold is `theta = max(5 sigma, 1 % of (P - b))`. The crossing `c` is
 //!    the first sample from which the force stays above `b + theta` up to `h`
-//!    (a lone spike before contact does not count), and first touch is refined
+//!    (a lone spike before contact does not count), and it must stay above for
+//!    at least 10 rows (a spike alone is no contact). First touch is refined
 //!    back from `c` to the last sample still inside the noise band,
 //!    `f <= b + 2 sigma`: where the force leaves the noise.
 //! 3. **Pass 2.** The pre-contact segment is every sample up to that touch.
@@ -49,6 +50,8 @@ pub const THRESHOLD_SIGMAS: f64 = 5.0;
 pub const THRESHOLD_PEAK_FRACTION: f64 = 0.01;
 /// The noise band: this many sigmas above the tare.
 pub const BAND_SIGMAS: f64 = 2.0;
+/// A contact keeps the force above the threshold for at least this many rows.
+pub const MIN_CONTACT_ROWS: usize = 10;
 
 /// What [`detect_touch`] found. Indices are into the force slice it was given.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -81,7 +84,8 @@ pub enum NoTouch {
         /// The number needed.
         needed: usize,
     },
-    /// The force never rises more than `threshold` above `level`.
+    /// The force never rises more than `threshold` above `level` for
+    /// [`MIN_CONTACT_ROWS`] rows.
     NoRise {
         /// The sample of the largest force.
         peak: usize,
@@ -162,6 +166,12 @@ pub(crate) fn locate_rise(
         Some(j) => j + 1,
         None => return Err(NoTouch::NoPreContact { crossing: start }),
     };
+    // A contact lasts: a spike above the threshold is not one.
+    let lasts = crossing + MIN_CONTACT_ROWS <= range.end
+        && f[crossing..crossing + MIN_CONTACT_ROWS].iter().all(|&x| x - level > threshold);
+    if !lasts {
+        return Err(NoTouch::NoRise { peak, level, threshold });
+    }
     // Refine back to the last sample inside the noise band.
     let touch = match (start..crossing).rev().find(|&k| f[k] - level <= band) {
         Some(k) => k,
@@ -298,6 +308,15 @@ pub(crate) mod tests {
         f[200] = 5.0; // one spike at 2 s, half the peak
         let d = detect_touch(&f).unwrap();
         assert!((d.touch as f64 * 0.01 - 5.0).abs() <= 0.06, "{d:?}");
+    }
+
+    #[test]
+    fn a_spike_alone_is_no_contact() {
+        let mut rng = Rng(4);
+        let mut f: Vec<f64> = (0..700).map(|_| 0.02 + 0.0015 * rng.normal()).collect();
+        f[500] += 0.011;
+        f[501] += 0.006;
+        assert!(matches!(detect_touch(&f), Err(NoTouch::NoRise { peak: 500, .. })), "{:?}", detect_touch(&f));
     }
 
     #[test]
