@@ -47,6 +47,7 @@ fn top_displacement(p: &AnyPress, result: &press::PressResult, t: f64) -> f64 {
     let (top, dim): (&[u32], usize) = match p {
         AnyPress::Plane(p) => (&p.mesh.node_sets["top"], 2),
         AnyPress::Solid(p) => (&p.mesh.node_sets["top"], 3),
+        AnyPress::Axisymmetric(p) => (&p.mesh.node_sets["top"], 2),
     };
     top.iter().map(|&i| snap.displacement[i as usize * dim + 1]).sum::<f64>() / top.len() as f64
 }

@@ -3,9 +3,15 @@
 //! Parameter identification for wagashi: finds the material parameters (moduli
 //! E1, E2 in MPa, viscosities c1..c3 in MPa s, Poisson's ratio nu, ...) whose
 //! simulations best match measured trials, says how well the data determine
-//! them, and warns when they do not. This crate holds the numerical core; the
-//! physics glue (residuals from experiment bundles, the seed paper's procedure)
-//! builds on it.
+//! them, and warns when they do not. Two layers:
+//!
+//! - the numerical core (below): bounded least squares, multi-start, intervals,
+//!   profiles, warnings, for any [`LeastSquares`] problem;
+//! - the physics glue: [`trial`] turns experiment bundles into residuals with exact
+//!   Jacobians (the engine's forward sensitivities: one extra solve per parameter
+//!   and step), [`procedure`] runs the seed paper's three steps (two parameter
+//!   sets) or a joint fit over them. `wagashi fit` is a thin shell around
+//!   [`procedure::run`].
 //!
 //! Each evaluation is a finite-element simulation (0.05 to 20 s), so the
 //! methods here are frugal with evaluations, use the exact Jacobians the engine's

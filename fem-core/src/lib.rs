@@ -1,8 +1,10 @@
 //! # wagashi fem-core
 //!
 //! The engine of wagashi: linear simplex finite elements in 2D (triangles, plane
-//! stress with thickness as in the seed paper, or plane strain) and 3D
-//! (tetrahedra), written once over the dimension; the seed's three-, four- and
+//! stress with thickness as in the seed paper, plane strain, or axisymmetric:
+//! the `r-y` section of a cylinder, one hoop strain more) and 3D (tetrahedra),
+//! written once over the dimension ([`element`] lists the formulations and
+//! their formulas); the seed's three-, four- and
 //! five-element rheology imposed through the Lamé split; parallel, deterministic
 //! sparse assembly; faer sparse Cholesky; quasi-static, dynamic and the seed's own
 //! time stepping; the seed's plate-press boundary conditions with release.
@@ -21,6 +23,8 @@
 //! - [`material::Material`]: a [`material::Rheology`] chain and a Poisson ratio.
 //! - [`press::PressProblem`]: a mesh, materials per region, a [`press::Protocol`];
 //!   [`press::simulate`] runs it and returns a [`press::PressResult`].
+//!   [`press::AnyPress`] holds a plane, solid or axisymmetric problem
+//!   ([`press::AxisymmetricPress`] on [`mesh::axisymmetric_section`]).
 //!
 //! ## Example
 //! ```

@@ -62,22 +62,24 @@ pub const fn valid_strain_size(dim: usize, num_strains: usize) -> bool {
 
 /// What the strain-displacement operator `B` of a P1 cell needs: the gradients of
 /// the shape functions and, for the axisymmetric formulation, the shape functions
-/// over the radius at the quadrature point (the hoop row).
+/// over the radius at the quadrature point (the hoop row). At the centroid, the
+/// one quadrature point, every `N_a` is `1/N`, so the hoop row is one number.
 ///
 /// Dereferences to the gradient matrix, so `g[(a, k)]` is `dN_a/dx_k`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ShapeGradients<const D: usize, const N: usize> {
     /// Row `a` is the gradient of shape function `a` [1/mm].
     pub grad: SMatrix<f64, N, D>,
-    /// `N_a(x_q) / r_q` at the quadrature point [1/mm]: the hoop row of the
-    /// axisymmetric `B`, `e_θθ = sum_a hoop[a] u_r,a`; zero for the other formulations.
-    pub hoop: SVector<f64, N>,
+    /// `N_a / r` at the centroid, the same for every node `a`: `1 / (N r_c)` [1/mm].
+    /// The hoop row of the axisymmetric `B`, `e_θθ = hoop * sum_a u_r,a`; zero for
+    /// the other formulations.
+    pub hoop: f64,
 }
 
 impl<const D: usize, const N: usize> ShapeGradients<D, N> {
     /// Gradients with no hoop row (plane and solid formulations).
     pub fn planar(grad: SMatrix<f64, N, D>) -> Self {
-        Self { grad, hoop: SVector::zeros() }
+        Self { grad, hoop: 0.0 }
     }
 }
 
@@ -154,7 +156,7 @@ where
                 return Err(weight);
             }
             g.weight = weight;
-            g.gradients.hoop = SVector::repeat(1.0 / (N as f64 * r_c));
+            g.gradients.hoop = 1.0 / (N as f64 * r_c);
             Ok(g)
         }
         _ => cell_geometry::<D, N>(x, formulation.thickness()),
@@ -180,7 +182,7 @@ pub fn strain_block<const D: usize, const N: usize, const S: usize>(
     }
     let mut row = D;
     if has_hoop(D, S) {
-        b[(row, 0)] = gradients.hoop[a];
+        b[(row, 0)] = gradients.hoop;
         row += 1;
     }
     for i in 0..D {
@@ -215,7 +217,7 @@ pub fn cell_strain<const D: usize, const N: usize, const S: usize>(
     }
     let mut row = D;
     if has_hoop(D, S) {
-        e[row] = (0..N).map(|a| gradients.hoop[a] * u[a][0]).sum();
+        e[row] = gradients.hoop * (0..N).map(|a| u[a][0]).sum::<f64>();
         row += 1;
     }
     for i in 0..D {
@@ -428,7 +430,7 @@ mod tests {
     #[test]
     fn axisymmetric_patch_test() {
         let mut m = crate::mesh::rectangle(2.0, 2.0, 0.4, "m").unwrap();
-        let on_boundary = |p: &[f64; 2]| p.iter().any(|&c| c < 1e-9 || c > 2.0 - 1e-9);
+        let on_boundary = |p: &[f64; 2]| p.iter().any(|c| !(1e-9..=2.0 - 1e-9).contains(c));
         for (i, p) in m.nodes.iter_mut().enumerate() {
             if !on_boundary(p) {
                 // Up to 0.1 of the 0.4 spacing along each axis: no cell inverts.

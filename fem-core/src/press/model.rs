@@ -231,7 +231,7 @@ where
     pub fn volume_ratio(&self, e: usize, u: &[SVector<f64, D>; N]) -> f64 {
         let g = &self.geometry[e].gradients;
         // Zero hoop row except for axisymmetric cells.
-        let hoop_stretch = 1.0 + (0..N).map(|a| g.hoop[a] * u[a][0]).sum::<f64>();
+        let hoop_stretch = 1.0 + g.hoop * (0..N).map(|a| u[a][0]).sum::<f64>();
         let mut f = SMatrix::<f64, D, D>::identity();
         for a in 0..N {
             for i in 0..D {

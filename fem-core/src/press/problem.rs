@@ -332,8 +332,8 @@ impl<const D: usize, const N: usize, const S: usize> PressProblem<D, N, S>
 where
     Simplex<D, N>: ReferenceSimplex<D, N>,
 {
-    /// The radius below which a node lies on the axis [mm]: 1e-9 of the mesh's size.
-    pub(crate) fn axis_tolerance(&self) -> f64 {
+    /// The radius below which a node lies on the axis [mm]: 1e-9 of the mesh's size (at least 1e-9 mm).
+    fn axis_tolerance(&self) -> f64 {
         let (lo, hi) = self.mesh.bounding_box();
         1e-9 * (0..D).map(|k| hi[k] - lo[k]).fold(1.0, f64::max)
     }
