@@ -15,8 +15,8 @@
 use fem_core::material::{Material, Rheology};
 use fem_core::mesh::{self, Layer};
 use fem_core::press::{
-    self, Attachment, MarkerRequest, ParameterKind, PlanePress, PressResult, Protocol, SensitivityParameter, Settings,
-    SolidPress,
+    self, Attachment, AxisymmetricPress, MarkerRequest, ParameterKind, PlanePress, PressResult, Protocol,
+    SensitivityParameter, Settings, SolidPress,
 };
 
 fn mat1() -> Material {
@@ -207,4 +207,23 @@ fn glued_solid_trial_matches_differences() {
         SensitivityParameter { regions: vec![0], kind: ParameterKind::Poisson },
     ];
     check(vec![mat1()], params, &sample_times(60.0), run);
+}
+
+/// Axisymmetric, glued (the hoop strain row): all six parameters.
+#[test]
+fn glued_axisymmetric_trial_matches_differences() {
+    let protocol = Protocol::ramp_hold_release(0.2, 10.0, 30.0, 60.0);
+    let mesh = mesh::axisymmetric_section(4.0, 9.0, 1.0, "mat1").unwrap();
+    let run = |m: &[Material], s: &Settings, params: Option<&[SensitivityParameter]>| {
+        let mut p = AxisymmetricPress::new_axisymmetric(mesh.clone(), m.to_vec(), protocol.clone()).unwrap();
+        p.markers = vec![MarkerRequest { name: "side".into(), position: vec![4.0, 4.5], times: vec![0.0, 30.0, 60.0] }];
+        match params {
+            Some(ps) => {
+                let (r, s) = press::simulate_with_sensitivities(&p, s, ps, &mut |_| {}).unwrap();
+                (r, Some(s))
+            }
+            None => (press::simulate(&p, s, &mut |_| {}).unwrap(), None),
+        }
+    };
+    check(vec![mat1()], all_parameters(&[0]), &sample_times(60.0), run);
 }

@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context};
 use clap::{ArgGroup, Args, Subcommand, ValueEnum};
 use serde::Serialize;
-use wagashi_io::bundle::Contact;
+use wagashi_io::bundle::{Contact, Model};
 use wagashi_io::texture::{
     read_exponent, read_rheometer, to_bundle, HeightSource, ImportFacts, ImportOptions, ImportedTrial, RawFormat,
     StrokeChoice,
@@ -132,6 +132,12 @@ pub struct CommonArgs {
     #[arg(long, value_name = "NAME", default_value = "sample")]
     pub material: String,
 
+    /// The material's rheological model, written as a [materials.NAME] table with
+    /// the model only (every parameter an unknown for `wagashi fit`); `none` writes
+    /// no table (give one with --materials).
+    #[arg(long, value_enum, default_value_t = ModelArg::FiveElement)]
+    pub model: ModelArg,
+
     /// How the plate and the support hold the specimen (tool_contact and support).
     /// Default glued: the food sticks to the plates in these tests, and the
     /// plates' friction is not known.
@@ -155,6 +161,21 @@ pub struct CommonArgs {
 }
 
 /// `--contact`.
+/// `--model`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ModelArg {
+    /// The seed's five-element chain.
+    FiveElement,
+    /// Spring + Voigt + dashpot.
+    FourElement,
+    /// Voigt + dashpot.
+    ThreeElement,
+    /// Hookean solid.
+    Elastic,
+    /// No [materials] table.
+    None,
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum ContactArg {
     /// No slip on the plate or the support (default).
@@ -224,6 +245,13 @@ pub fn run(args: &ImportArgs) -> anyhow::Result<()> {
             radius_mm: common.radius_mm,
             height,
             material: common.material.clone(),
+            model: match common.model {
+                ModelArg::FiveElement => Some(Model::FiveElement),
+                ModelArg::FourElement => Some(Model::FourElement),
+                ModelArg::ThreeElement => Some(Model::ThreeElement),
+                ModelArg::Elastic => Some(Model::Elastic),
+                ModelArg::None => None,
+            },
             contact: match common.contact {
                 ContactArg::Glued => Contact::Glued,
                 ContactArg::Frictionless => Contact::Frictionless,

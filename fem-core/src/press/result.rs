@@ -27,7 +27,8 @@ pub struct Snapshot {
     pub t_s: f64,
     /// Nodal displacements [mm], `dim` per node.
     pub displacement: Vec<f64>,
-    /// Cell stresses [MPa], Voigt order (`[xx, yy, xy]` or `[xx, yy, zz, xy, xz, yz]`).
+    /// Cell stresses [MPa], Voigt order (`[xx, yy, xy]`, `[xx, yy, zz, xy, xz, yz]`, or
+    /// axisymmetric `[rr, yy, tt, ry]`).
     pub cell_stress: Vec<f64>,
 }
 

@@ -560,5 +560,9 @@ mod tests {
             - unit_young_matrix::<6>(Formulation::Solid, nu - h))
             / (2.0 * h);
         assert!((d6 - fd6).amax() < 1e-8, "solid: {d6} vs {fd6}");
+        let axi = Formulation::Axisymmetric;
+        let d4 = unit_young_matrix_poisson_derivative::<4>(axi, nu);
+        let fd4 = (unit_young_matrix::<4>(axi, nu + h) - unit_young_matrix::<4>(axi, nu - h)) / (2.0 * h);
+        assert!((d4 - fd4).amax() < 1e-8, "axisymmetric: {d4} vs {fd4}");
     }
 }

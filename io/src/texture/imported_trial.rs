@@ -67,9 +67,13 @@ pub struct ImportOptions {
     pub radius_mm: f64,
     /// The cylinder's height; default [`HeightSource::GapAtTouch`].
     pub height: HeightSource,
-    /// `[specimen] material`; default `"sample"`. No `[materials]` table is
-    /// written: the material comes from `--materials` or a fit.
+    /// `[specimen] material`; default `"sample"`.
     pub material: String,
+    /// When given, a `[materials.NAME]` table with only this model is written: every
+    /// parameter an unknown for `wagashi fit` (experiment-format.md: "a material may
+    /// give only its model"); `wagashi press` needs `--materials` to give values.
+    /// Default `None`: no table, the material comes from `--materials`.
+    pub model: Option<crate::bundle::Model>,
     /// `[protocol] tool_contact` and `support`: glued (the default) or frictionless.
     pub contact: Contact,
     /// Which stroke; default [`StrokeChoice::First`].
@@ -86,6 +90,7 @@ impl ImportOptions {
             radius_mm,
             height: HeightSource::GapAtTouch,
             material: "sample".into(),
+            model: None,
             contact: Contact::Glued,
             stroke: StrokeChoice::First,
             every: 1,
@@ -400,7 +405,10 @@ pub fn to_bundle(raw: &RawTest, options: &ImportOptions) -> Result<ImportedTrial
             surface: None,
             regions: Default::default(),
         },
-        materials: Default::default(),
+        materials: options
+            .model
+            .map(|m| [(options.material.clone(), crate::bundle::MaterialSpec::new(m))].into_iter().collect())
+            .unwrap_or_default(),
         protocol: ProtocolSpec {
             tool: Tool::Plate,
             tool_radius_mm: None,
@@ -721,6 +729,20 @@ mod tests {
         trial.write(dir.path()).unwrap();
         let err = crate::read_bundle(dir.path()).unwrap_err().to_string();
         assert!(err.contains("specimen.material: material \"sample\" is not defined"), "{err}");
+    }
+
+    /// With a model, the bundle defines its material by the model alone: it reads
+    /// back as it is, every parameter unknown (for a fit).
+    #[test]
+    fn with_a_model_the_bundle_reads_back_alone() {
+        let options = ImportOptions { model: Some(crate::bundle::Model::FiveElement), ..options() };
+        let trial = to_bundle(&double_compression(5), &options).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        trial.write(dir.path()).unwrap();
+        let back = crate::read_bundle(dir.path()).unwrap();
+        let spec = &back.experiment.materials["sample"];
+        assert_eq!(spec.model, crate::bundle::Model::FiveElement);
+        assert_eq!(spec.missing().len(), 6, "{spec:?}");
     }
 
     #[test]
