@@ -330,7 +330,15 @@ impl Campaign {
             for name in b.experiment.specimen.material_names() {
                 filled.experiment.materials.insert(name.to_string(), materials[name].clone());
             }
-            let size = size_mm.unwrap_or_else(|| default_size(b));
+            let size = match size_mm.or_else(|| b.default_size_mm()) {
+                Some(h) => h,
+                None => {
+                    return Err(CampaignError::Invalid(format!(
+                        "{}: give an element size (--size-mm) for this specimen",
+                        b.experiment_file().display()
+                    )))
+                }
+            };
             let problem = if axisymmetric { filled.to_press_axisymmetric(size)? } else { filled.to_press(size)? };
             trials.push(trial_of(b, problem)?);
         }
@@ -369,17 +377,6 @@ impl Campaign {
         self.simulations.fetch_add(self.trials.len(), Ordering::Relaxed);
         self.trials.par_iter().map(|t| t.simulate(&table, &self.settings)).collect()
     }
-}
-
-/// A quarter of the specimen's smallest dimension, as `wagashi press`: min(W, H, T)
-/// for a block, min(R, H) for a cylinder.
-pub fn default_size(b: &Bundle) -> f64 {
-    let s = &b.experiment.specimen;
-    let smallest = match s.block_size() {
-        Some([w, h, t]) => w.min(h).min(t),
-        None => s.radius_mm.unwrap_or(1.0).min(s.height_mm.unwrap_or(1.0)),
-    };
-    smallest / 4.0
 }
 
 /// Starting values for unknowns that have none: an apparent modulus from the

@@ -17,6 +17,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use calibrate::procedure::{run, Procedure, ProcedureOptions};
+use calibrate::rng::SplitMix64;
 use calibrate::trial::Campaign;
 use fem_core::press::{simulate_any, AnyPress, MarkerRequest, PressResult, Settings};
 use wagashi_io::bundle::experiment_toml;
@@ -27,23 +28,6 @@ const FIT_SIZE_MM: f64 = 6.0;
 
 fn paper(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/paper").join(name)
-}
-
-/// A deterministic Gaussian source (SplitMix64 + Box-Muller).
-struct Noise(u64);
-
-impl Noise {
-    fn uniform(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn gauss(&mut self) -> f64 {
-        let (u, v) = (self.uniform().max(1e-300), self.uniform());
-        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
-    }
 }
 
 /// The 2D version of a paper bundle with markers on the free side and the top.
@@ -84,20 +68,20 @@ fn run_bundle(b: &Bundle, size_mm: f64, rtol: f64) -> PressResult {
 fn measure(name: &str, dir: &Path, seed: u64) -> Bundle {
     let truth = plane_bundle(name);
     let r = run_bundle(&truth, 0.5 * FIT_SIZE_MM, 1e-5);
-    let mut noise = Noise(seed);
+    let mut noise = SplitMix64::new(seed);
     let peak = r.peak_force();
     let end = truth.experiment.protocol.end_s;
     let mut force = String::from("t_s,force_N\n");
     for i in 0..=800 {
         let t = end * i as f64 / 800.0;
-        let f = r.bottom_force_at(t) + if t > 0.0 { 0.01 * peak * noise.gauss() } else { 0.0 };
+        let f = r.bottom_force_at(t) + if t > 0.0 { 0.01 * peak * noise.next_gaussian() } else { 0.0 };
         writeln!(force, "{t},{f}").unwrap();
     }
     let mut markers = String::from("marker,t_s,x_mm,y_mm\n");
     for track in &r.markers {
         for (t, pos) in &track.samples {
             let (x, y) = if *t > 0.0 {
-                (pos[0] + 0.05 * noise.gauss(), pos[1] + 0.05 * noise.gauss())
+                (pos[0] + 0.05 * noise.next_gaussian(), pos[1] + 0.05 * noise.next_gaussian())
             } else {
                 (pos[0], pos[1])
             };

@@ -8,28 +8,12 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use calibrate::procedure::{run, Procedure, ProcedureOptions};
+use calibrate::rng::SplitMix64;
 use calibrate::trial::Campaign;
 use fem_core::material::Material;
 use fem_core::mesh;
 use fem_core::press::{self, Attachment, MarkerRequest, PlanePress, Protocol, Settings};
 use wagashi_io::read_bundle;
-
-/// A deterministic Gaussian source (SplitMix64 + Box-Muller).
-struct Noise(u64);
-
-impl Noise {
-    fn uniform(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn gauss(&mut self) -> f64 {
-        let (u, v) = (self.uniform().max(1e-300), self.uniform());
-        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
-    }
-}
 
 const END_S: f64 = 400.0;
 const RELEASE_S: f64 = 210.93;
@@ -57,18 +41,18 @@ fn synthetic_bundle(dir: &Path, glued: bool, data_size_mm: f64, force_noise: f64
         .collect();
     let settings = Settings { rtol: 1e-5, ..Settings::default() };
     let r = press::simulate(&p, &settings, &mut |_| {}).unwrap();
-    let mut noise = Noise(seed);
+    let mut noise = SplitMix64::new(seed);
     let peak = r.peak_force();
     let mut force = String::from("t_s,force_N\n");
     for i in 0..=800 {
         let t = END_S * i as f64 / 800.0;
-        let f = r.bottom_force_at(t) + if t > 0.0 { force_noise * peak * noise.gauss() } else { 0.0 };
+        let f = r.bottom_force_at(t) + if t > 0.0 { force_noise * peak * noise.next_gaussian() } else { 0.0 };
         writeln!(force, "{t},{f}").unwrap();
     }
     let mut markers = String::from("marker,t_s,x_mm,y_mm\n");
     for track in &r.markers {
         for (t, pos) in &track.samples {
-            let mut jitter = |v: f64| if *t > 0.0 { v + marker_noise_mm * noise.gauss() } else { v };
+            let mut jitter = |v: f64| if *t > 0.0 { v + marker_noise_mm * noise.next_gaussian() } else { v };
             let (x, y) = (jitter(pos[0]), jitter(pos[1]));
             writeln!(markers, "{},{t},{x},{y}", track.name).unwrap();
         }

@@ -17,7 +17,7 @@ use std::path::PathBuf;
 use std::sync::Mutex;
 use std::time::Duration;
 
-use anyhow::{anyhow, bail, Context};
+use anyhow::{anyhow, bail};
 use calibrate::procedure::{run as run_procedure, Estimate, FitReport, Procedure, ProcedureOptions};
 use calibrate::trial::{set_parameter, Campaign, Channel};
 use clap::{Args, ValueEnum};
@@ -121,7 +121,7 @@ pub fn run(args: &FitArgs) -> anyhow::Result<()> {
             bail!("{}: has no measured data ([data] force or markers): nothing to fit", b.experiment_file().display());
         }
     }
-    let output = prepare_output(&bundles, &args.output, args.force)?;
+    let output = crate::press::prepare_output(&bundles.iter().collect::<Vec<_>>(), &args.output, args.force)?;
     let mut campaign = Campaign::new(&bundles, &start, args.size_mm, args.axisymmetric)?;
     campaign.marker_sigma_mm = args.marker_sigma_mm;
     if campaign.unknowns.is_empty() {
@@ -186,25 +186,6 @@ impl StepBars {
             bar.finish_and_clear();
         }
     }
-}
-
-fn prepare_output(bundles: &[Bundle], target: &std::path::Path, replace: bool) -> anyhow::Result<AtomicDir> {
-    let output = std::path::absolute(target).with_context(|| format!("{}: cannot resolve", target.display()))?;
-    for b in bundles {
-        if let Ok(input) = b.dir.canonicalize() {
-            if output.starts_with(&input) || input.starts_with(&output) {
-                bail!(
-                    "{}: the output folder may not be, contain or lie inside the input bundle {} (inputs are never modified)",
-                    target.display(),
-                    b.dir.display()
-                );
-            }
-        }
-    }
-    if target.join(wagashi_io::atomic::OUTPUT_MARKER_FILE).is_file() && !replace {
-        bail!("{}: exists (a previous wagashi output); pass --force to replace it", target.display());
-    }
-    Ok(AtomicDir::new(target)?)
 }
 
 /// `sets.NAME.MATERIAL.KEY = {value, ci95}`.

@@ -32,7 +32,6 @@ use anyhow::{bail, Context};
 use clap::{Args, ValueEnum};
 use fem_core::element::Formulation;
 use fem_core::press::{simulate_any, AnyPress, Integrator, PressResult, Settings, Snapshot};
-use wagashi_io::bundle::Shape;
 use wagashi_io::vtu::{write_pvd, write_vtu, VtuFields};
 use wagashi_io::{
     read_bundle_with, read_materials_file, write_atomic, write_bundle, AtomicDir, Bundle, BundleWrite, ForceSeries,
@@ -234,18 +233,6 @@ fn bundle_dir(path: &Path) -> anyhow::Result<PathBuf> {
     bail!("{}: no such folder (a bundle is a folder holding experiment.toml)", path.display());
 }
 
-/// The default element size [mm]: a quarter of the smallest dimension (min(W, H, T)
-/// for a block, min(R, H) for a cylinder); `None` for a surface specimen.
-pub fn default_size_mm(bundle: &Bundle) -> Option<f64> {
-    let s = &bundle.experiment.specimen;
-    let smallest = match s.shape {
-        Shape::Block => s.block_size().map(|[w, h, t]| w.min(h).min(t)),
-        Shape::Cylinder => Some(s.radius_mm?.min(s.height_mm?)),
-        Shape::Surface => None,
-    };
-    smallest.map(|d| d / 4.0)
-}
-
 /// Simulates `bundle` with `options` and writes the output folder; reports the
 /// mesh and progress on the way (`out`: stdout; the bar: stderr). Both `press`
 /// and `demo` go through here.
@@ -267,9 +254,9 @@ fn press_bundle_as(
     let keep_time_s = protocol.release_s.min(end_s);
 
     // Refuse a bad output folder before the (possibly long) simulation.
-    let output = prepare_output(bundle, &options.output, options.replace)?;
+    let output = prepare_output(&[bundle], &options.output, options.replace)?;
 
-    let (size_mm, size_origin) = match (options.size_mm, default_size_mm(bundle)) {
+    let (size_mm, size_origin) = match (options.size_mm, bundle.default_size_mm()) {
         (Some(h), _) => (h, options.size_origin),
         (None, Some(h)) => (h, "default: a quarter of the smallest dimension"),
         // A surface specimen: `to_press` refuses it (not simulated yet) before
@@ -395,16 +382,18 @@ pub fn print_results(s: &Summary, out: &mut dyn Write) -> anyhow::Result<()> {
 /// Checks `target` and starts building it. Refused: a target that is the bundle,
 /// lies inside it or holds it; an existing previous output unless `replace`; and
 /// (by [`AtomicDir`]) any other existing, non-empty folder or file.
-fn prepare_output(bundle: &Bundle, target: &Path, replace: bool) -> anyhow::Result<AtomicDir> {
-    // An embedded bundle's folder does not exist and cannot overlap.
-    if let Ok(input) = bundle.dir.canonicalize() {
-        let output = resolve(target)?;
-        if output.starts_with(&input) || input.starts_with(&output) {
-            bail!(
-                "{}: the output folder may not be, contain or lie inside the input bundle {} (inputs are never modified)",
-                target.display(),
-                bundle.dir.display()
-            );
+pub(crate) fn prepare_output(inputs: &[&Bundle], target: &Path, replace: bool) -> anyhow::Result<AtomicDir> {
+    for bundle in inputs {
+        // An embedded bundle's folder does not exist and cannot overlap.
+        if let Ok(input) = bundle.dir.canonicalize() {
+            let output = resolve(target)?;
+            if output.starts_with(&input) || input.starts_with(&output) {
+                bail!(
+                    "{}: the output folder may not be, contain or lie inside the input bundle {} (inputs are never modified)",
+                    target.display(),
+                    bundle.dir.display()
+                );
+            }
         }
     }
     let previous = target.join(wagashi_io::atomic::OUTPUT_MARKER_FILE).is_file();

@@ -209,6 +209,19 @@ impl Bundle {
             .collect()
     }
 
+    /// The default element size [mm]: a quarter of the specimen's smallest dimension
+    /// (min(W, H, T) for a block, min(R, H) for a cylinder); `None` for a surface
+    /// specimen. `wagashi press` and `wagashi fit` use it.
+    pub fn default_size_mm(&self) -> Option<f64> {
+        let s = &self.experiment.specimen;
+        let smallest = match s.shape {
+            Shape::Block => s.block_size().map(|[w, h, t]| w.min(h).min(t)),
+            Shape::Cylinder => Some(s.radius_mm?.min(s.height_mm?)),
+            Shape::Surface => None,
+        };
+        smallest.map(|d| d / 4.0)
+    }
+
     /// The engine materials of `regions` (material names), in that order.
     pub fn materials_for(&self, regions: &[String]) -> Result<Vec<Material>, BundleError> {
         regions
