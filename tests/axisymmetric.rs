@@ -10,16 +10,9 @@
 //!   against the corner singularity's prediction.
 //! - Every integrator runs the axisymmetric problem unchanged; the axis holds;
 //!   markers live in the section; bad meshes are refused.
-//! - `#[ignore]`d: the cost ratio 3D / axisymmetric at equal accuracy (a
-//!   measurement, not a check: `cargo test --release -p wagashi-workspace-tests
-//!   --test axisymmetric -- --ignored --nocapture`). Measured on 2 cores, whole
-//!   runs (70 steps each), peak-force error against the extrapolated limit:
-//!   3D h = 1 mm (2.1 % error, 0.075 s) vs axisymmetric 0.0014 s: 55x; 3D h = 0.5
-//!   mm (1.0 %, 1.08 s) vs 0.0050 s: 218x; 3D h = 0.25 mm (0.47 %, 15.4 s) vs
-//!   0.022 s: 693x. "100x cheaper" holds at 1 % accuracy and finer (at the 2 %
-//!   of 1 mm elements it is 55x); the ratio grows as the accuracy tightens.
-
-use std::time::Instant;
+//! - The cost ratio 3D / axisymmetric at equal accuracy is a measurement, not a
+//!   check: `cargo run --release -p wagashi-workspace-tests --example axisymmetric_cost`
+//!   (figures in BENCHMARKS.md).
 
 use fem_core::analytic::{uniaxial_recovery_strain, uniaxial_stress};
 use fem_core::element::Formulation;
@@ -159,13 +152,9 @@ fn frictionless_plates_give_the_homogeneous_closed_form() {
 fn glued_plates_match_the_3d_cylinder() {
     let h = 0.5;
     let pa = axisymmetric(h, Material::seed_mat1_force(), Attachment::Glued);
-    let clock = Instant::now();
     let ra = run_axisymmetric(&pa);
-    let time_a = clock.elapsed().as_secs_f64();
     let ps = solid(h, Material::seed_mat1_force(), Attachment::Glued);
-    let clock = Instant::now();
     let rs = press::simulate(&ps, &Settings::default(), &mut |_| {}).unwrap();
-    let time_s = clock.elapsed().as_secs_f64();
 
     let peak = rs.peak_force();
     let curve_gap = (0..=1000)
@@ -175,7 +164,7 @@ fn glued_plates_match_the_3d_cylinder() {
         / peak;
     let peak_gap = (ra.peak_force() - peak).abs() / peak;
     eprintln!(
-        "h = {h} mm: axisymmetric {} cells in {time_a:.3} s, 3D {} cells in {time_s:.3} s; peak {:.6} vs {peak:.6} N",
+        "h = {h} mm: axisymmetric {} cells, 3D {} cells; peak {:.6} vs {peak:.6} N",
         pa.mesh.num_cells(),
         ps.mesh.num_cells(),
         ra.peak_force()
@@ -343,70 +332,4 @@ fn bad_axisymmetric_problems_are_refused() {
     p.formulation = Formulation::PlaneStress { thickness_mm: 1.0 };
     let err = p.validate().unwrap_err();
     assert!(matches!(&err, PressError::BadFormulation(m) if m.contains("3 strain components")), "{err}");
-}
-
-// ---------------------------------------------------------------------------
-// The measurement behind "100x cheaper".
-
-/// Median wall time [s] of `repeats` runs of `f`, and its last value.
-fn timed<T>(repeats: usize, mut f: impl FnMut() -> T) -> (f64, T) {
-    let mut times = Vec::new();
-    let mut last = None;
-    for _ in 0..repeats {
-        let clock = Instant::now();
-        last = Some(f());
-        times.push(clock.elapsed().as_secs_f64());
-    }
-    times.sort_by(f64::total_cmp);
-    (times[times.len() / 2], last.unwrap())
-}
-
-/// Cost of a whole run (`press::simulate`: model, assembly, ordering,
-/// factorization, all steps) against the peak force's error relative to the
-/// Richardson-extrapolated axisymmetric limit, for both models; then, for each 3D
-/// run, the axisymmetric time at the same error (log-log interpolation between the
-/// two axisymmetric runs that bracket it) and the ratio.
-#[test]
-#[ignore = "a measurement (about a minute): run with --ignored --nocapture"]
-fn cost_ratio_at_equal_accuracy() {
-    let axi_sizes = [1.0, 0.5, 0.4, 0.3, 0.25, 0.2, 0.15, 0.125, 0.1, 0.0625, 0.03125];
-    let mut axi: Vec<(f64, f64, f64)> = Vec::new(); // (h, time, peak)
-    for h in axi_sizes {
-        let p = axisymmetric(h, Material::seed_mat1_force(), Attachment::Glued);
-        let repeats = if h >= 0.1 { 7 } else { 3 };
-        let (t, r) = timed(repeats, || press::simulate(&p, &Settings::default(), &mut |_| {}).unwrap());
-        axi.push((h, t, r.peak_force()));
-    }
-    // Richardson on the three finest, refined by 2.
-    let peak_at = |h: f64| axi.iter().find(|a| a.0 == h).expect("run").2;
-    let (f1, f2, f3) = (peak_at(0.125), peak_at(0.0625), peak_at(0.03125));
-    let p = ((f1 - f2) / (f2 - f3)).log2();
-    let limit = f3 - (f2 - f3) / (2f64.powf(p) - 1.0);
-    eprintln!("axisymmetric limit {limit:.7} N (observed order {p:.3} on h = 0.125, 0.0625, 0.03125)");
-    eprintln!("model         h [mm]   cells    time [s]   peak [N]    error");
-    let err = |f: f64| (f - limit) / limit;
-    for &(h, t, f) in &axi {
-        let cells = 2 * (R / h).ceil() as usize * (H / h - 1e-9).ceil() as usize;
-        eprintln!("axisymmetric  {h:<7}  {cells:<7}  {t:<9.4}  {f:.7}   {:.3e}", err(f));
-    }
-    for h in [1.0, 0.5, 0.25] {
-        let ps = solid(h, Material::seed_mat1_force(), Attachment::Glued);
-        let (t, r) =
-            timed(if h >= 0.5 { 3 } else { 1 }, || press::simulate(&ps, &Settings::default(), &mut |_| {}).unwrap());
-        let e = err(r.peak_force());
-        eprintln!("3D            {h:<7}  {:<7}  {t:<9.4}  {:.7}   {e:.3e}", ps.mesh.num_cells(), r.peak_force());
-        // The axisymmetric runs that bracket this error (errors fall as h falls).
-        let bracket = axi.windows(2).find(|w| err(w[0].2) >= e && err(w[1].2) <= e);
-        if let Some(w) = bracket {
-            let (ea, eb) = (err(w[0].2).ln(), err(w[1].2).ln());
-            let s = (e.ln() - ea) / (eb - ea);
-            let t_axi = (w[0].1.ln() + s * (w[1].1.ln() - w[0].1.ln())).exp();
-            eprintln!(
-                "    same error axisymmetric: {t_axi:.4} s (h between {} and {}); ratio 3D/axi = {:.0}",
-                w[0].0,
-                w[1].0,
-                t / t_axi
-            );
-        }
-    }
 }
