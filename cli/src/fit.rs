@@ -34,7 +34,12 @@ Examples:
   wagashi fit trials/mat1 trials/mat1+2 --procedure joint -o out/fit-joint
 
   # Start from (and free) the values of a materials file, 8 starts per step:
-  wagashi fit trials/mat1 --materials start.toml --starts 8 -o out/fit";
+  wagashi fit trials/mat1 --materials start.toml --starts 8 -o out/fit
+
+  # A cylinder imported from a texture analyser, by its axisymmetric section:
+  wagashi import rheometer ../shared/data/real/fungi-steak/double-compression-slowest-inplane-1.txt \
+      --cylinder-radius-mm 4 -o bundles/fungi
+  wagashi fit bundles/fungi/double-compression-slowest-inplane-1 --axisymmetric -o out/fit-fungi";
 
 /// `wagashi fit BUNDLE... -o OUT`.
 #[derive(Debug, Args)]
