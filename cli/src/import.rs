@@ -323,7 +323,7 @@ fn targets(files: &[PathBuf], output: &Path) -> anyhow::Result<Vec<(String, Path
 /// when it is a previous output and `replace` is not set, and (by [`AtomicDir`])
 /// when it is any other existing, non-empty folder or a file.
 fn prepare_output(input: &Path, target: &Path, replace: bool) -> anyhow::Result<AtomicDir> {
-    if resolve(input)?.starts_with(resolve(target)?) {
+    if crate::press::resolve(input)?.starts_with(crate::press::resolve(target)?) {
         bail!(
             "{}: the output folder may not hold the input {} (inputs are never modified)",
             target.display(),
@@ -335,26 +335,6 @@ fn prepare_output(input: &Path, target: &Path, replace: bool) -> anyhow::Result<
         bail!("{}: exists (a previous wagashi output); pass --force to replace it", target.display());
     }
     Ok(AtomicDir::new(target)?)
-}
-
-/// `path` made absolute with symbolic links resolved as far as it exists (as
-/// `wagashi press` resolves its output).
-fn resolve(path: &Path) -> anyhow::Result<PathBuf> {
-    let absolute = std::path::absolute(path).with_context(|| format!("{}: cannot resolve", path.display()))?;
-    let mut existing = absolute.as_path();
-    let mut rest = Vec::new();
-    while !existing.exists() {
-        match (existing.parent(), existing.file_name()) {
-            (Some(parent), Some(name)) => {
-                rest.push(name.to_os_string());
-                existing = parent;
-            }
-            _ => break,
-        }
-    }
-    let mut resolved = existing.canonicalize().unwrap_or_else(|_| existing.to_path_buf());
-    resolved.extend(rest.iter().rev());
-    Ok(resolved)
 }
 
 /// One line per imported file, for stderr.

@@ -404,7 +404,7 @@ pub(crate) fn prepare_output(inputs: &[&Bundle], target: &Path, replace: bool) -
 }
 
 /// `path` made absolute with symbolic links resolved as far as it exists.
-fn resolve(path: &Path) -> anyhow::Result<PathBuf> {
+pub(crate) fn resolve(path: &Path) -> anyhow::Result<PathBuf> {
     let absolute = std::path::absolute(path).with_context(|| format!("{}: cannot resolve", path.display()))?;
     let mut existing = absolute.as_path();
     let mut rest = Vec::new();

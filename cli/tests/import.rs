@@ -2,52 +2,15 @@
 //! (`<workspace>/../shared/data`, never copied into the repository).
 
 use std::collections::BTreeMap;
-use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::Output;
 
 use wagashi_io::bundle::{MaterialSpec, Model};
 use wagashi_io::{read_bundle_with, Bundle};
 
-// ---- helpers copied from tests/common/mod.rs (that file is shared; only what is needed here)
+mod common;
 
-/// Runs `wagashi ARGS` in `cwd` with no standard input.
-fn wagashi_in<I, S>(cwd: &Path, args: I) -> Output
-where
-    I: IntoIterator<Item = S>,
-    S: AsRef<OsStr>,
-{
-    Command::new(env!("CARGO_BIN_EXE_wagashi"))
-        .args(args)
-        .current_dir(cwd)
-        .stdin(Stdio::null())
-        .output()
-        .expect("the wagashi binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn assert_success(o: &Output) {
-    assert!(
-        o.status.success(),
-        "exit {:?}\nstdout:\n{}\nstderr:\n{}",
-        o.status.code(),
-        String::from_utf8_lossy(&o.stdout),
-        stderr(o)
-    );
-}
-
-/// Asserts a failure with exit status 1 and one line `error: ...` on stderr; returns that line.
-fn assert_one_line_error(o: &Output) -> String {
-    let err = stderr(o);
-    assert_eq!(o.status.code(), Some(1), "stderr:\n{err}");
-    let lines: Vec<&str> = err.lines().collect();
-    assert_eq!(lines.len(), 1, "one line expected:\n{err}");
-    assert!(lines[0].starts_with("error: "), "{err}");
-    lines[0].to_string()
-}
+use common::{assert_one_line_error, assert_success, stderr, wagashi_in};
 
 // ---- the shared data
 
@@ -73,8 +36,8 @@ fn gel() -> PathBuf {
     data("cmc-gel/sampleGel.tab")
 }
 
-/// Reads the bundle with a placeholder for its material (the import writes none:
-/// it comes from `--materials` or a fit).
+/// Reads the bundle with a placeholder material in place of the import's
+/// model-only table (which `--model none` leaves out).
 fn read_back(dir: &Path) -> Bundle {
     let materials = BTreeMap::from([("sample".to_string(), MaterialSpec::new(Model::Elastic))]);
     read_bundle_with(dir, &materials).unwrap_or_else(|e| panic!("{}: does not read back: {e}", dir.display()))
