@@ -105,9 +105,10 @@ pub struct StepReport {
     pub warnings: Vec<String>,
     /// Skipped, and why.
     pub skipped: Option<String>,
-    /// Profile likelihoods of the one-parameter steps (nu, c3): `(value, objective)`
-    /// pairs, the profile's 95 % interval and whether the profile is flat.
-    pub profile: Option<ProfileReport>,
+    /// Profile likelihoods of nu and c3 (the seed's one-parameter steps, and the
+    /// joint fit's): `(value, objective)` pairs, the profile's 95 % interval and
+    /// whether the profile is flat.
+    pub profiles: Vec<ProfileReport>,
     /// Wall time [s].
     pub wall_s: f64,
 }
@@ -310,7 +311,7 @@ fn fit_weighted(
         stop: "skipped".into(),
         warnings: vec![why.clone()],
         skipped: Some(why),
-        profile: None,
+        profiles: Vec::new(),
         wall_s: 0.0,
     };
     if free.is_empty() {
@@ -339,27 +340,28 @@ fn fit_weighted(
             (best.x.iter().map(|_| [f64::NAN, f64::NAN]).collect(), Vec::new(), vec![format!("no interval: {e}")])
         }
     };
-    // One-parameter steps (nu, c3): the profile likelihood is cheap, report it.
-    let profile_report = if free.len() == 1 {
-        match profile(&objective, &specs, best, 0, 4, &options.lsq) {
+    // Profile likelihoods of nu and c3 (the two): in the seed's
+    // one-parameter steps they cost a few simulations; in a joint fit each point
+    // re-fits the other parameters.
+    let mut profiles = Vec::new();
+    let wanted = (0..free.len()).filter(|&k| {
+        free.len() == 1 || (name == "joint" && matches!(campaign.unknowns[free[k]].key, "poisson" | "c3_MPa_s"))
+    });
+    for k in wanted.collect::<Vec<_>>() {
+        match profile(&objective, &specs, best, k, 4, &options.lsq) {
             Ok(p) => {
                 warnings.extend(p.warnings().iter().map(|w| w.to_string()));
                 let (lo, hi) = p.interval();
-                Some(ProfileReport {
-                    parameter: labels[0].clone(),
+                profiles.push(ProfileReport {
+                    parameter: labels[k].clone(),
                     points: p.pairs(),
                     ci95: [lo, hi],
                     flat: p.is_flat(),
-                })
+                });
             }
-            Err(e) => {
-                warnings.push(format!("no profile for {}: {e}", labels[0]));
-                None
-            }
+            Err(e) => warnings.push(format!("no profile for {}: {e}", labels[k])),
         }
-    } else {
-        None
-    };
+    }
     let evaluations = result.fits().map(|f| f.evaluations).sum::<usize>();
     let report = StepReport {
         name: name.to_string(),
@@ -376,7 +378,7 @@ fn fit_weighted(
         stop: best.stop.to_string(),
         warnings,
         skipped: None,
-        profile: profile_report,
+        profiles,
         wall_s: clock.elapsed().as_secs_f64(),
     };
     let mut report = report;

@@ -228,6 +228,12 @@ fn fit_json(campaign: &Campaign, report: &FitReport) -> Value {
                 "stop": s.stop,
                 "warnings": s.warnings,
                 "skipped": s.skipped,
+                "profiles": s.profiles.iter().map(|p| json!({
+                    "parameter": p.parameter,
+                    "points": p.points.iter().map(|q| [q.0, q.1]).collect::<Vec<_>>(),
+                    "ci95": p.ci95,
+                    "flat": p.flat,
+                })).collect::<Vec<_>>(),
                 "wall_s": s.wall_s,
             })
         })

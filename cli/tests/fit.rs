@@ -69,6 +69,26 @@ fn fits_a_simulated_trial_back_and_writes_every_output() {
     // materials.toml loads with --materials.
     let o = wagashi_in(cwd, ["press", "in", "--materials", "fit/materials.toml", "--size-mm", "6", "-o", "again"]);
     assert_success(&o);
+    // The joint procedure: one set, with profile likelihoods of nu and c3.
+    let o = wagashi_in(
+        cwd,
+        ["fit", "measured", "--materials", "start.toml", "--size-mm", "6", "--procedure", "joint", "-o", "joint"],
+    );
+    assert_success(&o);
+    let joint: serde_json::Value = serde_json::from_slice(&std::fs::read(cwd.join("joint/fit.json")).unwrap()).unwrap();
+    let nu = joint["sets"]["joint"]["mat1"]["poisson"]["value"].as_f64().unwrap();
+    assert!((nu - 0.3746).abs() < 5e-3 * 0.3746, "joint nu = {nu}");
+    let last = joint["steps"].as_array().unwrap().last().unwrap().clone();
+    let profiled: Vec<&str> =
+        last["profiles"].as_array().unwrap().iter().map(|p| p["parameter"].as_str().unwrap()).collect();
+    assert_eq!(profiled, ["mat1.poisson", "mat1.c3_MPa_s"], "{last}");
+    for p in last["profiles"].as_array().unwrap() {
+        let ci: Vec<f64> = p["ci95"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+        let v = joint["sets"]["joint"]["mat1"][p["parameter"].as_str().unwrap().trim_start_matches("mat1.")]["value"]
+            .as_f64()
+            .unwrap();
+        assert!(ci[0] <= v && v <= ci[1], "profile interval {ci:?} misses the estimate {v}");
+    }
     // The output folder is not replaced without --force.
     let o = wagashi_in(cwd, ["fit", "measured", "--materials", "start.toml", "--size-mm", "6", "-o", "fit"]);
     assert!(assert_one_line_error(&o).contains("--force"));
