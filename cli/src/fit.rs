@@ -17,6 +17,7 @@ use std::path::PathBuf;
 use std::sync::Mutex;
 use std::time::Duration;
 
+use crate::press::positive_number;
 use anyhow::{anyhow, bail};
 use calibrate::procedure::{run as run_procedure, Estimate, FitReport, Procedure, ProcedureOptions};
 use calibrate::trial::{set_parameter, Campaign, Channel};
@@ -76,7 +77,7 @@ pub struct FitArgs {
     pub starts: u32,
 
     /// Target element size [mm]; default: a quarter of each specimen's smallest dimension.
-    #[arg(long = "size-mm", value_name = "H")]
+    #[arg(long = "size-mm", value_name = "H", value_parser = positive_number, allow_negative_numbers = true)]
     pub size_mm: Option<f64>,
 
     /// Model cylinders (shape = "cylinder") by their axisymmetric r-y section:
@@ -85,7 +86,7 @@ pub struct FitArgs {
     pub axisymmetric: bool,
 
     /// Marker noise [mm]: the standard deviation of a measured marker coordinate.
-    #[arg(long = "marker-sigma-mm", value_name = "MM", default_value_t = 0.05)]
+    #[arg(long = "marker-sigma-mm", value_name = "MM", default_value_t = 0.05, value_parser = positive_number, allow_negative_numbers = true)]
     pub marker_sigma_mm: f64,
 
     /// Replace OUT when it holds a previous wagashi output.
@@ -104,14 +105,6 @@ pub enum ProcedureArg {
 
 /// `wagashi fit`.
 pub fn run(args: &FitArgs) -> anyhow::Result<()> {
-    if let Some(h) = args.size_mm {
-        if !(h.is_finite() && h > 0.0) {
-            bail!("--size-mm {h}: must be a finite number > 0");
-        }
-    }
-    if !(args.marker_sigma_mm.is_finite() && args.marker_sigma_mm > 0.0) {
-        bail!("--marker-sigma-mm {}: must be a finite number > 0", args.marker_sigma_mm);
-    }
     let start: BTreeMap<String, MaterialSpec> = match &args.materials {
         Some(path) => read_materials_file(path)?,
         None => Default::default(),

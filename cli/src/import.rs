@@ -20,6 +20,8 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context};
+
+use crate::press::positive_number;
 use clap::{ArgGroup, Args, Subcommand, ValueEnum};
 use serde::Serialize;
 use wagashi_io::bundle::{Contact, Model};
@@ -195,15 +197,6 @@ pub enum StrokeArg {
     Two,
     /// The whole test.
     All,
-}
-
-fn positive_number(s: &str) -> Result<f64, String> {
-    let x: f64 = s.trim().parse().map_err(|_| format!("`{s}` is not a number"))?;
-    if x.is_finite() && x > 0.0 {
-        Ok(x)
-    } else {
-        Err(format!("{s} must be a finite number > 0"))
-    }
 }
 
 /// What `summary.json` of an imported bundle holds (it also marks the folder as

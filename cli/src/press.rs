@@ -159,7 +159,8 @@ impl IntegratorArg {
     }
 }
 
-fn positive_number(s: &str) -> Result<f64, String> {
+/// A clap value parser for a finite number > 0 (every `*-mm` and `*-s` flag).
+pub(crate) fn positive_number(s: &str) -> Result<f64, String> {
     let x: f64 = s.trim().parse().map_err(|_| format!("`{s}` is not a number"))?;
     if x.is_finite() && x > 0.0 {
         Ok(x)
