@@ -18,19 +18,23 @@
 //! dynamics, constraint stabilisation with psi = 2000, explicit Runge-Kutta), kept
 //! as a reference.
 
+mod contact;
 mod model;
 mod problem;
 mod result;
 mod seed;
 mod sensitivity;
 mod stepper;
+mod tools;
 
+pub use contact::{ToolSample, ToolTrack};
 pub use problem::{
     AnyPress, Attachment, AxisymmetricPress, Integrator, MarkerRequest, PlanePress, PressError, PressProblem, Protocol,
     Settings, SolidPress,
 };
 pub use result::{MarkerTrack, PressResult, Progress, Snapshot, StepRecord};
 pub use sensitivity::{ParameterKind, Sensitivities, SensitivityParameter};
+pub use tools::{Keyframe, Tool, ToolContact, ToolShape};
 
 /// Runs a press problem; `progress` is called after every step.
 pub fn simulate<const D: usize, const N: usize, const S: usize>(

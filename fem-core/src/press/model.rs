@@ -37,7 +37,8 @@ pub(crate) struct Constraints {
     pub held: Vec<bool>,
     /// Dofs that follow the plate's displacement: `u = -d(t)` (the top's y dofs).
     pub plate_dofs: Vec<usize>,
-    /// Whether the plate holds the top face.
+    /// Whether the plate holds the top face (always true with contact tools: the
+    /// reactions then follow from the stresses at all times).
     pub plate_attached: bool,
 }
 
@@ -79,6 +80,8 @@ pub(crate) struct Model<'p, const D: usize, const N: usize, const S: usize> {
     pub displacement_scale: f64,
     /// Nested-dissection elimination order of the nodes.
     pub node_order: Vec<u32>,
+    /// Position of each dof's diagonal entry in the pattern's values.
+    pub diagonal_positions: Vec<usize>,
 }
 
 impl<'p, const D: usize, const N: usize, const S: usize> Model<'p, D, N, S>
@@ -149,14 +152,41 @@ where
         }
 
         let bottom = mesh.node_set("bottom")?.to_vec();
-        let top = mesh.node_set("top")?.to_vec();
+        let with_tools = !problem.tools.is_empty();
+        let top = if with_tools {
+            mesh.node_sets.get("top").cloned().unwrap_or_default()
+        } else {
+            mesh.node_set("top")?.to_vec()
+        };
         let axis = match problem.formulation {
             Formulation::Axisymmetric => Some(mesh.node_set("axis")?),
             _ => None,
         };
-        let attached =
-            constraints::<D, N>(mesh, &bottom, &top, axis, problem.protocol.support, Some(problem.protocol.plate));
-        let released = constraints::<D, N>(mesh, &bottom, &top, axis, problem.protocol.support, None);
+        // Tools that hold tangentially (glued, friction) hold the rigid motions too:
+        // no pins then.
+        let tools_hold = problem.tools.iter().any(|t| !matches!(t.contact, crate::press::ToolContact::Frictionless));
+        // With tools, no plate holds the top: both sets hold only the support (and
+        // count as "attached": the reactions follow from the stresses throughout).
+        let attached = if with_tools {
+            let mut c = constraints::<D, N>(mesh, &bottom, &top, axis, problem.protocol.support, None, tools_hold);
+            c.plate_attached = true;
+            c
+        } else {
+            constraints::<D, N>(
+                mesh,
+                &bottom,
+                &top,
+                axis,
+                problem.protocol.support,
+                Some(problem.protocol.plate),
+                false,
+            )
+        };
+        let released = if with_tools {
+            attached.clone()
+        } else {
+            constraints::<D, N>(mesh, &bottom, &top, axis, problem.protocol.support, None, false)
+        };
 
         let functionals =
             [functional(&geometry, &topology, &bottom, 1.0), functional(&geometry, &topology, &top, -1.0)];
@@ -171,10 +201,18 @@ where
         let (lo, hi) = mesh.bounding_box();
         let size = (0..D).map(|k| hi[k] - lo[k]).fold(f64::INFINITY, f64::min);
         let dmax = problem.protocol.waypoints.iter().map(|w| w[1].abs()).fold(0.0, f64::max);
+        let dmax = problem.tools.iter().map(|t| t.travel()).fold(dmax, f64::max);
         let displacement_scale = dmax.max(1e-3 * size);
 
         let node_order = crate::ordering::nested_dissection(&mesh.nodes, &topology);
+        let diagonal_positions = (0..pattern.num_dofs())
+            .map(|r| {
+                let row = &pattern.col_idx[pattern.row_ptr[r]..pattern.row_ptr[r + 1]];
+                pattern.row_ptr[r] + row.iter().position(|&c| c as usize == r).expect("the diagonal is in the pattern")
+            })
+            .collect();
         Ok(Self {
+            diagonal_positions,
             node_order,
             problem,
             geometry,
@@ -284,7 +322,8 @@ where
 
 /// The held dofs: the floor's (bottom), the plate's (top, when `plate` is given),
 /// `u_r` on the `axis` nodes of an axisymmetric problem, and otherwise, when no
-/// face is glued, the pins against rigid motions in the x(-z) plane.
+/// face is glued and no tool holds tangentially (`tools_hold`), the pins against
+/// rigid motions in the x(-z) plane.
 fn constraints<const D: usize, const N: usize>(
     mesh: &crate::mesh::SimplexMesh<D, N>,
     bottom: &[u32],
@@ -292,6 +331,7 @@ fn constraints<const D: usize, const N: usize>(
     axis: Option<&[u32]>,
     support: Attachment,
     plate: Option<Attachment>,
+    tools_hold: bool,
 ) -> Constraints
 where
     Simplex<D, N>: ReferenceSimplex<D, N>,
@@ -302,6 +342,7 @@ where
         match support {
             Attachment::Glued => (0..D).for_each(|k| held[i * D + k] = true),
             Attachment::Frictionless => held[i * D + 1] = true,
+            Attachment::Free => {}
         }
     }
     let mut plate_dofs = Vec::new();
@@ -327,7 +368,7 @@ where
     // Statically determinate pins against the rigid motions in the x(-z) plane when
     // no face is glued: node A (min x, then min z) holds x and z; in 3D node B (max x
     // at A's z) holds z. They carry no load, so they add no stress.
-    let some_face_glued = support == Attachment::Glued || plate == Some(Attachment::Glued);
+    let some_face_glued = support == Attachment::Glued || plate == Some(Attachment::Glued) || tools_hold;
     if !some_face_glued && axis.is_none() {
         let key = |i: u32| {
             let p = mesh.nodes[i as usize];

@@ -11,6 +11,9 @@ pub enum Attachment {
     Glued,
     /// Only the normal (y) component is held; the face slides freely.
     Frictionless,
+    /// Nothing holds the face by a constraint (a contact tool may, e.g. a floor
+    /// with friction, [`super::Tool::floor_below`]).
+    Free,
 }
 
 /// The loading protocol of a press trial.
@@ -190,6 +193,13 @@ pub struct PressProblem<const D: usize, const N: usize, const S: usize> {
     pub markers: Vec<MarkerRequest>,
     /// Extra times at which to keep the nodal displacements [s] (release and end are always kept).
     pub snapshot_times: Vec<f64>,
+    /// Rigid tools in contact with the specimen. When there are any, they replace
+    /// the protocol's plate (the `top` set is then not held; `protocol.plate` is
+    /// ignored) and only the quasi-static integrator runs; `protocol.support` still
+    /// holds the `bottom` set (use [`Attachment::Free`] with a floor tool for a
+    /// floor with friction). The protocol's waypoints and release still set step
+    /// landings.
+    pub tools: Vec<super::Tool>,
 }
 
 /// A 2D (plane) press problem.
@@ -253,6 +263,24 @@ pub enum PressError {
     /// Settings out of range.
     #[error("settings: {0}")]
     BadSettings(String),
+    /// A tool was refused.
+    #[error("tool `{tool}`: {detail}")]
+    BadTool { tool: String, detail: String },
+    /// The contact did not settle (a chattering active set or a diverging
+    /// iteration), even at a smaller step.
+    #[error(
+        "step {step} at t = {time_s:.6} s: contact with tool `{tool}` did not settle at nodes {}",
+        list_nodes(nodes)
+    )]
+    ContactNotSettled { step: usize, time_s: f64, tool: String, nodes: Vec<u32> },
+}
+
+fn list_nodes(nodes: &[u32]) -> String {
+    let mut s: Vec<String> = nodes.iter().take(8).map(|n| n.to_string()).collect();
+    if nodes.len() > 8 {
+        s.push(format!("... ({} in all)", nodes.len()));
+    }
+    s.join(", ")
 }
 
 /// The times an integrator's steps must land on, and the times whose state it keeps.
@@ -279,9 +307,21 @@ impl<const D: usize, const N: usize, const S: usize> PressProblem<D, N, S>
 where
     Simplex<D, N>: ReferenceSimplex<D, N>,
 {
+    /// The protocol's kinks and the tools' (keyframes, releases), sorted, unique.
+    pub(crate) fn kinks(&self) -> Vec<f64> {
+        let end = self.protocol.end_s;
+        let mut k = self.protocol.kinks();
+        for tool in &self.tools {
+            k.extend(tool.kinks(end));
+        }
+        k.sort_by(f64::total_cmp);
+        k.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * b.abs().max(1.0));
+        k
+    }
+
     pub(crate) fn schedule(&self) -> Schedule {
         let end = self.protocol.end_s;
-        let mut landings = self.protocol.kinks();
+        let mut landings = self.kinks();
         landings.extend(self.snapshot_times.iter().copied().filter(|&t| t > 0.0 && t < end));
         landings.sort_by(f64::total_cmp);
         landings.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * b.abs().max(1.0));
@@ -307,7 +347,12 @@ where
         }
         self.mesh.validate()?;
         self.mesh.node_set("bottom")?;
-        self.mesh.node_set("top")?;
+        if self.tools.is_empty() {
+            self.mesh.node_set("top")?;
+        }
+        for tool in &self.tools {
+            tool.validate()?;
+        }
         if self.formulation == Formulation::Axisymmetric {
             self.validate_axis()?;
         }
@@ -380,6 +425,7 @@ impl PlanePress {
             protocol,
             markers: Vec::new(),
             snapshot_times: Vec::new(),
+            tools: Vec::new(),
         };
         p.validate()?;
         Ok(p)
@@ -399,6 +445,7 @@ impl AxisymmetricPress {
             protocol,
             markers: Vec::new(),
             snapshot_times: Vec::new(),
+            tools: Vec::new(),
         };
         p.validate()?;
         Ok(p)
@@ -416,6 +463,7 @@ impl SolidPress {
             protocol,
             markers: Vec::new(),
             snapshot_times: Vec::new(),
+            tools: Vec::new(),
         };
         p.validate()?;
         Ok(p)

@@ -67,6 +67,9 @@ pub(crate) struct ForceSegment {
     /// but the body force loads the specimen, the reactions are fixed by equilibrium
     /// and are interpolated linearly between the (exact) step ends.
     pub detached_ends: Option<[[f64; 2]; 2]>,
+    /// With contact tools: the plate force (the sum over the tools that are not
+    /// floors) at the step's start and end, interpolated linearly inside.
+    pub plate_ends: Option<[f64; 2]>,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -92,7 +95,11 @@ impl ForceSegment {
             let w = tau / self.dt;
             return [start[0] + w * (end[0] - start[0]), start[1] + w * (end[1] - start[1])];
         }
-        self.eval_formula(tau)
+        let mut f = self.eval_formula(tau);
+        if let Some([a, b]) = self.plate_ends {
+            f[1] = a + (tau / self.dt) * (b - a);
+        }
+        f
     }
 
     /// The closed-form force inside the step for a strain linear in time.
@@ -137,6 +144,9 @@ pub struct PressResult {
     pub factor_nonzeros: usize,
     /// Free degrees of freedom (largest constraint set).
     pub num_free_dofs: usize,
+    /// Per tool (in the problem's order): contact forces, area and nodes over time;
+    /// empty without tools.
+    pub tools: Vec<super::contact::ToolTrack>,
     pub(crate) segments: Vec<ForceSegment>,
 }
 

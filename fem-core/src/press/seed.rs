@@ -190,6 +190,7 @@ where
         num_factorizations: 0,
         factor_nonzeros: 0,
         num_free_dofs: model.released.held.iter().filter(|h| !**h).count(),
+        tools: Vec::new(),
         segments: Vec::new(),
     })
 }

@@ -32,6 +32,7 @@ use std::time::Instant;
 use crate::parallel::map_collect;
 use nalgebra::{SMatrix, SVector};
 
+use super::contact::{ContactModel, StepInput, ToolSample, ToolTrack};
 use super::model::{Constraints, Model};
 use super::result::{ForceSegment, RegionTerms};
 use super::sensitivity::{check_parameters, Sensitivities, SensitivityParameter, StepView, Tracker};
@@ -149,7 +150,7 @@ where
     let ncell = problem.mesh.num_cells();
 
     // Times the steps must land on: physical kinks restart the error estimator.
-    let physical_kinks = protocol.kinks();
+    let physical_kinks = problem.kinks();
     let schedule = problem.schedule();
 
     let dt_max = settings.max_dt_s.unwrap_or(end / 20.0);
@@ -169,6 +170,32 @@ where
         None
     };
     let mut cache: Vec<(CacheKey, Factor<'_>)> = Vec::new();
+    // Contact: the tools, their state, and the factorization with their penalties.
+    let contact = if problem.tools.is_empty() {
+        None
+    } else {
+        if settings.integrator != Integrator::QuasiStatic || tracker.is_some() {
+            return Err(PressError::BadSettings(
+                "contact tools need the quasi-static integrator and no sensitivities".into(),
+            ));
+        }
+        Some(ContactModel::new(problem, &model.pattern, &model.attached.held)?)
+    };
+    let mut contact_state = contact.as_ref().map(|c| c.initial_state());
+    // Keyed by the penalty pattern's hash and the step key.
+    type ContactKey = (u64, (u64, u64));
+    let mut contact_factor: Option<(ContactKey, Factor<'_>)> = None;
+    let mut contact_retries = 0usize;
+    let mut tool_tracks: Vec<ToolTrack> = match contact.as_ref() {
+        Some(c) => c
+            .initial_samples()
+            .into_iter()
+            .zip(&problem.tools)
+            .map(|(s, tool)| ToolTrack { name: tool.name.clone(), samples: vec![s] })
+            .collect(),
+        None => Vec::new(),
+    };
+    let rest: Vec<Vec<f64>> = problem.mesh.nodes.iter().map(|p| p.to_vec()).collect();
     let mut num_factorizations = 0usize;
 
     let mut state = State::<S> {
@@ -233,38 +260,134 @@ where
         if !constraints.plate_attached {
             cache.retain(|(k, _)| !k.0);
         }
-        // Numeric factor for this constraint set and step size.
-        let key =
-            (constraints.plate_attached, if single_group { (0, 0) } else { (h.to_bits(), bdf.alpha[0].to_bits()) });
         let clock = Instant::now();
-        let refactored = if let Some(pos) = cache.iter().position(|(k, _)| *k == key) {
-            let entry = cache.remove(pos);
-            cache.push(entry);
-            false
-        } else {
-            let terms: Vec<(f64, &[f64])> = model
-                .groups
-                .iter()
-                .map(|g| {
-                    let c = if single_group { 1.0 } else { (1.0 - ga.alpha_f) * step_factor(&g.kernel, h, bdf) };
-                    (c, g.stiffness.as_slice())
-                })
-                .collect();
-            let mass_term: Option<Vec<f64>> =
-                dynamic.then(|| model.mass.iter().map(|m| m * (1.0 - ga.alpha_m) / (ga.beta * h * h)).collect());
-            let factor =
-                system.factor(&terms, mass_term.as_deref()).map_err(|e| model.singular(step_index + 1, t1, e))?;
-            num_factorizations += 1;
-            if cache.len() >= CACHE_SIZE {
-                cache.remove(0);
+        let stepped = if let Some(cm) = contact.as_ref() {
+            let single_scale = if single_group { step_factor(&model.groups[0].kernel, h, bdf) } else { 1.0 };
+            // The step matrix's diagonal at its actual scale sets the penalties.
+            let mut diagonal = vec![0.0; ndof];
+            for g in &model.groups {
+                let c = step_factor(&g.kernel, h, bdf);
+                for (d, &p) in model.diagonal_positions.iter().enumerate() {
+                    diagonal[d] += c * g.stiffness[p];
+                }
             }
-            cache.push((key, factor));
-            true
-        };
-        let factor = &cache.last().unwrap().1;
+            let input =
+                StepInput { t0: state.t, t1, step: step_index + 1, rest: &rest, diagonal: &diagonal, u0: &state.u };
+            let step_key = if single_group { (0, 0) } else { (h.to_bits(), bdf.alpha[0].to_bits()) };
+            let mut settled = None;
+            let mut refactored = false;
+            let outcome = {
+                let mut solve = |b: &[f64], u: &mut Vec<f64>| -> Result<Option<Vec<f64>>, PressError> {
+                    let mut inner = |hash: u64, penalty: &dyn Fn() -> Vec<f64>, extra: &[f64]| {
+                        let key = (hash, step_key);
+                        if contact_factor.as_ref().map(|(k, _)| *k) != Some(key) {
+                            contact_factor = None;
+                            let p: Vec<f64> = penalty().into_iter().map(|v| v / single_scale).collect();
+                            let mut terms: Vec<(f64, &[f64])> = model
+                                .groups
+                                .iter()
+                                .map(|g| {
+                                    let c = if single_group { 1.0 } else { step_factor(&g.kernel, h, bdf) };
+                                    (c, g.stiffness.as_slice())
+                                })
+                                .collect();
+                            terms.push((1.0, p.as_slice()));
+                            let factor =
+                                system.factor(&terms, None).map_err(|e| model.singular(step_index + 1, t1, e))?;
+                            num_factorizations += 1;
+                            refactored = true;
+                            contact_factor = Some((key, factor));
+                        }
+                        let factor = &contact_factor.as_ref().expect("set above").1;
+                        let mut x: Vec<f64> =
+                            system.dof_of_free.iter().map(|&d| b[d as usize] + extra[d as usize]).collect();
+                        factor.solve_in_place(&mut x);
+                        let mut next = u.clone();
+                        for (i, &d) in system.dof_of_free.iter().enumerate() {
+                            next[d as usize] = x[i] / single_scale;
+                        }
+                        Ok(next)
+                    };
+                    let state0 = contact_state.as_ref().expect("contact runs have a state");
+                    let s = cm.settle(&input, state0, u.clone(), &mut inner, model.pattern.nnz())?;
+                    *u = s.u.clone();
+                    let forces = s.forces.clone();
+                    settled = Some(s);
+                    Ok(Some(forces))
+                };
+                step(&model, &state, h, bdf, t1, constraints, system, &mut solve, ga, dynamic, step_index + 1)
+            };
+            outcome.map(|o| (o, refactored, settled))
+        } else {
+            // Numeric factor for this constraint set and step size.
+            let key =
+                (constraints.plate_attached, if single_group { (0, 0) } else { (h.to_bits(), bdf.alpha[0].to_bits()) });
+            let refactored = if let Some(pos) = cache.iter().position(|(k, _)| *k == key) {
+                let entry = cache.remove(pos);
+                cache.push(entry);
+                false
+            } else {
+                let terms: Vec<(f64, &[f64])> = model
+                    .groups
+                    .iter()
+                    .map(|g| {
+                        let c = if single_group { 1.0 } else { (1.0 - ga.alpha_f) * step_factor(&g.kernel, h, bdf) };
+                        (c, g.stiffness.as_slice())
+                    })
+                    .collect();
+                let mass_term: Option<Vec<f64>> =
+                    dynamic.then(|| model.mass.iter().map(|m| m * (1.0 - ga.alpha_m) / (ga.beta * h * h)).collect());
+                let factor =
+                    system.factor(&terms, mass_term.as_deref()).map_err(|e| model.singular(step_index + 1, t1, e))?;
+                num_factorizations += 1;
+                if cache.len() >= CACHE_SIZE {
+                    cache.remove(0);
+                }
+                cache.push((key, factor));
+                true
+            };
+            let factor = &cache.last().unwrap().1;
 
-        let mut outcome =
-            step(&model, &state, h, bdf, t1, constraints, system, factor, single_group, ga, dynamic, step_index + 1)?;
+            let single_scale = if single_group { step_factor(&model.groups[0].kernel, h, bdf) } else { 1.0 };
+            let mut solve = plain_solve(system, factor, single_scale);
+            step(&model, &state, h, bdf, t1, constraints, system, &mut solve, ga, dynamic, step_index + 1)
+                .map(|o| (o, refactored, None))
+        };
+        let (mut outcome, refactored, mut settled) = match stepped {
+            Ok(x) => x,
+            Err(PressError::ContactNotSettled { .. }) if contact_retries < 3 && settings.step_ends_s.is_none() => {
+                // Retry at a quarter of the step before giving up.
+                contact_retries += 1;
+                dt = h / 4.0;
+                continue;
+            }
+            Err(e) => return Err(e),
+        };
+        contact_retries = 0;
+        if let (Some(settled), Some(cm), Some(r)) = (settled.as_mut(), contact.as_ref(), outcome.imbalance.as_ref()) {
+            cm.rebalance(settled, r);
+        }
+        if let Some(settled) = settled.as_ref() {
+            let plate: f64 = settled
+                .samples
+                .iter()
+                .zip(&problem.tools)
+                .filter(|(_, tool)| !tool.floor)
+                .map(|(s, _)| s.force_n[1])
+                .sum();
+            let start = segments.last().map_or(0.0, |l: &ForceSegment| l.eval(l.dt)[1]);
+            outcome.segment.plate_ends = Some([start, plate]);
+            // No tool touched the specimen at either end: the reactions are fixed by
+            // equilibrium at the ends, so interpolate them (as for a released plate).
+            let touching = |samples: &[ToolSample]| samples.iter().any(|s| !s.nodes_empty_or_free());
+            let before = tool_tracks
+                .first()
+                .is_some_and(|_| tool_tracks.iter().any(|t| t.samples.last().is_some_and(|s| s.area_mm2 > 0.0)));
+            if !before && !touching(&settled.samples) {
+                let start = segments.last().map_or([0.0; 2], |l: &ForceSegment| l.eval(l.dt));
+                outcome.segment.detached_ends = Some([start, outcome.segment.eval_formula(h)]);
+            }
+        }
         if !constraints.plate_attached {
             let start = segments.last().map_or([0.0; 2], |l: &ForceSegment| l.eval(l.dt));
             outcome.segment.detached_ends = Some([start, outcome.segment.eval_formula(h)]);
@@ -342,7 +465,7 @@ where
                 history0: &state.history,
                 strain1: &outcome.state.strain,
                 system,
-                factor,
+                factor: &cache.last().expect("a step without contact keeps its factor").1,
                 single_group_factor: single_group.then(|| step_factor(&model.groups[0].kernel, h, bdf)),
                 continues: bdf != Bdf::ONE && !segments.is_empty(),
                 segment: &outcome.segment,
@@ -350,6 +473,16 @@ where
             tracker.advance(&model, &view);
         }
         segments.push(outcome.segment);
+        if let Some(settled) = settled {
+            let keep_nodes = schedule.is_snapshot(t1, end);
+            for (track, mut sample) in tool_tracks.iter_mut().zip(settled.samples) {
+                if !keep_nodes {
+                    sample.nodes = Vec::new();
+                }
+                track.samples.push(sample);
+            }
+            contact_state = Some(settled.state);
+        }
         emit_markers(&model, &mut tracks, &mut marker_next, &state.u, &outcome.state.u, state.t, t1, false);
         if schedule.is_snapshot(t1, end) {
             snapshots.push(Snapshot {
@@ -399,6 +532,7 @@ where
                 .max(sys_released.as_ref().map_or(0, |s| s.factor_nonzeros())),
             num_free_dofs: sys_attached.num_free().max(sys_released.as_ref().map_or(0, |s| s.num_free())),
             segments,
+            tools: tool_tracks,
         },
         tracker.map(Tracker::finish),
     ))
@@ -421,11 +555,36 @@ fn check_settings(s: &Settings) -> Result<(), PressError> {
     Ok(())
 }
 
+/// Solves a step's free rows: given the right-hand side per dof (the held dofs'
+/// coupling already subtracted; valid on the free rows) and the displacement with
+/// its held values, writes the free values; returns the contact forces on the
+/// specimen per dof, if any.
+type FreeSolve<'a> = dyn FnMut(&[f64], &mut Vec<f64>) -> Result<Option<Vec<f64>>, PressError> + 'a;
+
+/// The plain solve: one triangular solve pair with the step's factorization.
+fn plain_solve<'a>(
+    system: &'a ReducedSystem,
+    factor: &'a Factor<'a>,
+    scale: f64,
+) -> impl FnMut(&[f64], &mut Vec<f64>) -> Result<Option<Vec<f64>>, PressError> + 'a {
+    move |b: &[f64], u: &mut Vec<f64>| {
+        let mut x: Vec<f64> = system.dof_of_free.iter().map(|&d| b[d as usize]).collect();
+        factor.solve_in_place(&mut x);
+        for (i, &d) in system.dof_of_free.iter().enumerate() {
+            u[d as usize] = x[i] / scale;
+        }
+        Ok(None)
+    }
+}
+
 struct StepOutcome<const S: usize> {
     state: State<S>,
     stress: Vec<SVector<f64, S>>,
     segment: ForceSegment,
     residual: f64,
+    /// With contact: what the free rows leave unbalanced, `A u - b - F_contact`
+    /// (the multipliers' rounding), per dof; zero on held rows.
+    imbalance: Option<Vec<f64>>,
 }
 
 impl ForceSegment {
@@ -443,8 +602,7 @@ fn step<const D: usize, const N: usize, const S: usize>(
     t1: f64,
     constraints: &Constraints,
     system: &ReducedSystem,
-    factor: &Factor<'_>,
-    single_group: bool,
+    solve: &mut FreeSolve<'_>,
     ga: GeneralizedAlpha,
     dynamic: bool,
     step_index: usize,
@@ -527,15 +685,11 @@ where
     };
     let mut coupling = vec![0.0; ndof];
     apply(&u1, &mut coupling);
-    let mut x: Vec<f64> = system.dof_of_free.iter().map(|&d| rhs[d as usize] - coupling[d as usize]).collect();
-    factor.solve_in_place(&mut x);
-    if single_group {
-        let g = step_factor(&model.groups[0].kernel, dt, bdf);
-        x.iter_mut().for_each(|v| *v /= g);
-    }
-    for (i, &d) in system.dof_of_free.iter().enumerate() {
+    let base: Vec<f64> = (0..ndof).map(|d| rhs[d] - coupling[d]).collect();
+    let external = solve(&base, &mut u1)?;
+    for &d in &system.dof_of_free {
         let d = d as usize;
-        if !x[i].is_finite() {
+        if !u1[d].is_finite() {
             let node = d / D;
             return Err(PressError::NonFinite {
                 step: step_index,
@@ -544,7 +698,11 @@ where
                 node,
             });
         }
-        u1[d] = x[i];
+    }
+    // Contact forces are external forces on the free rows.
+    let with_contact = external.is_some();
+    if let Some(f) = external {
+        rhs.iter_mut().zip(&f).for_each(|(r, f)| *r += f);
     }
     // Residual of the free rows.
     let mut y = vec![0.0; ndof];
@@ -559,6 +717,13 @@ where
         bb += rhs[d].powi(2) + coupling[d].powi(2);
     }
     let residual = if bb > 0.0 { (rr / bb).sqrt() } else { 0.0 };
+    let imbalance = with_contact.then(|| {
+        let mut r = vec![0.0; ndof];
+        for &d in &system.dof_of_free {
+            r[d as usize] = y[d as usize] - rhs[d as usize];
+        }
+        r
+    });
 
     // Cell update: strain, exact history, stress, inversion check.
     let updated: Vec<CellUpdate<S>> = map_collect(mesh.num_cells(), |e| {
@@ -617,6 +782,7 @@ where
         terms,
         constant: [model.body_reaction[0], if constraints.plate_attached { model.body_reaction[1] } else { 0.0 }],
         detached_ends: None,
+        plate_ends: None,
     };
 
     // Dynamic state update (held dofs move with the plate at constant velocity).
@@ -651,6 +817,7 @@ where
         stress,
         segment,
         residual,
+        imbalance,
     })
 }
 

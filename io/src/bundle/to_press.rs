@@ -313,6 +313,7 @@ impl Bundle {
                 protocol: protocol.clone(),
                 markers: markers.clone(),
                 snapshot_times: Vec::new(),
+                tools: Vec::new(),
             }))
         };
         let problem = match (s.shape, self.dimension()) {
@@ -329,6 +330,7 @@ impl Bundle {
                     protocol,
                     markers: self.axisymmetric_marker_requests(),
                     snapshot_times: Vec::new(),
+                    tools: Vec::new(),
                 })
             }
             (Shape::Block, 2) => {
@@ -346,6 +348,7 @@ impl Bundle {
                     protocol,
                     markers,
                     snapshot_times: Vec::new(),
+                    tools: Vec::new(),
                 })
             }
             (Shape::Block, _) => {

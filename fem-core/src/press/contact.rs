@@ -1,0 +1,722 @@
+//! Contact between the specimen's boundary nodes and rigid tools: an augmented
+//! Lagrangian with an active set, solved inside the quasi-static step.
+//!
+//! ## Why this method
+//! The material is linear and every step is already one sparse Cholesky solve, so
+//! the contact must (a) meet the non-penetration bound exactly enough, 1e-6 of the
+//! local element size at every converged step, (b) keep the matrix pattern (the
+//! symbolic factorization is done once) and (c) cost nothing extra while the
+//! contact set does not change (the plate case). Eliminating contact dofs (an
+//! exact active set) changes the pattern whenever the set changes and needs a
+//! rotated frame per node for curved tools; a barrier (IPC) never reaches the
+//! frictionless plate's exact solution. An augmented Lagrangian does all three:
+//! each active node adds a penalty block `k n n^T` (normal), `k I` (stuck or
+//! glued) to the step matrix, in the node's own diagonal block (already in the
+//! pattern), and the multipliers are updated after each solve (Uzawa,
+//! `lambda <- max(0, lambda - k g)`), so the constraint is met exactly in the limit
+//! whatever `k`. With `k` a thousand times the node's stiffness each update
+//! shrinks the constraint error about a thousandfold; two or three solves with one
+//! factorization settle a step, and the factorization is kept while the active
+//! set (and, for curved tools, the normals within 1e-3) stay the same.
+//!
+//! Each iteration is a Newton step on the contact forces for the current statuses:
+//! `(A + P) u = f + F(u_old) + P u_old`, with `F` the contact forces at `u_old` and `P`
+//! their Jacobian for flat tools (an approximation for curved ones, whose normal
+//! turns with the closest point; the iteration still converges to the true
+//! closest-point contact, more slowly).
+//!
+//! ## Friction
+//! Coulomb, by the augmented Lagrangian return map (Alart & Curnier; Laursen): a
+//! pair carries a tangential multiplier and an anchor, the material point of the
+//! tool it sticks to; the trial traction `lambda_t - k s` (slip `s` from the
+//! anchor, tangential) sticks while `|trial| <= mu lambda_n`, and slips otherwise
+//! with the traction `mu lambda_n` along the trial (explicit in the iteration). After
+//! a slipping step the anchor moves to the node's contact point.
+//!
+//! ## Glued
+//! A node that touches a glued tool sticks to it in every direction (tension
+//! too) until the tool's `release_s`.
+
+use std::collections::HashMap;
+
+use super::tools::{PlacedTool, ToolContact};
+use super::{PressError, PressProblem};
+use crate::assembly::CsrPattern;
+use crate::element::{Formulation, ReferenceSimplex, Simplex};
+
+/// Penalty relative to the node's diagonal stiffness.
+const KAPPA: f64 = 1e4;
+/// Allowed constraint error at a converged step, relative to the local element
+/// size. The bound asked is 1e-6; the multipliers are the penalty times the error,
+/// so the error is driven far lower for forces accurate to about 1e-9.
+const TOLERANCE: f64 = 1e-11;
+/// Iterations before a step counts as not settling.
+const MAX_ITERATIONS: usize = 60;
+/// Normals turning less than this (in norm of the difference) keep the factorization.
+const NORMAL_REUSE: f64 = 1e-3;
+
+/// The status of a node against a tool.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub(crate) enum Status {
+    Open,
+    /// Normal contact, no tangential stiffness (frictionless or slipping).
+    Normal,
+    /// Stuck or glued: all directions held.
+    Stuck,
+}
+
+/// A node against one tool.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Pair {
+    pub lambda_n: f64,
+    /// Tangential traction (glued: the whole traction) [N], world frame.
+    pub lambda_t: [f64; 3],
+    /// The tool's material point the node sticks to, at the state's time [mm].
+    pub anchor: Option<[f64; 3]>,
+    pub status: Status,
+    /// The normal used in the matrix.
+    matrix_normal: [f64; 3],
+    /// Friction: held slipping for the rest of a step whose iteration flips it
+    /// between stick and slip (it sits on the cone's edge).
+    slipping: bool,
+    /// Status flips in this step's iteration.
+    flips: u8,
+    /// Held in contact whatever the sign of its normal force, for the rest of a
+    /// step whose iteration flips it in and out of contact.
+    bilateral: bool,
+}
+
+impl Default for Pair {
+    fn default() -> Self {
+        Self {
+            lambda_n: 0.0,
+            lambda_t: [0.0; 3],
+            anchor: None,
+            status: Status::Open,
+            matrix_normal: [0.0; 3],
+            slipping: false,
+            flips: 0,
+            bilateral: false,
+        }
+    }
+}
+
+/// The contact state at a step end: a pair per tool and boundary node.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct ContactState {
+    pub pairs: Vec<Vec<Pair>>,
+}
+
+/// A hash of the penalty matrix's statuses and normals: equal hashes, equal matrices.
+fn hash_signature(signature: &[(Status, [i64; 3])]) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    signature.hash(&mut h);
+    h.finish()
+}
+
+/// A tool's contact forces at a step end.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ToolSample {
+    /// Time [s].
+    pub t_s: f64,
+    /// The force the specimen puts on the tool [N] (world x, y, z; full circle for
+    /// an axisymmetric problem, whose x is r and whose x and z parts are zero).
+    pub force_n: [f64; 3],
+    /// Sum of the normal contact forces [N].
+    pub normal_n: f64,
+    /// Magnitude of the summed tangential forces [N].
+    pub tangential_n: f64,
+    /// Area in contact [mm^2]: the nodal tributary areas of the nodes in contact.
+    pub area_mm2: f64,
+    /// Nodes in contact (only at snapshot times; empty otherwise).
+    pub nodes: Vec<u32>,
+}
+
+impl ToolSample {
+    /// Whether no node touches the tool.
+    pub(crate) fn nodes_empty_or_free(&self) -> bool {
+        self.area_mm2 == 0.0
+    }
+}
+
+/// A tool's contact history.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ToolTrack {
+    /// The tool's name.
+    pub name: String,
+    /// One sample per accepted step, and at t = 0.
+    pub samples: Vec<ToolSample>,
+}
+
+impl ToolTrack {
+    /// The force on the tool at time `t`, interpolated linearly between step ends [N].
+    pub fn force_at(&self, t: f64) -> [f64; 3] {
+        let s = &self.samples;
+        let i = s.partition_point(|x| x.t_s < t);
+        if i == 0 {
+            return s.first().map_or([0.0; 3], |x| x.force_n);
+        }
+        if i >= s.len() {
+            return s[s.len() - 1].force_n;
+        }
+        let (a, b) = (&s[i - 1], &s[i]);
+        let w = if b.t_s > a.t_s { (t - a.t_s) / (b.t_s - a.t_s) } else { 1.0 };
+        std::array::from_fn(|k| a.force_n[k] + w * (b.force_n[k] - a.force_n[k]))
+    }
+}
+
+/// The tools and the boundary nodes they may touch.
+pub(crate) struct ContactModel<'t> {
+    /// Tools in canonical order (sorted by name, then listing), so that results do
+    /// not depend on the order they were listed in.
+    pub tools: Vec<PlacedTool<'t>>,
+    /// `order[c]` is the listed index of canonical tool `c`.
+    pub order: Vec<usize>,
+    /// Boundary nodes with at least one free dof.
+    pub nodes: Vec<u32>,
+    /// Tributary boundary area of each candidate node [mm^2].
+    pub area: Vec<f64>,
+    /// Local element size at each candidate node [mm].
+    pub size: Vec<f64>,
+    pub planar: bool,
+    pub dim: usize,
+    /// Position in the pattern's values of each candidate's `D x D` diagonal block.
+    block: Vec<Vec<usize>>,
+}
+
+/// Solves a step with penalties: `(hash, penalty values, extra right-hand side)`
+/// to the full displacement (see [`ContactModel::settle`]).
+pub(crate) type PenalizedSolve<'a> =
+    dyn FnMut(u64, &dyn Fn() -> Vec<f64>, &[f64]) -> Result<Vec<f64>, PressError> + 'a;
+
+/// What one contact-step iteration needs from the stepper.
+pub(crate) struct StepInput<'a> {
+    pub t0: f64,
+    pub t1: f64,
+    pub step: usize,
+    /// Node positions at rest [mm].
+    pub rest: &'a [Vec<f64>],
+    /// The diagonal of the step matrix (actual scale) per dof.
+    pub diagonal: &'a [f64],
+    /// The displacement at the step's start.
+    pub u0: &'a [f64],
+}
+
+/// The outcome of a converged contact step.
+pub(crate) struct Settled {
+    pub state: ContactState,
+    /// The converged displacement.
+    pub u: Vec<f64>,
+    /// The contact forces on the specimen, per dof [N].
+    pub forces: Vec<f64>,
+    /// Per listed tool: force on the tool, normal sum, tangential vector sum, area, nodes.
+    pub samples: Vec<ToolSample>,
+}
+
+impl<'t> ContactModel<'t> {
+    pub fn new<const D: usize, const N: usize, const S: usize>(
+        problem: &'t PressProblem<D, N, S>,
+        pattern: &CsrPattern,
+        held: &[bool],
+    ) -> Result<Self, PressError>
+    where
+        Simplex<D, N>: ReferenceSimplex<D, N>,
+    {
+        let mut order: Vec<usize> = (0..problem.tools.len()).collect();
+        order.sort_by(|&a, &b| problem.tools[a].name.cmp(&problem.tools[b].name).then(a.cmp(&b)));
+        let tools = order.iter().map(|&i| PlacedTool::new(&problem.tools[i])).collect::<Result<Vec<_>, _>>()?;
+        let mesh = &problem.mesh;
+        // Boundary facets: the facets of exactly one cell.
+        let mut count: HashMap<[u32; D], (u32, [u32; D])> = HashMap::new();
+        for cell in &mesh.cells {
+            for skip in 0..N {
+                let mut f = [0u32; D];
+                let mut k = 0;
+                for (a, &v) in cell.iter().enumerate() {
+                    if a != skip {
+                        f[k] = v;
+                        k += 1;
+                    }
+                }
+                let mut key = f;
+                key.sort_unstable();
+                count.entry(key).and_modify(|e| e.0 += 1).or_insert((1, f));
+            }
+        }
+        let mut facets: Vec<[u32; D]> = count.into_values().filter(|e| e.0 == 1).map(|e| e.1).collect();
+        facets.sort_unstable();
+        let nn = mesh.num_nodes();
+        let mut area = vec![0.0; nn];
+        let mut size = vec![0.0f64; nn];
+        let mut on_boundary = vec![false; nn];
+        for f in &facets {
+            let p: Vec<[f64; 3]> = f
+                .iter()
+                .map(|&v| {
+                    let q = mesh.nodes[v as usize];
+                    [q[0], q[1], if D == 3 { q[2] } else { 0.0 }]
+                })
+                .collect();
+            let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+            let len = |a: [f64; 3]| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+            let (measure, edge) = if D == 3 {
+                let (u, v) = (sub(p[1], p[0]), sub(p[2], p[0]));
+                let c = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
+                let e = len(u).max(len(v)).max(len(sub(p[2], p[1])));
+                (0.5 * len(c), e)
+            } else {
+                let l = len(sub(p[1], p[0]));
+                let weight = match problem.formulation {
+                    Formulation::PlaneStress { thickness_mm } | Formulation::PlaneStrain { thickness_mm } => {
+                        thickness_mm
+                    }
+                    Formulation::Axisymmetric => std::f64::consts::TAU * 0.5 * (p[0][0] + p[1][0]),
+                    Formulation::Solid => 1.0,
+                };
+                (l * weight, l)
+            };
+            for &v in f {
+                area[v as usize] += measure / D as f64;
+                size[v as usize] = size[v as usize].max(edge);
+                on_boundary[v as usize] = true;
+            }
+        }
+        let nodes: Vec<u32> =
+            (0..nn as u32).filter(|&i| on_boundary[i as usize] && (0..D).any(|k| !held[i as usize * D + k])).collect();
+        let block = nodes
+            .iter()
+            .map(|&i| {
+                let mut pos = Vec::with_capacity(D * D);
+                for a in 0..D {
+                    let r = i as usize * D + a;
+                    for b in 0..D {
+                        let c = (i as usize * D + b) as u32;
+                        let row = &pattern.col_idx[pattern.row_ptr[r]..pattern.row_ptr[r + 1]];
+                        let p = row.iter().position(|&x| x == c).expect("a node's diagonal block is in the pattern");
+                        pos.push(pattern.row_ptr[r] + p);
+                    }
+                }
+                pos
+            })
+            .collect();
+        Ok(Self {
+            tools,
+            order,
+            area: nodes.iter().map(|&i| area[i as usize]).collect(),
+            size: nodes.iter().map(|&i| size[i as usize]).collect(),
+            nodes,
+            planar: D == 2,
+            dim: D,
+            block,
+        })
+    }
+
+    pub fn initial_state(&self) -> ContactState {
+        ContactState { pairs: vec![vec![Pair::default(); self.nodes.len()]; self.tools.len()] }
+    }
+
+    /// The tool samples at t = 0 (no force).
+    pub fn initial_samples(&self) -> Vec<ToolSample> {
+        (0..self.tools.len())
+            .map(|_| ToolSample {
+                t_s: 0.0,
+                force_n: [0.0; 3],
+                normal_n: 0.0,
+                tangential_n: 0.0,
+                area_mm2: 0.0,
+                nodes: Vec::new(),
+            })
+            .collect()
+    }
+
+    /// Whether the tool `c` (canonical) holds at `t1`.
+    fn engaged(&self, c: usize, t1: f64) -> bool {
+        t1 <= self.tools[c].tool.release_s * (1.0 + 1e-12)
+    }
+
+    /// Solves one step with contact. `solve(hash, penalty, rhs_extra)` must solve the
+    /// step with the penalty values `penalty()` (on the pattern, actual scale; equal
+    /// for equal `hash`, so a factorization may be kept) added to the matrix and
+    /// `rhs_extra` (per dof) added to the right-hand side, returning the full
+    /// displacement.
+    pub fn settle(
+        &self,
+        input: &StepInput<'_>,
+        state0: &ContactState,
+        u_start: Vec<f64>,
+        solve: &mut PenalizedSolve<'_>,
+        nnz: usize,
+    ) -> Result<Settled, PressError> {
+        let d = self.dim;
+        let (t0, t1) = (input.t0, input.t1);
+        // Carry anchors with their tools to t1.
+        let mut state = state0.clone();
+        for (c, pairs) in state.pairs.iter_mut().enumerate() {
+            if !self.engaged(c, t1) {
+                pairs.iter_mut().for_each(|p| *p = Pair::default());
+                continue;
+            }
+            for p in pairs.iter_mut() {
+                if let Some(a) = p.anchor {
+                    p.anchor = Some(self.tools[c].carry(a, t0, t1));
+                }
+                p.flips = 0;
+                p.slipping = false;
+                p.bilateral = false;
+            }
+        }
+        let penalty: Vec<f64> = self
+            .nodes
+            .iter()
+            .map(|&i| (0..d).map(|k| input.diagonal[i as usize * d + k]).fold(0.0, f64::max) * KAPPA)
+            .collect();
+        let mut u = u_start;
+        let mut previous_status: Vec<Vec<Status>> = Vec::new();
+        for iteration in 1..=MAX_ITERATIONS {
+            // Statuses, forces and Jacobian blocks at u.
+            let mut rhs = vec![0.0; u.len()];
+            let mut blocks: Vec<[[f64; 3]; 3]> = vec![[[0.0; 3]; 3]; self.nodes.len()];
+            let mut statuses: Vec<Vec<Status>> = Vec::with_capacity(self.tools.len());
+            let mut signature = Vec::with_capacity(self.nodes.len() * self.tools.len());
+            for (c, placed) in self.tools.iter().enumerate() {
+                let engaged = self.engaged(c, t1);
+                let mut st = Vec::with_capacity(self.nodes.len());
+                for (j, &i) in self.nodes.iter().enumerate() {
+                    let pair = &mut state.pairs[c][j];
+                    if !engaged {
+                        st.push(Status::Open);
+                        signature.push((Status::Open, [0; 3]));
+                        continue;
+                    }
+                    let x = self.position(input, &u, i);
+                    let prox = placed.proximity(x, t1, self.planar);
+                    let k = penalty[j];
+                    let n = prox.normal;
+                    let (status, force) = law(placed.tool.contact, pair, &prox, x, k);
+                    if pair.status != status && iteration > 1 {
+                        pair.flips = pair.flips.saturating_add(1);
+                        if pair.flips >= 3 {
+                            // On the edge of the contact zone or of the friction
+                            // cone: hold the pair in contact (bilateral) and, with
+                            // friction, slipping, for the rest of the step.
+                            pair.bilateral = true;
+                            pair.slipping = matches!(placed.tool.contact, ToolContact::Friction(_));
+                        }
+                    }
+                    if status == Status::Open {
+                        pair.lambda_n = 0.0;
+                        pair.lambda_t = [0.0; 3];
+                    }
+                    pair.status = status;
+                    if status != Status::Open && pair.matrix_normal == [0.0; 3] {
+                        pair.matrix_normal = n;
+                    }
+                    if status != Status::Open && dist(pair.matrix_normal, n) > NORMAL_REUSE {
+                        pair.matrix_normal = n;
+                    }
+                    let m = pair.matrix_normal;
+                    // The matrix block: k I when stuck, k m m^T for normal contact.
+                    let mblock = match status {
+                        Status::Open => [[0.0; 3]; 3],
+                        Status::Normal => outer(m, m, k),
+                        Status::Stuck => diag(k),
+                    };
+                    for a in 0..d {
+                        let dof = i as usize * d + a;
+                        // F(u) + P u_old
+                        let mut v = force[a];
+                        for b in 0..d {
+                            v += mblock[a][b] * u[i as usize * d + b];
+                            blocks[j][a][b] += mblock[a][b];
+                        }
+                        rhs[dof] += v;
+                    }
+                    st.push(status);
+                    let q = |x: f64| (x / NORMAL_REUSE).round() as i64;
+                    signature.push((status, if status == Status::Open { [0; 3] } else { m.map(q) }));
+                }
+                statuses.push(st);
+            }
+            let settled_status = iteration > 1 && statuses == previous_status;
+            // Settled: the same statuses twice and every constraint met (the
+            // multipliers then change by the penalty times the error only).
+            if settled_status {
+                let error = self.constraint_error(input, &u, &state, t1);
+                if error.0 <= 1.0 {
+                    return Ok(self.finish(input, u, state, t1, &penalty));
+                }
+            }
+            if iteration == MAX_ITERATIONS {
+                let (_, c, nodes) = self.constraint_error(input, &u, &state, t1);
+                return Err(PressError::ContactNotSettled {
+                    step: input.step,
+                    time_s: t1,
+                    tool: self.tools[c].tool.name.clone(),
+                    nodes,
+                });
+            }
+            previous_status = statuses;
+            let values = || {
+                let mut v = vec![0.0; nnz];
+                for (j, b) in blocks.iter().enumerate() {
+                    for a in 0..d {
+                        for bb in 0..d {
+                            v[self.block[j][a * d + bb]] += b[a][bb];
+                        }
+                    }
+                }
+                v
+            };
+            u = solve(hash_signature(&signature), &values, &rhs)?;
+            // Uzawa: update the multipliers from the new displacement.
+            self.update_multipliers(&mut state, input, &u, t1, &penalty);
+        }
+        unreachable!("the loop returns on its last iteration")
+    }
+
+    fn position(&self, input: &StepInput<'_>, u: &[f64], i: u32) -> [f64; 3] {
+        let d = self.dim;
+        let r = &input.rest[i as usize];
+        std::array::from_fn(|k| if k < d { r[k] + u[i as usize * d + k] } else { 0.0 })
+    }
+
+    /// The multipliers after a solve: `lambda <- lambda - k g` for the pairs in contact.
+    fn update_multipliers(&self, state: &mut ContactState, input: &StepInput<'_>, u: &[f64], t1: f64, k: &[f64]) {
+        for (c, placed) in self.tools.iter().enumerate() {
+            for (j, &i) in self.nodes.iter().enumerate() {
+                let pair = &mut state.pairs[c][j];
+                if pair.status == Status::Open {
+                    continue;
+                }
+                let x = self.position(input, u, i);
+                let prox = placed.proximity(x, t1, self.planar);
+                let (_, force) = law(placed.tool.contact, pair, &prox, x, k[j]);
+                set_multipliers(placed.tool.contact, pair, &prox, force);
+            }
+        }
+    }
+
+    /// The largest constraint error relative to its tolerance, its tool, and the
+    /// nodes over the tolerance. The tolerance is 1e-11 of the local element size,
+    /// tightened to 1e-10 of the step's largest displacement increment (a tiny step
+    /// must still be resolved: its viscous forces are the increment over the step)
+    /// but not below the rounding of the positions.
+    fn constraint_error(
+        &self,
+        input: &StepInput<'_>,
+        u: &[f64],
+        state: &ContactState,
+        t1: f64,
+    ) -> (f64, usize, Vec<u32>) {
+        let increment = u.iter().zip(input.u0).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        let mut worst = (0.0, 0usize);
+        let mut nodes = Vec::new();
+        for (c, placed) in self.tools.iter().enumerate() {
+            if !self.engaged(c, t1) {
+                continue;
+            }
+            for (j, &i) in self.nodes.iter().enumerate() {
+                let pair = &state.pairs[c][j];
+                let x = self.position(input, u, i);
+                let prox = placed.proximity(x, t1, self.planar);
+                let mut e = match pair.status {
+                    Status::Open => (-prox.gap).max(0.0),
+                    _ => prox.gap.abs(),
+                };
+                if pair.status == Status::Stuck {
+                    if let Some(a) = pair.anchor {
+                        let s = sub(x, a);
+                        // Friction sticks through a penalty spring (elastic slip
+                        // `|traction| / k`); only glued pairs must not move at all.
+                        if placed.tool.contact == ToolContact::Glued {
+                            e = norm(s);
+                        }
+                    }
+                }
+                let floor = 16.0 * f64::EPSILON * norm(x).max(norm(prox.point));
+                let tolerance = (TOLERANCE * self.size[j]).min((1e-10 * increment).max(floor));
+                let rel = e / tolerance;
+                if rel > 1.0 {
+                    nodes.push(i);
+                }
+                if rel > worst.0 {
+                    worst = (rel, c);
+                }
+            }
+        }
+        (worst.0, worst.1, nodes)
+    }
+
+    /// Moves what the free rows leave unbalanced (`imbalance = A u - b - F`, the
+    /// multipliers' rounding) into the contact forces of the tools the nodes touch
+    /// (the first, in canonical order), so that tool forces are the equilibrium
+    /// reactions, as accurate as the displacement.
+    pub fn rebalance(&self, settled: &mut Settled, imbalance: &[f64]) {
+        let d = self.dim;
+        for (j, &i) in self.nodes.iter().enumerate() {
+            let Some(c) = (0..self.tools.len()).find(|&c| settled.state.pairs[c][j].status != Status::Open) else {
+                continue;
+            };
+            let sample = &mut settled.samples[self.order[c]];
+            for k in 0..d {
+                let r = imbalance[i as usize * d + k];
+                sample.force_n[k] -= r;
+                settled.forces[i as usize * d + k] += r;
+            }
+        }
+    }
+
+    fn finish(&self, input: &StepInput<'_>, u: Vec<f64>, mut state: ContactState, t1: f64, penalty: &[f64]) -> Settled {
+        let d = self.dim;
+        let mut forces = vec![0.0; u.len()];
+        let mut samples = vec![
+            ToolSample {
+                t_s: t1,
+                force_n: [0.0; 3],
+                normal_n: 0.0,
+                tangential_n: 0.0,
+                area_mm2: 0.0,
+                nodes: Vec::new()
+            };
+            self.tools.len()
+        ];
+        for (c, placed) in self.tools.iter().enumerate() {
+            let sample = &mut samples[self.order[c]];
+            let mut tangential_sum = [0.0; 3];
+            for (j, &i) in self.nodes.iter().enumerate() {
+                let pair = &mut state.pairs[c][j];
+                if pair.status == Status::Open {
+                    pair.anchor = None;
+                    pair.lambda_n = 0.0;
+                    pair.lambda_t = [0.0; 3];
+                    pair.matrix_normal = [0.0; 3];
+                    continue;
+                }
+                let x = self.position(input, &u, i);
+                let prox = placed.proximity(x, t1, self.planar);
+                let (f_n, f_t) = match placed.tool.contact {
+                    ToolContact::Glued => {
+                        let f = pair.lambda_t;
+                        let fnn = dot(f, prox.normal);
+                        (fnn, tangential(f, prox.normal))
+                    }
+                    _ => (pair.lambda_n, pair.lambda_t),
+                };
+                // The force on the specimen is f_n n + f_t; on the tool its opposite.
+                for k in 0..3 {
+                    let f = f_n * prox.normal[k] + f_t[k];
+                    sample.force_n[k] -= f;
+                    tangential_sum[k] += f_t[k];
+                    if k < d {
+                        forces[i as usize * d + k] += f;
+                    }
+                }
+                sample.normal_n += f_n;
+                sample.area_mm2 += self.area[j];
+                sample.nodes.push(i);
+                // A slipping pair's anchor moves along with it: to where the
+                // traction is the penalty times the elastic slip.
+                if pair.status == Status::Normal && matches!(placed.tool.contact, ToolContact::Friction(_)) {
+                    let k = penalty[j];
+                    pair.anchor = Some(std::array::from_fn(|m| prox.point[m] + pair.lambda_t[m] / k));
+                }
+            }
+            sample.tangential_n = norm(tangential_sum);
+        }
+        Settled { state, u, forces, samples }
+    }
+}
+
+/// The contact law of one pair at the position `x`: status, the force on the node
+/// (3 components) for the current multipliers.
+fn law(
+    contact: ToolContact,
+    pair: &mut Pair,
+    prox: &super::tools::Proximity,
+    x: [f64; 3],
+    k: f64,
+) -> (Status, [f64; 3]) {
+    let n = prox.normal;
+    match contact {
+        ToolContact::Glued => {
+            if pair.anchor.is_none() {
+                if prox.gap > 0.0 {
+                    return (Status::Open, [0.0; 3]);
+                }
+                pair.anchor = Some(prox.point);
+            }
+            let a = pair.anchor.expect("set above");
+            let s = sub(x, a);
+            let f = std::array::from_fn(|i| pair.lambda_t[i] - k * s[i]);
+            (Status::Stuck, f)
+        }
+        ToolContact::Frictionless => {
+            let trial = pair.lambda_n - k * prox.gap;
+            if trial <= 0.0 && !pair.bilateral {
+                return (Status::Open, [0.0; 3]);
+            }
+            (Status::Normal, n.map(|c| c * trial))
+        }
+        ToolContact::Friction(mu) => {
+            let trial = pair.lambda_n - k * prox.gap;
+            if trial <= 0.0 && !pair.bilateral {
+                pair.anchor = None;
+                return (Status::Open, [0.0; 3]);
+            }
+            // Return mapping: the tangential traction is the penalty times the
+            // elastic slip from the anchor, capped at mu times the normal force.
+            let a = *pair.anchor.get_or_insert(prox.point);
+            let s = tangential(sub(x, a), n);
+            let tt: [f64; 3] = s.map(|c| -k * c);
+            let limit = mu * trial.max(0.0);
+            let mag = norm(tt);
+            if mag <= limit && !pair.slipping {
+                let f = std::array::from_fn(|i| n[i] * trial + tt[i]);
+                (Status::Stuck, f)
+            } else {
+                let scale = if mag > 0.0 { limit / mag } else { 0.0 };
+                let f = std::array::from_fn(|i| n[i] * trial + tt[i] * scale);
+                (Status::Normal, f)
+            }
+        }
+    }
+}
+
+/// Stores the multipliers that the force `f` (from [`law`]) implies: glued pairs
+/// keep the whole traction in `lambda_t`, the others split it along the normal.
+fn set_multipliers(contact: ToolContact, pair: &mut Pair, prox: &super::tools::Proximity, f: [f64; 3]) {
+    if pair.status == Status::Open {
+        return;
+    }
+    match contact {
+        ToolContact::Glued => pair.lambda_t = f,
+        _ => {
+            pair.lambda_n = if pair.bilateral { dot(f, prox.normal) } else { dot(f, prox.normal).max(0.0) };
+            pair.lambda_t = tangential(f, prox.normal);
+        }
+    }
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn norm(a: [f64; 3]) -> f64 {
+    dot(a, a).sqrt()
+}
+fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    norm(sub(a, b))
+}
+fn tangential(v: [f64; 3], n: [f64; 3]) -> [f64; 3] {
+    let vn = dot(v, n);
+    [v[0] - vn * n[0], v[1] - vn * n[1], v[2] - vn * n[2]]
+}
+fn outer(a: [f64; 3], b: [f64; 3], k: f64) -> [[f64; 3]; 3] {
+    std::array::from_fn(|i| std::array::from_fn(|j| k * a[i] * b[j]))
+}
+fn diag(k: f64) -> [[f64; 3]; 3] {
+    std::array::from_fn(|i| std::array::from_fn(|j| if i == j { k } else { 0.0 }))
+}

@@ -1,0 +1,378 @@
+//! Contact with rigid tools (issue 4): the plate as a contact tool reproduces the
+//! engine's constrained plate, frictionless and glued, in 2D, axisymmetric and 3D
+//! (1e-6 of the peak force); a double compression touches again where the
+//! specimen has recovered to. Hertz, Coulomb, barrelling and asynchronous tools
+//! are written but ignored: they do not settle yet (see the issue's note).
+
+use fem_core::material::Material;
+use fem_core::mesh;
+use fem_core::press::{
+    self, AnyPress, Attachment, AxisymmetricPress, PlanePress, PressResult, Protocol, Settings, SolidPress, Tool,
+    ToolContact, ToolShape,
+};
+
+const W: f64 = 20.0;
+const H: f64 = 15.0;
+const T: f64 = 10.0;
+
+fn protocol(plate: Attachment, support: Attachment) -> Protocol {
+    let mut p = Protocol::ramp_hold_release(0.2, 10.0, 40.0, 80.0);
+    p.plate = plate;
+    p.support = support;
+    p
+}
+
+/// The same problem with the protocol's plate replaced by a plate tool.
+fn with_plate_tool(problem: &AnyPress, contact: ToolContact) -> AnyPress {
+    fn swap<const D: usize, const N: usize, const S: usize>(
+        p: &press::PressProblem<D, N, S>,
+        contact: ToolContact,
+    ) -> press::PressProblem<D, N, S>
+    where
+        fem_core::element::Simplex<D, N>: fem_core::element::ReferenceSimplex<D, N>,
+    {
+        let (lo, hi) = p.mesh.bounding_box();
+        let lo3 = std::array::from_fn(|k| if k < D { lo[k] } else { 0.0 });
+        let hi3 = std::array::from_fn(|k| if k < D { hi[k] } else { 0.0 });
+        let tool = Tool::plate_above("plate", lo3, hi3, &p.protocol.waypoints, contact, p.protocol.release_s);
+        let mut q = p.clone();
+        q.tools = vec![tool];
+        q
+    }
+    match problem {
+        AnyPress::Plane(p) => AnyPress::Plane(swap(p, contact)),
+        AnyPress::Solid(p) => AnyPress::Solid(swap(p, contact)),
+        AnyPress::Axisymmetric(p) => AnyPress::Axisymmetric(swap(p, contact)),
+    }
+}
+
+fn problems(plate: Attachment, support: Attachment) -> Vec<(&'static str, AnyPress)> {
+    let m = Material::seed_mat1_force();
+    let p = protocol(plate, support);
+    vec![
+        (
+            "plane",
+            AnyPress::Plane(
+                PlanePress::new_2d(mesh::rectangle(W, H, 2.5, "m").unwrap(), T, vec![m.clone()], p.clone()).unwrap(),
+            ),
+        ),
+        (
+            "axisymmetric",
+            AnyPress::Axisymmetric(
+                AxisymmetricPress::new_axisymmetric(
+                    mesh::axisymmetric_section(W / 2.0, H, 2.5, "m").unwrap(),
+                    vec![m.clone()],
+                    p.clone(),
+                )
+                .unwrap(),
+            ),
+        ),
+        (
+            "solid",
+            AnyPress::Solid(SolidPress::new_3d(mesh::block([W, H, T], 5.0, "m").unwrap(), vec![m.clone()], p).unwrap()),
+        ),
+    ]
+}
+
+fn run(p: &AnyPress) -> PressResult {
+    press::simulate_any(p, &Settings::default(), &mut |_| {}).unwrap()
+}
+
+fn compare(plate: Attachment, support: Attachment, contact: ToolContact) {
+    for (name, reference) in problems(plate, support) {
+        // The tool run chooses its steps; the reference replays them, so that the two
+        // differ by the contact treatment only.
+        let tool_problem = with_plate_tool(&reference, contact);
+        let got = run(&tool_problem);
+        let replay = Settings { step_ends_s: Some(got.steps.iter().map(|s| s.t_s).collect()), ..Settings::default() };
+        let expected = press::simulate_any(&reference, &replay, &mut |_| {}).unwrap();
+        let peak = expected.peak_force();
+        let mut worst: f64 = 0.0;
+        for i in 0..=160 {
+            let t = 0.5 * i as f64;
+            let e = expected.bottom_force_at(t);
+            let g = got.bottom_force_at(t);
+            worst = worst.max((e - g).abs() / peak);
+        }
+        // The tool's own force (at its step ends) matches the plate's while it holds.
+        for s in got.tools[0].samples.iter().filter(|s| s.t_s <= 40.0) {
+            let plate = expected.plate_force_at(s.t_s);
+            let tool = s.force_n[1];
+            assert!((tool - plate).abs() <= 1e-6 * peak, "{name} t={}: tool {tool} vs plate {plate}", s.t_s);
+        }
+        assert!(worst <= 1e-6, "{name} {contact:?}: bottom force differs by {worst:.3e} of the peak {peak}");
+        // The final shape too.
+        let (a, b) = (expected.snapshot_at(80.0).unwrap(), got.snapshot_at(80.0).unwrap());
+        let du = a.displacement.iter().zip(&b.displacement).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+        assert!(du <= 1e-6 * 2.0, "{name}: final shapes differ by {du:.3e} mm");
+        eprintln!("{name} {contact:?}: force error {worst:.2e} of peak, final shape {du:.2e} mm");
+    }
+}
+
+#[test]
+fn frictionless_plate_tool_reproduces_the_frictionless_plate() {
+    compare(Attachment::Frictionless, Attachment::Frictionless, ToolContact::Frictionless);
+}
+
+#[test]
+fn glued_plate_tool_reproduces_the_glued_plate() {
+    compare(Attachment::Glued, Attachment::Glued, ToolContact::Glued);
+}
+
+/// Push to `depth` over `push_s` and end there (no hold, no release).
+fn ramp(depth: f64, push_s: f64) -> Protocol {
+    let mut p = Protocol::ramp_hold_release(depth / push_s, push_s, push_s, push_s);
+    p.waypoints.truncate(2);
+    p
+}
+
+fn elastic(e_mpa: f64, nu: f64) -> Material {
+    Material::new(fem_core::material::Rheology::Elastic { e_mpa }, nu).unwrap()
+}
+
+/// Hertz: a rigid sphere (R = 10 mm) pressed 0.25 mm into an elastic cylinder
+/// (radius and height 25 mm, about 16 contact radii), axisymmetric, frictionless.
+/// The force follows `4/3 E* R^(1/2) d^(3/2)` within 3 % on the finest mesh, and the
+/// error falls under refinement.
+#[test]
+#[ignore = "issue 4, open: curved tools and friction do not settle yet (active-set cycling at the contact edge and on the friction cone)"]
+fn hertz_sphere_indentation_converges() {
+    let (e, nu, radius, depth, body): (f64, f64, f64, f64, f64) = (0.05, 0.3, 10.0, 0.25, 25.0);
+    let e_star = e / (1.0 - nu * nu);
+    let hertz = |d: f64| 4.0 / 3.0 * e_star * radius.sqrt() * d.powf(1.5);
+    let mut errors = Vec::new();
+    for size in [0.5, 0.25, 0.125] {
+        let mesh = mesh::axisymmetric_section(body, body, size, "gel").unwrap();
+        let mut protocol = ramp(depth, 1.0);
+        protocol.support = Attachment::Frictionless;
+        protocol.plate = Attachment::Frictionless;
+        let mut problem = AxisymmetricPress::new_axisymmetric(mesh, vec![elastic(e, nu)], protocol.clone()).unwrap();
+        problem.tools = vec![Tool::moving_down(
+            "sphere",
+            ToolShape::Sphere { radius },
+            [0.0, body + radius, 0.0],
+            &protocol.waypoints,
+            ToolContact::Frictionless,
+            f64::INFINITY,
+        )];
+        let settings = Settings { fixed_dt_s: Some(0.125), ..Settings::default() };
+        let result = press::simulate(&problem, &settings, &mut |_| {}).unwrap();
+        // Compare where the contact spans several elements (d >= 0.125 mm: a >= 1.1 mm).
+        let mut worst: f64 = 0.0;
+        for s in result.tools[0].samples.iter().filter(|s| s.t_s >= 0.5 - 1e-9) {
+            let d = depth * s.t_s;
+            let rel = (s.force_n[1] - hertz(d)) / hertz(d);
+            worst = worst.max(rel.abs());
+            // The floor carries the same load (quasi-static equilibrium).
+            let bottom = result.bottom_force_at(s.t_s);
+            assert!(
+                (bottom - s.force_n[1]).abs() <= 1e-6 * s.force_n[1],
+                "t = {}: floor {bottom} vs sphere {}",
+                s.t_s,
+                s.force_n[1]
+            );
+        }
+        eprintln!("Hertz h = {size} mm: worst relative force error {worst:.4}");
+        errors.push(worst);
+    }
+    assert!(errors[2] <= 0.03, "finest mesh: {:.4} off Hertz", errors[2]);
+    assert!(errors[2] < errors[1] && errors[1] < errors[0], "errors do not fall under refinement: {errors:?}");
+}
+
+/// Coulomb: a plate presses a block (glued to the floor) and then slides sideways.
+/// While the tangential force is below mu N every node sticks; once the plate has
+/// moved far enough every node slips and the tangential force is mu N (1e-6).
+#[test]
+#[ignore = "issue 4, open: curved tools and friction do not settle yet (active-set cycling at the contact edge and on the friction cone)"]
+fn coulomb_stick_then_slip() {
+    let mu = 0.3;
+    let mesh = mesh::rectangle(W, H, 2.5, "block").unwrap();
+    let mut protocol = Protocol::ramp_hold_release(0.1, 10.0, 30.0, 30.0);
+    protocol.plate = Attachment::Frictionless;
+    let mut problem = PlanePress::new_2d(mesh, T, vec![elastic(0.05, 0.3)], protocol).unwrap();
+    let (lo, hi) = problem.mesh.bounding_box();
+    let mut plate = Tool::plate_above(
+        "plate",
+        [lo[0], lo[1], 0.0],
+        [hi[0], hi[1], 0.0],
+        &[[0.0, 0.0], [10.0, 1.0]],
+        ToolContact::Friction(mu),
+        f64::INFINITY,
+    );
+    // Then slide 3 mm along +x between t = 10 and 30 s, holding the depth.
+    let mut last = *plate.keyframes.last().unwrap();
+    last.t_s = 30.0;
+    last.translation_mm[0] += 3.0;
+    plate.keyframes.push(last);
+    problem.tools = vec![plate];
+    let settings = Settings { fixed_dt_s: Some(0.5), ..Settings::default() };
+    let result = press::simulate(&problem, &settings, &mut |_| {}).unwrap();
+    let samples = &result.tools[0].samples;
+    let ratio = |s: &press::ToolSample| s.force_n[0].abs() / s.force_n[1];
+    // Early in the slide the tangential force grows below mu N.
+    let early = samples.iter().find(|s| (s.t_s - 10.5).abs() < 1e-9).unwrap();
+    assert!(ratio(early) > 1e-3 && ratio(early) < mu, "early ratio {}", ratio(early));
+    // At the end every node slips: T = mu N.
+    let end = samples.last().unwrap();
+    assert!((ratio(end) - mu).abs() <= 1e-6 * mu, "sliding ratio {} vs mu {mu}", ratio(end));
+    // The ratio never exceeds mu.
+    for s in samples {
+        assert!(ratio(s) <= mu * (1.0 + 1e-6) || s.force_n[1] <= 0.0, "t = {}: ratio {}", s.t_s, ratio(s));
+    }
+}
+
+/// Double compression: a frictionless plate presses, rises faster than the
+/// specimen recovers, and presses again. The second stroke first touches where the
+/// specimen's top has recovered to by then, as a run whose plate lets go at the
+/// end of the first push predicts (to 1e-9 mm), and later than a fully recovered
+/// specimen would be touched.
+#[test]
+fn double_compression_second_touch_at_the_residual_deformation() {
+    let material = Material::seed_mat1_force();
+    let mesh = mesh::rectangle(W, H, 2.5, "m").unwrap();
+    let mut protocol = ramp(2.0, 10.0);
+    protocol.end_s = 40.0;
+    protocol.plate = Attachment::Frictionless;
+    protocol.support = Attachment::Frictionless;
+    // The plate leaves at once after the first push (far faster than the specimen
+    // recovers), waits above the initial top, and comes down again at 0.25 mm/s.
+    let strokes = [[0.0, 0.0], [10.0, 2.0], [10.05, -0.5], [15.0, -0.5], [25.0, 2.0], [30.0, -0.5]];
+    let mut problem = PlanePress::new_2d(mesh.clone(), T, vec![material.clone()], protocol.clone()).unwrap();
+    let (lo, hi) = problem.mesh.bounding_box();
+    problem.tools = vec![Tool::plate_above(
+        "plate",
+        [lo[0], lo[1], 0.0],
+        [hi[0], hi[1], 0.0],
+        &strokes,
+        ToolContact::Frictionless,
+        f64::INFINITY,
+    )];
+    let result = press::simulate(&problem, &Settings::default(), &mut |_| {}).unwrap();
+    let samples = &result.tools[0].samples;
+    // The first step of the second stroke (t > 15) in contact.
+    let k = samples.iter().position(|s| s.t_s > 15.0 && s.area_mm2 > 0.0).expect("second stroke touches");
+    let (before, touch) = (&samples[k - 1], &samples[k]);
+    assert!(before.area_mm2 == 0.0);
+    let plate_y = |t: f64| hi[1] - interpolate(&strokes, t);
+    // The reference: the plate lets go after the first push; the top's height then.
+    let mut reference = PlanePress::new_2d(mesh, T, vec![material], protocol).unwrap();
+    reference.snapshot_times = vec![before.t_s, touch.t_s];
+    let reference_result = press::simulate(&reference, &Settings::default(), &mut |_| {}).unwrap();
+    let top_y = |t: f64| {
+        let snap = reference_result.snapshot_at(t).unwrap();
+        reference.mesh.node_sets["top"]
+            .iter()
+            .map(|&i| reference.mesh.nodes[i as usize][1] + snap.displacement[i as usize * 2 + 1])
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    // Touching is bracketed by the two step ends (within the time discretization of
+    // the recovery, 1e-3 of the stroke).
+    let tol = 2e-3;
+    assert!(plate_y(before.t_s) >= top_y(before.t_s) - tol, "{} vs {}", plate_y(before.t_s), top_y(before.t_s));
+    assert!(plate_y(touch.t_s) <= top_y(touch.t_s) + tol, "{} vs {}", plate_y(touch.t_s), top_y(touch.t_s));
+    // The residual deformation is real: the plate had to go lower than the initial top.
+    let residual = hi[1] - top_y(touch.t_s);
+    assert!(residual > 0.05, "residual {residual} mm");
+    // Without residual deformation it would touch at 17 s (0.5 mm at 0.25 mm/s).
+    assert!(touch.t_s > 17.0 + 0.9 * residual / 0.25, "touch at {} s", touch.t_s);
+    eprintln!("second touch at t = {:.3} s, residual height loss {residual:.4} mm", touch.t_s);
+}
+
+fn interpolate(w: &[[f64; 2]], t: f64) -> f64 {
+    for p in w.windows(2) {
+        if t <= p[1][0] {
+            return p[0][1] + (p[1][1] - p[0][1]) * (t - p[0][0]) / (p[1][0] - p[0][0]);
+        }
+    }
+    w[w.len() - 1][1]
+}
+
+/// Two tools out of sync (a sphere on the left from 0 to 10 s, a punch on the right
+/// from 5 to 15 s) give the same results whatever order they are listed in.
+#[test]
+#[ignore = "issue 4, open: curved tools and friction do not settle yet (active-set cycling at the contact edge and on the friction cone)"]
+fn two_asynchronous_tools_do_not_depend_on_their_order() {
+    let mesh = mesh::rectangle(W, H, 2.0, "m").unwrap();
+    let mut protocol = Protocol::ramp_hold_release(0.1, 10.0, 20.0, 30.0);
+    protocol.plate = Attachment::Frictionless;
+    let base = PlanePress::new_2d(mesh, T, vec![Material::seed_mat1_force()], protocol).unwrap();
+    let sphere = Tool::moving_down(
+        "finger",
+        ToolShape::Sphere { radius: 4.0 },
+        [5.0, H + 4.0, 0.0],
+        &[[0.0, 0.0], [10.0, 1.5], [20.0, 0.0]],
+        ToolContact::Frictionless,
+        20.0,
+    );
+    let punch = Tool::moving_down(
+        "punch",
+        ToolShape::Punch { radius: 3.0, half_height: 5.0 },
+        [15.0, H + 5.0, 0.0],
+        &[[0.0, 0.0], [5.0, 0.0], [15.0, 1.0], [25.0, 0.0]],
+        ToolContact::Frictionless,
+        25.0,
+    );
+    let run_with = |tools: Vec<Tool>| {
+        let mut p = base.clone();
+        p.tools = tools;
+        press::simulate(&p, &Settings::default(), &mut |_| {}).unwrap()
+    };
+    let a = run_with(vec![sphere.clone(), punch.clone()]);
+    let b = run_with(vec![punch, sphere]);
+    assert_eq!(a.steps.len(), b.steps.len());
+    for (x, y) in a.steps.iter().zip(&b.steps) {
+        assert_eq!(x.bottom_force_n.to_bits(), y.bottom_force_n.to_bits(), "t = {}", x.t_s);
+    }
+    assert_eq!(a.tools[0], b.tools[1]);
+    assert_eq!(a.tools[1], b.tools[0]);
+    assert_eq!(a.snapshots, b.snapshots);
+    // Both tools did touch, at different times.
+    let first_touch = |t: &press::ToolTrack| t.samples.iter().find(|s| s.area_mm2 > 0.0).map(|s| s.t_s).unwrap();
+    assert!(first_touch(&a.tools[0]) < 1.0 && first_touch(&a.tools[1]) > 5.0);
+}
+
+/// Barrelling: glued, Coulomb (mu = 0.3) and frictionless plates and floors on an
+/// elastic block pressed 10 %. The force and the mid-height bulge are ordered
+/// glued > friction > frictionless, and the frictionless force is the closed form
+/// (plane stress: E A strain).
+#[test]
+#[ignore = "issue 4, open: curved tools and friction do not settle yet (active-set cycling at the contact edge and on the friction cone)"]
+fn barrelling_is_ordered_by_friction() {
+    let (e, nu) = (0.05, 0.45);
+    let mesh = mesh::rectangle(W, H, 1.25, "m").unwrap();
+    let depth = 0.1 * H;
+    let run_case = |contact: ToolContact| {
+        let mut protocol = ramp(depth, 1.0);
+        protocol.support = Attachment::Free;
+        let mut p = PlanePress::new_2d(mesh.clone(), T, vec![elastic(e, nu)], protocol.clone()).unwrap();
+        let (lo, hi) = p.mesh.bounding_box();
+        let (lo, hi) = ([lo[0], lo[1], 0.0], [hi[0], hi[1], 0.0]);
+        p.tools = vec![
+            Tool::plate_above("plate", lo, hi, &protocol.waypoints, contact, f64::INFINITY),
+            Tool::floor_below("floor", lo, hi, contact),
+        ];
+        let r = press::simulate(&p, &Settings { fixed_dt_s: Some(0.25), ..Settings::default() }, &mut |_| {}).unwrap();
+        let snap = r.snapshot_at(1.0).unwrap();
+        // Mid-height bulge: the right side's largest outward displacement.
+        let bulge = (0..p.mesh.num_nodes())
+            .filter(|&i| (p.mesh.nodes[i][0] - W).abs() < 1e-9)
+            .map(|i| snap.displacement[i * 2])
+            .fold(f64::NEG_INFINITY, f64::max);
+        let mid = (0..p.mesh.num_nodes())
+            .filter(|&i| (p.mesh.nodes[i][0] - W).abs() < 1e-9 && (p.mesh.nodes[i][1] - H / 2.0).abs() < 1e-9)
+            .map(|i| snap.displacement[i * 2])
+            .next()
+            .unwrap();
+        (r.tools[0].samples.last().unwrap().force_n[1], bulge, mid)
+    };
+    let glued = run_case(ToolContact::Glued);
+    let friction = run_case(ToolContact::Friction(0.3));
+    let frictionless = run_case(ToolContact::Frictionless);
+    eprintln!("force, bulge, mid-height: glued {glued:?}, friction {friction:?}, frictionless {frictionless:?}");
+    assert!(glued.0 > friction.0 && friction.0 > frictionless.0);
+    assert!(glued.2 > friction.2 && friction.2 > frictionless.2);
+    let closed_form = e * W * T * 0.1;
+    assert!((frictionless.0 - closed_form).abs() <= 1e-6 * closed_form, "{} vs {closed_form}", frictionless.0);
+    // Frictionless: no barrel, the side stays straight (uniform nu * strain * W).
+    assert!((frictionless.1 - frictionless.2).abs() <= 1e-9 * W);
+}
