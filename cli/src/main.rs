@@ -13,13 +13,19 @@
 //!   texture-analyser exports into experiment bundles, one folder per file.
 //! - `wagashi fit BUNDLE... -o OUT` ([`fit`]): identify material parameters
 //!   (`wagashi-calibrate`): the seed's three steps or a joint fit, with intervals.
+//! - `wagashi export OUT_DIR --gltf FILE.glb` ([`export`]): a press output as an
+//!   animated glTF 2.0 binary (also `wagashi press ... --gltf FILE.glb`).
+//! - `wagashi mesh SURFACE -o OUT --size-mm H` ([`mesh`]): tetrahedralize an OBJ,
+//!   STL or glTF surface (envelope mode), with a quality report.
 //!
 //! Errors: `main` prints one line, `error: CAUSE` (the causes joined with `: `),
 //! and exits with status 1; argument errors are clap's (status 2).
 
 mod demo;
+mod export;
 mod fit;
 mod import;
+mod mesh;
 mod plot;
 mod press;
 mod progress;
@@ -48,6 +54,8 @@ enum Command {
     Demo(demo::DemoArgs),
     Import(import::ImportArgs),
     Fit(fit::FitArgs),
+    Export(export::ExportArgs),
+    Mesh(mesh::MeshArgs),
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
@@ -56,6 +64,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Demo(args) => demo::run(&args),
         Command::Import(args) => import::run(&args),
         Command::Fit(args) => fit::run(&args),
+        Command::Export(args) => export::run(&args),
+        Command::Mesh(args) => mesh::run(&args),
     }
 }
 

@@ -15,6 +15,30 @@
 //! | `final.vtu`        | the final shape (at `end_s`)                                      |
 //! | `force.svg`        | simulated (and measured) force against time                       |
 //! | `shapes.pvd`, `shapes/` | with `--pvd N`: N + 1 shapes evenly spaced in time           |
+//! | `frames.bin`       | with `--gltf`: the glTF's frames, for `wagashi export` ([`crate::export`]) |
+//! | `tools.csv`        | with contact tools: each tool's contact force, normal and tangential parts and contact area at every step |
+//! | `contact_nodes.json` | with contact tools: the nodes touching each tool at the kept times |
+//! | `tools/NAME.EXT`   | with surface tools: a copy of each tool's surface file, which the output's `experiment.toml` names |
+//!
+//! Trials other than the seed's press (a sphere, a punch, a surface tool,
+//! friction, `[[protocol.tools]]`; `Bundle::has_contact_tools`) run with rigid
+//! contact tools, which need `--integrator implicit` (refused up front
+//! otherwise). `force.csv` stays the bottom force (the floor's, with
+//! `support = "friction"`); `tools.csv` has one row per tool and accepted step
+//! (and t = 0), in time order:
+//! `t_s,tool,force_x_N,force_y_N,force_z_N,normal_N,tangential_N,area_mm2`, the
+//! force being the one the specimen puts on the tool (world axes: a tool pressing
+//! down feels +y, the floor -y; full-circle forces for the axisymmetric model,
+//! whose x and z parts are 0). `contact_nodes.json` lists, per tool and kept time
+//! (the release, the end, the `--pvd` and `--gltf` frames), the 0-based indices of
+//! the mesh nodes in contact (the points of the `.vtu` files):
+//! `{"tools": [{"name", "snapshots": [{"t_s", "normal_N", "area_mm2", "nodes"}]}]}`.
+//! A contact that does not settle ends the run with one line naming the step,
+//! the time, the tool and the nodes.
+//!
+//! `--gltf FILE.glb` also writes the run as an animated glTF 2.0 binary
+//! ([`crate::export`]): the `--pvd` times as frames, else 60 intervals; inside
+//! `OUT`, the file is part of the folder's atomic write.
 //!
 //! The output folder is itself a bundle: `wagashi press OUT -o OUT2` reads it back
 //! as if measured and reports the difference.
@@ -24,6 +48,7 @@
 //! as the section (x = r) with the stress components `RR, YY, TT, RY`, and the
 //! markers put back on their azimuths in `markers.csv`.
 
+use std::fmt::Write as _;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -31,7 +56,9 @@ use std::time::Instant;
 use anyhow::{bail, Context};
 use clap::{Args, ValueEnum};
 use fem_core::element::Formulation;
-use fem_core::press::{simulate_any, AnyPress, Integrator, PressResult, Settings, Snapshot};
+use fem_core::press::{
+    simulate_any, AnyPress, Integrator, PressResult, Settings, Snapshot, Tool, ToolSample, ToolTrack,
+};
 use wagashi_io::vtu::{write_pvd, write_vtu, VtuFields};
 use wagashi_io::{
     read_bundle_with, read_materials_file, write_atomic, write_bundle, AtomicDir, Bundle, BundleWrite, ForceSeries,
@@ -40,7 +67,7 @@ use wagashi_io::{
 
 use crate::plot::force_svg;
 use crate::progress::SimulationBar;
-use crate::summary::{steps_csv, ForceComparison, Summary};
+use crate::summary::{number, steps_csv, ForceComparison, Summary};
 
 /// The most force samples `--output-dt` may ask for.
 const MAX_OUTPUT_SAMPLES: f64 = 1e7;
@@ -60,7 +87,13 @@ Examples:
   wagashi press examples/paper/mat1 -o out/mat1 --force
 
   # A cylinder bundle by its axisymmetric section (2D cost, full-circle force):
-  wagashi press my/cylinder -o out/cylinder --axisymmetric";
+  wagashi press my/cylinder -o out/cylinder --axisymmetric
+
+  # With an animated glTF of the run (60 frames; open it in any glTF viewer):
+  wagashi press examples/paper/mat1 -o out/mat1 --size-mm 6 --gltf out/mat1.glb
+
+  # A double compression: the plate leaves the specimen and touches it again (tools.csv):
+  wagashi press examples/paper/double-compression -o out/tpa --gltf out/tpa.glb";
 
 /// `wagashi press BUNDLE -o OUT`.
 #[derive(Debug, Args)]
@@ -69,8 +102,9 @@ Examples:
     long_about = "Simulate a compression trial described by an experiment bundle (a folder holding \
 experiment.toml, see experiment-format.md) and write the results into OUT: the simulated trial as a \
 bundle (experiment.toml, force.csv, markers.csv), summary.json, steps.csv, the keep and final shapes \
-(keep.vtu, final.vtu, for ParaView) and force.svg. OUT is written atomically; the input bundle is never \
-modified.",
+(keep.vtu, final.vtu, for ParaView) and force.svg; with rigid contact tools (a sphere, a punch, a \
+surface tool, friction, a second stroke, [[protocol.tools]]) also tools.csv and contact_nodes.json. OUT \
+is written atomically; the input bundle is never modified.",
     after_help = PRESS_AFTER_HELP
 )]
 pub struct PressArgs {
@@ -89,6 +123,7 @@ pub struct PressArgs {
 
     /// Time integrator: implicit (quasi-static, exact history update), dynamic
     /// (generalized-alpha, lumped mass) or seed (the seed paper's explicit scheme; slow).
+    /// Trials with rigid contact tools need implicit.
     #[arg(long, value_enum, default_value_t = IntegratorArg::Implicit)]
     pub integrator: IntegratorArg,
 
@@ -121,6 +156,14 @@ pub struct PressArgs {
     /// summary.json); any other existing folder is never replaced.
     #[arg(long)]
     pub force: bool,
+
+    /// Also write the run as an animated glTF 2.0 binary (name ending in .glb):
+    /// the specimen's surface deforming (frames at the --pvd times, else 60
+    /// intervals over the trial), the plate (or the contact tools) moving, lengths in metres, colours
+    /// for the displacement magnitude. Adds frames.bin to OUT for `wagashi export`.
+    /// An existing .glb is replaced; any other existing file is refused.
+    #[arg(long, value_name = "FILE.glb")]
+    pub gltf: Option<PathBuf>,
 
     /// Simulate a cylinder (shape = "cylinder") by its axisymmetric r-y section
     /// with 2D axisymmetric triangles instead of 3D tetrahedra: the same
@@ -213,8 +256,11 @@ pub fn run(args: &PressArgs) -> anyhow::Result<()> {
         replace: args.force,
     };
     let mut out = std::io::stdout().lock();
-    let summary = press_bundle_as(&bundle, &options, args.axisymmetric, &mut out)?;
+    let summary = press_bundle_as(&bundle, &options, args.axisymmetric, args.gltf.as_deref(), &mut out)?;
     print_results(&summary, &mut out)?;
+    if let Some(gltf) = &args.gltf {
+        writeln!(out, "glTF                  {}", gltf.display())?;
+    }
     Ok(())
 }
 
@@ -238,15 +284,16 @@ fn bundle_dir(path: &Path) -> anyhow::Result<PathBuf> {
 /// mesh and progress on the way (`out`: stdout; the bar: stderr). Both `press`
 /// and `demo` go through here.
 pub fn press_bundle(bundle: &Bundle, options: &PressOptions, out: &mut dyn Write) -> anyhow::Result<Summary> {
-    press_bundle_as(bundle, options, false, out)
+    press_bundle_as(bundle, options, false, None, out)
 }
 
 /// [`press_bundle`], with the cylinder modelled by its axisymmetric section when
-/// `axisymmetric` (`--axisymmetric`).
+/// `axisymmetric` (`--axisymmetric`), and the animated glTF written to `gltf` (`--gltf`).
 fn press_bundle_as(
     bundle: &Bundle,
     options: &PressOptions,
     axisymmetric: bool,
+    gltf: Option<&Path>,
     out: &mut dyn Write,
 ) -> anyhow::Result<Summary> {
     let clock = Instant::now();
@@ -256,6 +303,13 @@ fn press_bundle_as(
 
     // Refuse a bad output folder before the (possibly long) simulation.
     let output = prepare_output(&[bundle], &options.output, options.replace)?;
+    let gltf = match gltf {
+        Some(path) => {
+            crate::export::check_frame_count(options.pvd)?;
+            Some(crate::export::GltfTarget::check(path, &[bundle], Some(&options.output))?)
+        }
+        None => None,
+    };
 
     let (size_mm, size_origin) = match (options.size_mm, bundle.default_size_mm()) {
         (Some(h), _) => (h, options.size_origin),
@@ -265,11 +319,24 @@ fn press_bundle_as(
         (None, None) => (1.0, "default"),
     };
     let mut problem = if axisymmetric { bundle.to_press_axisymmetric(size_mm)? } else { bundle.to_press(size_mm)? };
+    let tool_names: Vec<String> = problem_tools(&problem).iter().map(|t| t.name.clone()).collect();
+    if !tool_names.is_empty() && options.integrator != IntegratorArg::Implicit {
+        bail!(
+            "--integrator {}: {} runs with rigid contact tools ({}), which need --integrator implicit",
+            options.integrator.as_str(),
+            bundle.experiment_file().display(),
+            tool_names.join(", ")
+        );
+    }
     let pvd_times: Vec<f64> = match options.pvd {
         Some(n) => (0..=n).map(|i| if i == n { end_s } else { end_s * f64::from(i) / f64::from(n) }).collect(),
         None => Vec::new(),
     };
-    set_snapshot_times(&mut problem, &pvd_times);
+    let snapshot_times = match gltf {
+        Some(_) => crate::export::frame_times(end_s, &pvd_times),
+        None => pvd_times.clone(),
+    };
+    set_snapshot_times(&mut problem, &snapshot_times);
     let mesh = MeshInfo::of(&problem)?;
     let model = match &problem {
         AnyPress::Axisymmetric(_) => "axisymmetric (r-y section)".to_string(),
@@ -309,7 +376,13 @@ fn press_bundle_as(
     let last = snapshot(&result, end_s)?;
     let name = format!("{}-sim", bundle.experiment.name);
     let dir = output.path();
-    write_bundle(dir, &BundleWrite::simulated(bundle, &name, &force, &markers))?;
+    // Surface tools: their files go into the output, which names its copies.
+    let mut experiment = bundle.experiment.clone();
+    let tool_files = copy_tool_surfaces(bundle, &mut experiment, dir)?;
+    write_bundle(
+        dir,
+        &BundleWrite { experiment: &experiment, ..BundleWrite::simulated(bundle, &name, &force, &markers) },
+    )?;
     write_atomic(dir.join("steps.csv"), steps_csv(&result.steps).as_bytes())?;
     write_shape(&dir.join("keep.vtu"), &problem, keep)?;
     write_shape(&dir.join("final.vtu"), &problem, last)?;
@@ -322,6 +395,26 @@ fn press_bundle_as(
     if !pvd_times.is_empty() {
         write_time_series(dir, &problem, &result, &pvd_times)?;
         files.extend(["shapes.pvd".to_string(), "shapes/".to_string()]);
+    }
+    if !result.tools.is_empty() {
+        write_atomic(dir.join(TOOLS_FILE), tools_csv(&result.tools).as_bytes())?;
+        write_atomic(dir.join(CONTACT_NODES_FILE), contact_nodes_json(&result)?.as_bytes())?;
+        files.extend([TOOLS_FILE.to_string(), CONTACT_NODES_FILE.to_string()]);
+        files.extend(tool_files);
+        for track in &result.tools {
+            let peak = track.samples.iter().map(|s| s.normal_n).fold(0.0, f64::max);
+            let area = track.samples.iter().map(|s| s.area_mm2).fold(0.0, f64::max);
+            writeln!(
+                out,
+                "tool {:<16} peak normal force {peak:.4} N, largest contact area {area:.4} mm^2",
+                track.name
+            )?;
+        }
+    }
+    if let Some(target) = &gltf {
+        let written = crate::export::write_press_gltf(target, dir, &name, &problem, &result.snapshots, keep_time_s)
+            .with_context(|| format!("--gltf {}", target.path().display()))?;
+        files.extend(written);
     }
 
     let summary = Summary {
@@ -437,6 +530,111 @@ fn uniform_times(end_s: f64, dt_s: f64) -> anyhow::Result<Vec<f64>> {
         times[n] = end_s;
     }
     Ok(times)
+}
+
+/// The contact forces of each tool at every step.
+pub const TOOLS_FILE: &str = "tools.csv";
+/// The nodes in contact with each tool at the kept times.
+pub const CONTACT_NODES_FILE: &str = "contact_nodes.json";
+/// The header of `tools.csv`.
+pub const TOOLS_HEADER: &str = "t_s,tool,force_x_N,force_y_N,force_z_N,normal_N,tangential_N,area_mm2";
+/// The folder of the copied tool surfaces in an output.
+const TOOL_SURFACES_DIR: &str = "tools";
+
+/// The contact tools of a problem (empty for the seed's press).
+pub(crate) fn problem_tools(problem: &AnyPress) -> &[Tool] {
+    match problem {
+        AnyPress::Plane(p) => &p.tools,
+        AnyPress::Solid(p) => &p.tools,
+        AnyPress::Axisymmetric(p) => &p.tools,
+    }
+}
+
+/// `tools.csv`: one row per tool and sample, in time order (tools in the
+/// problem's order at equal times).
+fn tools_csv(tracks: &[ToolTrack]) -> String {
+    let mut rows: Vec<(f64, usize, &ToolSample)> =
+        tracks.iter().enumerate().flat_map(|(i, t)| t.samples.iter().map(move |s| (s.t_s, i, s))).collect();
+    rows.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let mut out = String::with_capacity(96 * (rows.len() + 1));
+    out.push_str(TOOLS_HEADER);
+    out.push('\n');
+    for (t, i, s) in rows {
+        let [fx, fy, fz] = s.force_n.map(number);
+        let _ = writeln!(
+            out,
+            "{},{},{fx},{fy},{fz},{},{},{}",
+            number(t),
+            tracks[i].name,
+            number(s.normal_n),
+            number(s.tangential_n),
+            number(s.area_mm2)
+        );
+    }
+    out
+}
+
+/// `contact_nodes.json`: per tool, the nodes in contact at each kept time.
+fn contact_nodes_json(result: &PressResult) -> anyhow::Result<String> {
+    let end = result.snapshots.iter().map(|s| s.t_s).fold(1.0, f64::max);
+    let tools: Vec<serde_json::Value> = result
+        .tools
+        .iter()
+        .map(|track| {
+            let snapshots: Vec<serde_json::Value> = result
+                .snapshots
+                .iter()
+                .filter_map(|snap| {
+                    let s = track.samples.iter().find(|s| (s.t_s - snap.t_s).abs() <= 1e-9 * end)?;
+                    Some(serde_json::json!({
+                        "t_s": snap.t_s,
+                        "normal_N": s.normal_n,
+                        "area_mm2": s.area_mm2,
+                        "nodes": s.nodes,
+                    }))
+                })
+                .collect();
+            serde_json::json!({ "name": track.name, "snapshots": snapshots })
+        })
+        .collect();
+    Ok(serde_json::to_string_pretty(&serde_json::json!({ "tools": tools }))? + "\n")
+}
+
+/// Copies the surface file of each surface tool into `dir/tools/NAME.EXT` (NAME:
+/// the tool's, unique) and points `experiment` at the copies, so that the output
+/// reads back as a bundle (`press OUT`, `export OUT`). Returns the files written,
+/// relative to `dir`.
+fn copy_tool_surfaces(
+    bundle: &Bundle,
+    experiment: &mut wagashi_io::Experiment,
+    dir: &Path,
+) -> anyhow::Result<Vec<String>> {
+    let mut written = Vec::new();
+    let mut copy = |tool: &str, file: &mut String| -> anyhow::Result<()> {
+        let from = bundle.dir.join(file.as_str());
+        let ext = Path::new(file.as_str()).extension().map(|e| format!(".{}", e.to_string_lossy())).unwrap_or_default();
+        let relative = format!("{TOOL_SURFACES_DIR}/{tool}{ext}");
+        let bytes = std::fs::read(&from).with_context(|| format!("{}: cannot read", from.display()))?;
+        let to = dir.join(&relative);
+        std::fs::create_dir_all(dir.join(TOOL_SURFACES_DIR))
+            .with_context(|| format!("{}: cannot create", dir.join(TOOL_SURFACES_DIR).display()))?;
+        write_atomic(&to, &bytes)?;
+        *file = relative.clone();
+        written.push(relative);
+        Ok(())
+    };
+    let p = &mut experiment.protocol;
+    if p.tool == wagashi_io::bundle::Tool::Surface {
+        if let Some(file) = p.tool_surface.as_mut() {
+            copy(p.tool.as_str(), file)?;
+        }
+    }
+    for t in &mut p.tools {
+        if let Some(file) = t.surface.as_mut() {
+            copy(&t.name, file)?;
+        }
+    }
+    Ok(written)
 }
 
 fn set_snapshot_times(problem: &mut AnyPress, times: &[f64]) {

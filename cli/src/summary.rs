@@ -133,7 +133,7 @@ pub fn steps_csv(steps: &[StepRecord]) -> String {
 
 /// The shortest text that reads back to `x`, in exponent form for very small or
 /// large magnitudes.
-fn number(x: f64) -> String {
+pub(crate) fn number(x: f64) -> String {
     let a = x.abs();
     if a != 0.0 && !(1e-4..1e15).contains(&a) {
         format!("{x:e}")

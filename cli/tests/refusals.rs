@@ -330,5 +330,10 @@ fn marker_not_on_the_surface() {
 #[test]
 fn valid_but_unsupported_content_names_its_key() {
     let t = Trial::new();
-    t.refuse_toml("tool = \"plate\"", "tool = \"sphere\"\ntool_radius_mm = 10.0", "tool = ", "protocol.tool");
+    t.refuse_toml(
+        "shape = \"block\"\nsize_mm = [58.0, 59.5, 12.0]",
+        "shape = \"surface\"\nsurface = \"daifuku.obj\"",
+        "shape = ",
+        "specimen.shape",
+    );
 }

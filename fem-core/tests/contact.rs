@@ -1,8 +1,11 @@
 //! Contact with rigid tools (issue 4): the plate as a contact tool reproduces the
 //! engine's constrained plate, frictionless and glued, in 2D, axisymmetric and 3D
 //! (1e-6 of the peak force); a double compression touches again where the
-//! specimen has recovered to. Hertz, Coulomb, barrelling and asynchronous tools
-//! are written but ignored: they do not settle yet (see the issue's note).
+//! specimen has recovered to; Hertz (axisymmetric, graded meshes) converges to
+//! within 3 %; two asynchronous tools give results independent of their order.
+//! barrelling orders glued, Coulomb and frictionless plates. The Coulomb slide is
+//! written but ignored: friction does not settle yet when a slide reverses a
+//! face's slip (see the issue's note).
 
 use fem_core::material::Material;
 use fem_core::mesh;
@@ -130,19 +133,22 @@ fn elastic(e_mpa: f64, nu: f64) -> Material {
     Material::new(fem_core::material::Rheology::Elastic { e_mpa }, nu).unwrap()
 }
 
-/// Hertz: a rigid sphere (R = 10 mm) pressed 0.25 mm into an elastic cylinder
-/// (radius and height 25 mm, about 16 contact radii), axisymmetric, frictionless.
-/// The force follows `4/3 E* R^(1/2) d^(3/2)` within 3 % on the finest mesh, and the
-/// error falls under refinement.
+/// Hertz: a rigid sphere (R = 50 mm) pressed 0.1 mm into an elastic cylinder
+/// (radius and height 200 mm, 90 contact radii: the half-space solution holds to
+/// well under 1 %; a/R = 0.045 keeps the small-slope terms Hertz neglects, e.g.
+/// the surface's radial inflow, under 1 %), axisymmetric, frictionless, on meshes
+/// graded toward the contact (0.2, 0.1, 0.05 mm within 4 mm, growing by 20, 10,
+/// 5 % per element beyond). The force follows
+/// `4/3 E* R^(1/2) d^(3/2)` within 3 % on the finest mesh, and the error falls
+/// under refinement.
 #[test]
-#[ignore = "issue 4, open: curved tools and friction do not settle yet (active-set cycling at the contact edge and on the friction cone)"]
 fn hertz_sphere_indentation_converges() {
-    let (e, nu, radius, depth, body): (f64, f64, f64, f64, f64) = (0.05, 0.3, 10.0, 0.25, 25.0);
+    let (e, nu, radius, depth, body): (f64, f64, f64, f64, f64) = (0.05, 0.3, 50.0, 0.1, 200.0);
     let e_star = e / (1.0 - nu * nu);
     let hertz = |d: f64| 4.0 / 3.0 * e_star * radius.sqrt() * d.powf(1.5);
     let mut errors = Vec::new();
-    for size in [0.5, 0.25, 0.125] {
-        let mesh = mesh::axisymmetric_section(body, body, size, "gel").unwrap();
+    for (size, growth) in [(0.2, 1.2), (0.1, 1.1), (0.05, 1.05)] {
+        let mesh = mesh::indentation_section(body, body, size, 4.0, growth, "gel").unwrap();
         let mut protocol = ramp(depth, 1.0);
         protocol.support = Attachment::Frictionless;
         protocol.plate = Attachment::Frictionless;
@@ -155,7 +161,7 @@ fn hertz_sphere_indentation_converges() {
             ToolContact::Frictionless,
             f64::INFINITY,
         )];
-        let settings = Settings { fixed_dt_s: Some(0.125), ..Settings::default() };
+        let settings = Settings { fixed_dt_s: Some(0.25), max_dt_s: Some(0.25), ..Settings::default() };
         let result = press::simulate(&problem, &settings, &mut |_| {}).unwrap();
         // Compare where the contact spans several elements (d >= 0.125 mm: a >= 1.1 mm).
         let mut worst: f64 = 0.0;
@@ -183,7 +189,7 @@ fn hertz_sphere_indentation_converges() {
 /// While the tangential force is below mu N every node sticks; once the plate has
 /// moved far enough every node slips and the tangential force is mu N (1e-6).
 #[test]
-#[ignore = "issue 4, open: curved tools and friction do not settle yet (active-set cycling at the contact edge and on the friction cone)"]
+#[ignore = "issue 4, open: friction does not settle when a slide reverses the slip of a face already slipping (the return map needs a predictor that moves stuck nodes with the tool)"]
 fn coulomb_stick_then_slip() {
     let mu = 0.3;
     let mesh = mesh::rectangle(W, H, 2.5, "block").unwrap();
@@ -287,10 +293,10 @@ fn interpolate(w: &[[f64; 2]], t: f64) -> f64 {
     w[w.len() - 1][1]
 }
 
-/// Two tools out of sync (a sphere on the left from 0 to 10 s, a punch on the right
-/// from 5 to 15 s) give the same results whatever order they are listed in.
+/// Two tools out of sync (a sphere on the left pressing from 0 to 10 s, a punch
+/// starting 0.5 mm above the right part and pressing from 5 to 15 s) give the same
+/// results whatever order they are listed in.
 #[test]
-#[ignore = "issue 4, open: curved tools and friction do not settle yet (active-set cycling at the contact edge and on the friction cone)"]
 fn two_asynchronous_tools_do_not_depend_on_their_order() {
     let mesh = mesh::rectangle(W, H, 2.0, "m").unwrap();
     let mut protocol = Protocol::ramp_hold_release(0.1, 10.0, 20.0, 30.0);
@@ -307,8 +313,8 @@ fn two_asynchronous_tools_do_not_depend_on_their_order() {
     let punch = Tool::moving_down(
         "punch",
         ToolShape::Punch { radius: 3.0, half_height: 5.0 },
-        [15.0, H + 5.0, 0.0],
-        &[[0.0, 0.0], [5.0, 0.0], [15.0, 1.0], [25.0, 0.0]],
+        [15.0, H + 5.5, 0.0],
+        &[[0.0, 0.0], [5.0, 0.0], [15.0, 1.5], [25.0, 0.0]],
         ToolContact::Frictionless,
         25.0,
     );
@@ -332,11 +338,11 @@ fn two_asynchronous_tools_do_not_depend_on_their_order() {
 }
 
 /// Barrelling: glued, Coulomb (mu = 0.3) and frictionless plates and floors on an
-/// elastic block pressed 10 %. The force and the mid-height bulge are ordered
-/// glued > friction > frictionless, and the frictionless force is the closed form
-/// (plane stress: E A strain).
+/// elastic block pressed 10 %. The force and the barrel (how much more the block
+/// widens at mid-height than at its faces) are ordered glued > friction >
+/// frictionless; the frictionless force is the closed form (plane stress: E A
+/// strain, 1e-6) and its sides stay straight.
 #[test]
-#[ignore = "issue 4, open: curved tools and friction do not settle yet (active-set cycling at the contact edge and on the friction cone)"]
 fn barrelling_is_ordered_by_friction() {
     let (e, nu) = (0.05, 0.45);
     let mesh = mesh::rectangle(W, H, 1.25, "m").unwrap();
@@ -353,26 +359,28 @@ fn barrelling_is_ordered_by_friction() {
         ];
         let r = press::simulate(&p, &Settings { fixed_dt_s: Some(0.25), ..Settings::default() }, &mut |_| {}).unwrap();
         let snap = r.snapshot_at(1.0).unwrap();
-        // Mid-height bulge: the right side's largest outward displacement.
-        let bulge = (0..p.mesh.num_nodes())
-            .filter(|&i| (p.mesh.nodes[i][0] - W).abs() < 1e-9)
-            .map(|i| snap.displacement[i * 2])
-            .fold(f64::NEG_INFINITY, f64::max);
-        let mid = (0..p.mesh.num_nodes())
-            .filter(|&i| (p.mesh.nodes[i][0] - W).abs() < 1e-9 && (p.mesh.nodes[i][1] - H / 2.0).abs() < 1e-9)
-            .map(|i| snap.displacement[i * 2])
-            .next()
-            .unwrap();
-        (r.tools[0].samples.last().unwrap().force_n[1], bulge, mid)
+        // The width change at height y: right side minus left side.
+        let width_change = |y: f64| {
+            let side = |x: f64| {
+                (0..p.mesh.num_nodes())
+                    .find(|&i| (p.mesh.nodes[i][0] - x).abs() < 1e-9 && (p.mesh.nodes[i][1] - y).abs() < 1e-9)
+                    .map(|i| snap.displacement[i * 2])
+                    .unwrap()
+            };
+            side(W) - side(0.0)
+        };
+        // The barrel: how much more the middle widens than the faces.
+        let bulge = width_change(H / 2.0) - width_change(H);
+        (r.tools[0].samples.last().unwrap().force_n[1], bulge)
     };
     let glued = run_case(ToolContact::Glued);
     let friction = run_case(ToolContact::Friction(0.3));
     let frictionless = run_case(ToolContact::Frictionless);
-    eprintln!("force, bulge, mid-height: glued {glued:?}, friction {friction:?}, frictionless {frictionless:?}");
+    eprintln!("force, barrel: glued {glued:?}, friction {friction:?}, frictionless {frictionless:?}");
     assert!(glued.0 > friction.0 && friction.0 > frictionless.0);
-    assert!(glued.2 > friction.2 && friction.2 > frictionless.2);
+    assert!(glued.1 > friction.1 && friction.1 > frictionless.1);
     let closed_form = e * W * T * 0.1;
     assert!((frictionless.0 - closed_form).abs() <= 1e-6 * closed_form, "{} vs {closed_form}", frictionless.0);
-    // Frictionless: no barrel, the side stays straight (uniform nu * strain * W).
-    assert!((frictionless.1 - frictionless.2).abs() <= 1e-9 * W);
+    // Frictionless: no barrel, the sides stay straight.
+    assert!(frictionless.1.abs() <= 1e-9 * W, "frictionless barrel {}", frictionless.1);
 }

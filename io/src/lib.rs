@@ -11,6 +11,13 @@
 //!   simulation's results in the same form, so it reads back as if measured.
 //! - **VTK output** ([`vtu`]): `.vtu` meshes with displacement, region and stress,
 //!   and `.pvd` time series for ParaView.
+//! - **glTF export** ([`gltf`]): animated binary glTF 2.0 (`.glb`) of a press run,
+//!   the specimen's surface as morph targets and the tools as moving nodes, in metres.
+//! - **Surface import** ([`surface`]): OBJ, STL (binary and ASCII) and glTF/GLB
+//!   triangle surfaces into [`meshing::Surface`] in mm, with named regions;
+//!   [`surface::read_surface`], and [`surface::write_stl`].
+//! - **Tetrahedral meshes** ([`tetmesh`]): TetGen `.node`/`.ele`/`.face` and Gmsh
+//!   MSH 4.1 ASCII, read and written, regions kept.
 //! - **Atomic outputs** ([`atomic`]): [`write_atomic`] for files, [`AtomicDir`] for
 //!   output folders; every writer here uses them.
 //!
@@ -78,11 +85,15 @@
 pub mod atomic;
 pub mod bundle;
 mod error;
+pub mod gltf;
 mod number;
 mod source_map;
+pub mod surface;
+pub mod tetmesh;
 pub mod texture;
 pub mod vtu;
 
+pub use crate::gltf::{write_glb, GltfError, GltfScene};
 pub use atomic::{write_atomic, AtomicDir};
 pub use bundle::{
     read_bundle, read_bundle_from_str, read_bundle_with, read_materials_file, write_bundle, Bundle, BundleWrite,

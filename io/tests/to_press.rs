@@ -169,20 +169,33 @@ fn assert_unsupported(toml: &str, field: &str, needle: &str, arrives: &str) {
     assert!(msg.starts_with(&prefix) && msg.contains(arrives), "expected `{prefix}...{arrives}`, got `{msg}`");
 }
 
+/// The tools of the format other than the seed's press build contact problems;
+/// the mapping of each is checked in `tests/tools.rs`.
 #[test]
-fn other_tools_are_valid_but_not_simulated_yet() {
-    let toml = edit(EXPERIMENT, "tool = \"plate\"", "tool = \"sphere\"\ntool_radius_mm = 5.0");
-    assert_unsupported(&toml, "protocol.tool", "tool = \"sphere\"", "rigid-tool contact");
-    let toml = edit(EXPERIMENT, "tool = \"plate\"", "tool = \"surface\"\ntool_surface = \"tool.obj\"");
-    assert_unsupported(&toml, "protocol.tool", "tool = \"surface\"", "rigid-tool contact");
-}
-
-#[test]
-fn friction_is_valid_but_not_simulated_yet() {
-    let toml = edit(EXPERIMENT, "support = \"glued\"", "support = \"friction\"\nfriction = 0.4");
-    assert_unsupported(&toml, "protocol.support", "support", "rigid-tool contact");
-    let toml = edit(EXPERIMENT, "tool_contact = \"glued\"", "tool_contact = \"friction\"\nfriction = 0.4");
-    assert_unsupported(&toml, "protocol.tool_contact", "tool_contact", "rigid-tool contact");
+fn sphere_punch_and_friction_build_contact_problems() {
+    let cases = [
+        edit(EXPERIMENT, "tool = \"plate\"", "tool = \"sphere\"\ntool_radius_mm = 5.0"),
+        edit(EXPERIMENT, "tool = \"plate\"", "tool = \"punch\"\ntool_radius_mm = 5.0"),
+        edit(EXPERIMENT, "support = \"glued\"", "support = \"friction\"\nfriction = 0.4"),
+        edit(EXPERIMENT, "tool_contact = \"glued\"", "tool_contact = \"friction\"\nfriction = 0.4"),
+    ];
+    for (toml, (names, support)) in cases.iter().zip([
+        (vec!["sphere"], Attachment::Glued),
+        (vec!["punch"], Attachment::Glued),
+        (vec!["plate", "floor"], Attachment::Free),
+        (vec!["plate"], Attachment::Glued),
+    ]) {
+        let b = bundle_files(toml);
+        let bundle = read_bundle(&b.dir).unwrap();
+        assert!(bundle.has_contact_tools());
+        let p = solid(bundle.to_press(20.0).unwrap());
+        assert_eq!(p.tools.iter().map(|t| t.name.as_str()).collect::<Vec<_>>(), names, "{toml}");
+        assert_eq!(p.protocol.support, support);
+        assert_eq!(p.protocol.waypoints, vec![[0.0, 0.0], [28.87, 5.774], [210.93, 5.774]]);
+    }
+    // The seed's press has no contact tool.
+    let p = solid(read_bundle(with_experiment(EXPERIMENT).dir).unwrap().to_press(20.0).unwrap());
+    assert!(p.tools.is_empty());
 }
 
 #[test]

@@ -118,6 +118,75 @@ pub fn layered_axisymmetric_section(radius_mm: f64, layers: &[Layer], size_mm: f
     Ok(mesh)
 }
 
+/// The axisymmetric section `[0, R] x [0, H]` of a cylinder graded toward the
+/// centre of its top face, for indentation: spacing `fine_mm` within `fine_extent_mm`
+/// of the axis (in r) and of the top (in y), then growing by `growth` per element
+/// out to the radius and down to the floor. Node sets `bottom`, `top`, `axis`.
+pub fn indentation_section(
+    radius_mm: f64,
+    height_mm: f64,
+    fine_mm: f64,
+    fine_extent_mm: f64,
+    growth: f64,
+    region: &str,
+) -> Result<TriMesh, MeshError> {
+    let positive = |x: f64| x.is_finite() && x > 0.0;
+    let sizes_ok = positive(radius_mm) && positive(height_mm) && positive(fine_mm) && positive(fine_extent_mm);
+    if !(sizes_ok && growth.is_finite() && growth >= 1.0) || fine_mm > fine_extent_mm.min(radius_mm).min(height_mm) {
+        return Err(MeshError::BadGeometry(format!(
+            "indentation section: radius {radius_mm}, height {height_mm}, fine size {fine_mm} within \
+             {fine_extent_mm} mm, growth {growth}: sizes must be > 0, the fine size below the extents, growth >= 1"
+        )));
+    }
+    // Distances from 0 to `length`: uniform, then geometric; the last interval is
+    // merged when it would be shorter than half the one before.
+    let graded = |length: f64| -> Vec<f64> {
+        let mut x = vec![0.0];
+        let mut h = fine_mm;
+        while *x.last().unwrap() < length {
+            let last = *x.last().unwrap();
+            if last >= fine_extent_mm {
+                h *= growth;
+            }
+            x.push((last + h).min(length));
+        }
+        let n = x.len();
+        if n > 2 && x[n - 1] - x[n - 2] < 0.5 * (x[n - 2] - x[n - 3]) {
+            x.remove(n - 2);
+        }
+        x
+    };
+    let rs = graded(radius_mm);
+    let ys: Vec<f64> = graded(height_mm).into_iter().rev().map(|d| height_mm - d).collect();
+    let (nr, ny) = (rs.len() - 1, ys.len() - 1);
+    let id = |i: usize, j: usize| (j * (nr + 1) + i) as u32;
+    let mut nodes = Vec::with_capacity((nr + 1) * (ny + 1));
+    for &y in &ys {
+        for &r in &rs {
+            nodes.push([r, y]);
+        }
+    }
+    let mut cells = Vec::with_capacity(2 * nr * ny);
+    for j in 0..ny {
+        for i in 0..nr {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            cells.push([a, b, c]);
+            cells.push([a, c, d]);
+        }
+    }
+    let mut mesh = TriMesh {
+        nodes,
+        cell_regions: vec![0; cells.len()],
+        cells,
+        region_names: vec![region.to_string()],
+        node_sets: BTreeMap::new(),
+        face_sets: BTreeMap::new(),
+    };
+    add_bottom_top(&mut mesh, height_mm);
+    mesh.add_node_set("axis", |p| p[0] == 0.0);
+    Ok(mesh)
+}
+
 /// A `size = [W, H, T]` block (x, y, z) of one region.
 pub fn block(size_mm: [f64; 3], element_size_mm: f64, region: &str) -> Result<TetMesh, MeshError> {
     layered_block(size_mm[0], size_mm[2], &[Layer { region: region.into(), thickness_mm: size_mm[1] }], element_size_mm)

@@ -10,7 +10,7 @@ mod generate;
 mod simplex_mesh;
 
 pub use generate::{
-    axisymmetric_section, block, cylinder, layered_axisymmetric_section, layered_block, layered_rectangle, rectangle,
-    Layer,
+    axisymmetric_section, block, cylinder, indentation_section, layered_axisymmetric_section, layered_block,
+    layered_rectangle, rectangle, Layer,
 };
 pub use simplex_mesh::{MeshError, SimplexMesh, TetMesh, TriMesh};

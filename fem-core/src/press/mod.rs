@@ -47,6 +47,9 @@ where
 {
     match settings.integrator {
         Integrator::QuasiStatic | Integrator::Dynamic => stepper::run(problem, settings, &[], progress).map(|r| r.0),
+        Integrator::Seed if !problem.tools.is_empty() => {
+            Err(PressError::BadSettings("contact tools need the quasi-static integrator".into()))
+        }
         Integrator::Seed => seed::run(problem, settings, progress),
     }
 }

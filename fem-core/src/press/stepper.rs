@@ -309,7 +309,12 @@ where
                         Ok(next)
                     };
                     let state0 = contact_state.as_ref().expect("contact runs have a state");
-                    let s = cm.settle(&input, state0, u.clone(), &mut inner, model.pattern.nnz())?;
+                    // Start from the last step's displacement (the held dofs at their new values).
+                    let mut start = u.clone();
+                    for &d in &system.dof_of_free {
+                        start[d as usize] = state.u[d as usize];
+                    }
+                    let s = cm.settle(&input, state0, start, &mut inner, model.pattern.nnz())?;
                     *u = s.u.clone();
                     let forces = s.forces.clone();
                     settled = Some(s);

@@ -151,7 +151,7 @@ pub struct Layer {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Tool {
-    /// A rigid plate larger than the top face (the only tool simulated today).
+    /// A rigid plate larger than the top face.
     Plate,
     /// A sphere of `tool_radius_mm`.
     Sphere,
@@ -227,6 +227,89 @@ pub struct ProtocolSpec {
     /// Project extension: gravity along -y. Default false.
     #[serde(default, skip_serializing_if = "is_false")]
     pub gravity: bool,
+    /// Project extension, surface tool only: the length unit of `tool_surface`'s
+    /// coordinates, `"mm"`, `"cm"`, `"m"` or `"in"`. Default: the file format's
+    /// (mm for OBJ and STL, m for glTF/GLB, as `wagashi_io::surface` reads them).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tool_surface_units: Option<String>,
+    /// Project extension: more rigid tools, `[[protocol.tools]]`, each with its own
+    /// shape, contact and trajectory; pressed together with the tool above (see
+    /// the [`super`] module docs). Default: none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub tools: Vec<ToolSpec>,
+}
+
+/// The shape of a tool of `[[protocol.tools]]` (a project extension).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ToolKind {
+    /// A box of `half_extents_mm` centred on the tool's origin.
+    Plate,
+    /// A ball of `radius_mm` centred on the tool's origin.
+    Sphere,
+    /// A flat cylinder of `radius_mm` with axis y, centred on the tool's origin,
+    /// flat faces at `y = ±half_height_mm` (default half height: the radius).
+    Punch,
+    /// A cylinder of `radius_mm` and `half_height_mm` with hemispherical caps, axis y.
+    Capsule,
+    /// A closed triangle surface read from `surface` (OBJ, STL, glTF/GLB), its
+    /// coordinates in the tool's frame.
+    Surface,
+}
+
+impl ToolKind {
+    /// The name as the bundle spells it.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ToolKind::Plate => "plate",
+            ToolKind::Sphere => "sphere",
+            ToolKind::Punch => "punch",
+            ToolKind::Capsule => "capsule",
+            ToolKind::Surface => "surface",
+        }
+    }
+}
+
+/// `[[protocol.tools]]`: one more rigid tool with its own trajectory (a project
+/// extension; see the [`super`] module docs for the syntax and the rules).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ToolSpec {
+    /// The tool's name, unique among the trial's tools (reports, `tools.csv`, glTF).
+    pub name: String,
+    /// The tool's shape.
+    pub shape: ToolKind,
+    /// Sphere, punch and capsule: radius [mm], > 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius_mm: Option<f64>,
+    /// Punch (optional, default `radius_mm`) and capsule (required): half the
+    /// height of the cylindrical part [mm], > 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub half_height_mm: Option<f64>,
+    /// Plate: half its size along x, y and z [mm], three values > 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub half_extents_mm: Option<Vec<f64>>,
+    /// Surface: the closed surface file, relative to the bundle folder.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub surface: Option<String>,
+    /// Surface: the unit of the file's coordinates (`"mm"`, `"cm"`, `"m"`, `"in"`);
+    /// default: the format's (mm for OBJ and STL, m for glTF/GLB).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub units: Option<String>,
+    /// How the tool holds what it touches.
+    pub contact: Contact,
+    /// Coulomb coefficient, >= 0; required when `contact = "friction"`, refused otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub friction: Option<f64>,
+    /// The tool lets go at this time [s], > 0; default: the protocol's `release_s`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub release_s: Option<f64>,
+    /// The tool's pose over time: rows `[t_s, x_mm, y_mm, z_mm]`, or
+    /// `[t_s, x_mm, y_mm, z_mm, rx_deg, ry_deg, rz_deg]` with a rotation vector
+    /// (axis times angle, degrees); the position of the tool's origin in the
+    /// specimen's frame, interpolated linearly (rotations by slerp), held before
+    /// the first row and after the last. Times >= 0, strictly increasing.
+    pub keyframes: Vec<Vec<f64>>,
 }
 
 fn is_false(b: &bool) -> bool {

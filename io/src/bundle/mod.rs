@@ -5,7 +5,8 @@
 //!   [`Bundle`]; [`read_bundle_from_str`] does the same for an `experiment.toml`
 //!   given as text (a bundle embedded in a binary); [`read_materials_file`] reads
 //!   a `--materials FILE`.
-//! - [`Bundle::to_press`] builds the engine's press problem.
+//! - [`Bundle::to_press`] builds the engine's press problem, with its rigid
+//!   contact tools ([`Bundle::contact_tools`], "Rigid tools" below).
 //! - [`write_bundle`] writes a simulation's results as a bundle.
 //!
 //! Every refusal names the file, the line and the field: `FILE:LINE: FIELD: CAUSE`
@@ -33,16 +34,111 @@
 //! - Markers of a `surface` specimen are not checked against the surface (this
 //!   crate does not load surfaces yet).
 //! - A material in a `--materials` file replaces the bundle's table of the same name.
+//! - `[protocol] tool_surface_units` (optional, `tool = "surface"` only): see below.
+//! - `[[protocol.tools]]` (optional): more rigid tools, see below.
+//!
+//! ## Rigid tools
+//!
+//! [`Bundle::to_press`] simulates the seed's press, `tool = "plate"` with
+//! `tool_contact` and `support` each `"glued"` or `"frictionless"` and no
+//! `[[protocol.tools]]`, as it always has: the top and bottom faces held by
+//! constraints (results and sensitivities unchanged). One exception keeps the
+//! format's meaning of a plate that "leaves the specimen when it rises faster
+//! than the specimen recovers, and may touch again": a frictionless plate whose
+//! waypoints push again after rising, before `release_s` (a double compression),
+//! is a contact tool. Every other protocol runs with rigid contact tools
+//! (`fem_core::press::Tool`, [`Bundle::contact_tools`]); such runs need the
+//! quasi-static integrator and have no sensitivities. Positions are in the
+//! specimen's frame (mm, y up, the bottom on y = 0).
+//!
+//! - `tool = "plate"` with `tool_contact = "friction"` (or with a floor, more
+//!   tools, or a second stroke): a flat plate wider than the specimen whose lower
+//!   face starts on the top face and moves down by the waypoints' `d(t)`.
+//! - `tool = "sphere"`: a sphere of `tool_radius_mm` centred over the top face's
+//!   centre (the middle of a block's top, `(W/2, H + R, T/2)`; the axis of a
+//!   cylinder, `(0, H + R, 0)`), touching the top at t = 0, moving down by `d(t)`.
+//! - `tool = "punch"`: a flat cylinder (axis y) of radius `tool_radius_mm` and
+//!   height twice the radius, placed as the sphere, its flat lower face on the top.
+//! - `tool = "surface"`: the closed surface `tool_surface` (OBJ, STL, glTF/GLB; its
+//!   regions taken as one body) where the file places it in the specimen's frame,
+//!   moving down by `d(t)` from there. Its coordinates are taken in
+//!   `tool_surface_units` (`"mm"`, `"cm"`, `"m"`, `"in"`), by default in the
+//!   format's unit: mm for OBJ and STL, m for glTF/GLB (glTF's own unit), as
+//!   [`crate::surface`] reads them.
+//! - `tool_contact`: `"glued"` (sticks in every direction from first touch until
+//!   `release_s`), `"frictionless"`, `"friction"` (Coulomb with `friction`).
+//! - `support = "friction"`: the bottom face is free and a flat floor under it
+//!   holds it with Coulomb friction `friction` (the tool named `"floor"`, whose
+//!   force is the bottom force); `"glued"` and `"frictionless"` hold the bottom by
+//!   constraints, as in the seed's press.
+//! - The v1 tool lets go at `release_s`; after that it no longer touches the
+//!   specimen, wherever it moves.
+//! - 2D (`dimension = 2`): the tools act in the plane z = 0 (a sphere presses as a
+//!   disc, i.e. as a cylinder across the thickness). The axisymmetric model of a
+//!   cylinder ([`Bundle::to_press_axisymmetric`]): the tools act in its section
+//!   `z = 0, x = r >= 0`, so they must be bodies of revolution on the axis.
+//!
+//! ### Several tools: `[[protocol.tools]]`
+//!
+//! Each `[[protocol.tools]]` table adds one tool with its own shape, contact and
+//! trajectory. They act **together with** the v1 tool, which keeps its meaning
+//! (named after its shape: `"plate"`, `"sphere"`, `"punch"` or `"surface"`); to
+//! press with the extra tools only, let the v1 tool stay clear of the specimen
+//! (e.g. waypoints that lift it, `[[0.0, 0.0], [1.0, -5.0]]`) or release it
+//! early. For example, a finger pressing one side while a plate holds the other:
+//!
+//! ```toml
+//! [protocol]
+//! tool = "plate"
+//! tool_contact = "frictionless"
+//! support = "glued"
+//! waypoints = [[0.0, 0.0], [10.0, 1.0], [40.0, 1.0]]
+//! release_s = 40.0
+//! end_s = 60.0
+//!
+//! [[protocol.tools]]
+//! name = "finger"                  # unique; not "floor" nor the v1 tool's name
+//! shape = "sphere"                 # "plate", "sphere", "punch", "capsule" or "surface"
+//! radius_mm = 4.0                  # sphere, punch, capsule
+//! # half_height_mm = 6.0           # capsule (required), punch (default: radius_mm)
+//! # half_extents_mm = [30.0, 2.0, 30.0]   # plate: half sizes along x, y, z
+//! # surface = "finger.obj"         # surface: tool-frame coordinates, relative path
+//! # units = "mm"                   # surface: "mm", "cm", "m", "in" (default: the format's)
+//! contact = "friction"             # "glued", "frictionless" or "friction"
+//! friction = 0.3                   # only with contact = "friction"
+//! release_s = 35.0                 # default: the protocol's release_s
+//! # The origin of the tool's frame (the sphere's centre) over time, in the
+//! # specimen's frame: [t_s, x_mm, y_mm, z_mm], or 7 columns with a rotation
+//! # vector [.., rx_deg, ry_deg, rz_deg] (axis times angle). Linear in between
+//! # (rotations by slerp), held before the first row and after the last.
+//! keyframes = [[0.0, 10.0, 64.0, 6.0], [5.0, 10.0, 64.0, 6.0], [15.0, 10.0, 62.5, 6.0], [25.0, 10.0, 70.0, 6.0]]
+//! ```
+//!
+//! The origin of each shape's frame is its centre: a plate's, a sphere's, the
+//! middle of a punch's or capsule's axis (along y). A surface tool's file gives
+//! its shape in the tool's frame, so keyframes at the origin leave it where the
+//! file places it. Refused, naming the file, the line and the key: a name that is
+//! empty, repeated, `"floor"` or the v1 tool's, or holds a comma, a quote or a slash; a
+//! missing shape key or one that belongs to another shape; `friction` without
+//! `contact = "friction"` or the reverse; no keyframes, a keyframe of other than
+//! 4 or 7 values or with other columns than the first, non-finite, at a negative
+//! time or not after the one before; in 2D a keyframe off the plane z = 0 or
+//! turning about x or y; in the axisymmetric model a keyframe off the axis
+//! (x or z not 0) or turning about x or z; a surface file that cannot be read or
+//! is not closed.
 
 mod experiment;
 mod material_spec;
 mod read;
 mod series;
 mod to_press;
+mod tools;
 mod validate;
 mod write;
 
-pub use experiment::{Contact, DataSpec, Experiment, Layer, Plane, ProtocolSpec, Shape, Specimen, Tool, FORMAT_V1};
+pub use experiment::{
+    Contact, DataSpec, Experiment, Layer, Plane, ProtocolSpec, Shape, Specimen, Tool, ToolKind, ToolSpec, FORMAT_V1,
+};
 pub use material_spec::{read_materials_file, MaterialSpec, MissingParameter, Model};
 pub use read::{read_bundle, read_bundle_from_str, read_bundle_with, Bundle, EXPERIMENT_FILE};
 pub use series::{markers_header, ForceSample, ForceSeries, MarkerSample, MarkerSeries, FORCE_HEADER};

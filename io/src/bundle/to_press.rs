@@ -6,10 +6,14 @@
 //!   vector follows the mesh's region order.
 //! - Density [t/mm^3]: `density_g_cm3` x 1e-9, else `mass_g` / volume (the exact
 //!   volume of the shape, W H T or pi R^2 H) x 1e-6, else 1 g/cm^3.
-//! - Protocol: the plate tool with `glued` or `frictionless` contact and support.
-//!   Sphere, punch and surface tools, `friction` contact and `shape = "surface"` are
-//!   valid bundle content that the engine does not simulate yet:
-//!   [`BundleError::Unsupported`].
+//! - Protocol: the waypoints, `release_s`, `end_s` and `gravity` as they are. The
+//!   seed's press (`tool = "plate"` with `glued` or `frictionless` contact and
+//!   support, no `[[protocol.tools]]`) holds the top and bottom faces by
+//!   constraints (`Protocol::plate`, `Protocol::support`). Every other trial runs
+//!   with rigid contact tools ([`Bundle::contact_tools`], the module docs of
+//!   [`super`]): `PressProblem::tools`, and `support = "friction"` as
+//!   `Attachment::Free` with a floor tool. `shape = "surface"` is valid bundle
+//!   content that the engine does not simulate yet: [`BundleError::Unsupported`].
 //! - Markers: one request per marker at its initial position, reported at every
 //!   time the marker was measured (`t_s = 0` included). No extra snapshots.
 //!
@@ -33,7 +37,7 @@ use fem_core::press::{
     AnyPress, Attachment, AxisymmetricPress, MarkerRequest, MarkerTrack, PlanePress, PressError, Protocol, SolidPress,
 };
 
-use super::experiment::{Contact, Shape, Tool};
+use super::experiment::{Contact, Shape};
 use super::read::Bundle;
 use super::series::{MarkerSample, MarkerSeries};
 use super::validate::validate_experiment;
@@ -77,6 +81,10 @@ impl Bundle {
             PressError::MarkerOutside { .. } => {
                 (self.experiment_file(), self.line_of("data.markers"), "data.markers".to_string())
             }
+            PressError::BadTool { tool, .. } => {
+                let field = self.tool_field(tool);
+                (self.experiment_file(), self.line_of(&field), field)
+            }
             _ => (self.experiment_file(), self.line_of("protocol"), "protocol".to_string()),
         };
         BundleError::Engine { file, line, field, source: Box::new(source) }
@@ -84,28 +92,8 @@ impl Bundle {
 
     /// Refuses what the engine cannot simulate yet.
     fn check_supported(&self) -> Result<(), BundleError> {
-        let e = &self.experiment;
-        if e.specimen.shape == Shape::Surface {
+        if self.experiment.specimen.shape == Shape::Surface {
             return Err(self.unsupported("specimen.shape", SURFACE_UNSUPPORTED.into()));
-        }
-        let p = &e.protocol;
-        if p.tool != Tool::Plate {
-            return Err(self.unsupported(
-                "protocol.tool",
-                format!(
-                    "tool = \"{}\" is valid bundle content but not simulated yet: it arrives with rigid-tool contact",
-                    p.tool.as_str()
-                ),
-            ));
-        }
-        for (key, c) in [("protocol.tool_contact", p.tool_contact), ("protocol.support", p.support)] {
-            if c == Contact::Friction {
-                return Err(self.unsupported(
-                    key,
-                    "\"friction\" is valid bundle content but not simulated yet: it arrives with rigid-tool contact"
-                        .into(),
-                ));
-            }
         }
         Ok(())
     }
@@ -133,21 +121,29 @@ impl Bundle {
         }
     }
 
-    /// The engine's protocol (plate tool only).
+    /// The engine's protocol. `plate` is the v1 tool's contact as a constraint
+    /// (`"friction"` maps to `Frictionless`; the engine ignores `plate` when the
+    /// trial has contact tools, which a friction contact always gives); `support`
+    /// is `Glued`, `Frictionless`, or `Free` for `"friction"` (the floor tool of
+    /// [`Bundle::contact_tools`] then holds the bottom).
     pub fn protocol(&self) -> Result<Protocol, BundleError> {
         self.check_supported()?;
         let p = &self.experiment.protocol;
-        let attachment = |c: Contact| match c {
+        let plate = match p.tool_contact {
             Contact::Glued => Attachment::Glued,
-            // Friction was refused by `check_supported`.
             Contact::Frictionless | Contact::Friction => Attachment::Frictionless,
+        };
+        let support = match p.support {
+            Contact::Glued => Attachment::Glued,
+            Contact::Frictionless => Attachment::Frictionless,
+            Contact::Friction => Attachment::Free,
         };
         Ok(Protocol {
             waypoints: p.waypoints.clone(),
             release_s: p.release_s,
             end_s: p.end_s,
-            plate: attachment(p.tool_contact),
-            support: attachment(p.support),
+            plate,
+            support,
             gravity: p.gravity,
         })
     }
@@ -288,6 +284,7 @@ impl Bundle {
             });
         }
         let protocol = self.protocol()?;
+        let tools = self.contact_tools(axisymmetric)?;
         let missing = |field: &str| self.map.invalid(field, "missing required key");
         let block_size = || s.block_size().ok_or_else(|| missing("specimen.size_mm"));
         let layers: Vec<Layer> = match &s.material {
@@ -313,7 +310,7 @@ impl Bundle {
                 protocol: protocol.clone(),
                 markers: markers.clone(),
                 snapshot_times: Vec::new(),
-                tools: Vec::new(),
+                tools: tools.clone(),
             }))
         };
         let problem = match (s.shape, self.dimension()) {
@@ -330,7 +327,7 @@ impl Bundle {
                     protocol,
                     markers: self.axisymmetric_marker_requests(),
                     snapshot_times: Vec::new(),
-                    tools: Vec::new(),
+                    tools: tools.clone(),
                 })
             }
             (Shape::Block, 2) => {
@@ -348,7 +345,7 @@ impl Bundle {
                     protocol,
                     markers,
                     snapshot_times: Vec::new(),
-                    tools: Vec::new(),
+                    tools: tools.clone(),
                 })
             }
             (Shape::Block, _) => {

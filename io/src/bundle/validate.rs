@@ -5,11 +5,12 @@
 
 use std::collections::BTreeMap;
 
-use super::experiment::{Contact, Experiment, Shape, Tool, FORMAT_V1};
+use super::experiment::{Contact, Experiment, Shape, Tool, ToolKind, FORMAT_V1};
 use super::material_spec::MaterialSpec;
 use super::series::MarkerSeries;
 use crate::error::BundleError;
 use crate::source_map::SourceMap;
+use crate::surface::LengthUnit;
 
 /// Layer thicknesses must sum to H within this [mm].
 pub const LAYER_SUM_TOLERANCE_MM: f64 = 1e-6;
@@ -190,6 +191,15 @@ fn validate_protocol(e: &Experiment, map: &SourceMap) -> Result<(), BundleError>
             refuse_key(map, "protocol.tool_radius_mm", p.tool_radius_mm.is_some(), format!("not used by {tool}"))?;
         }
     }
+    match (&p.tool_surface_units, p.tool) {
+        (Some(unit), Tool::Surface) => {
+            length_unit(map, "protocol.tool_surface_units", unit)?;
+        }
+        (Some(_), _) => {
+            return Err(map.invalid("protocol.tool_surface_units", format!("not used by {tool}")));
+        }
+        (None, _) => {}
+    }
     let uses_friction = p.tool_contact == Contact::Friction || p.support == Contact::Friction;
     if uses_friction {
         let mu = require(map, "protocol.friction", p.friction, "when tool_contact or support is \"friction\"")?;
@@ -231,6 +241,165 @@ fn validate_protocol(e: &Experiment, map: &SourceMap) -> Result<(), BundleError>
         positive(map, key, Some(value), "a time")?;
         if value < last_push {
             return Err(map.invalid(key, format!("{value} s is before the last waypoint that pushes ({last_push} s)")));
+        }
+    }
+    validate_tools(e, map)
+}
+
+/// A length unit's name, as `wagashi_io::surface` reads it.
+pub(crate) fn length_unit(map: &SourceMap, field: &str, unit: &str) -> Result<LengthUnit, BundleError> {
+    unit.parse::<LengthUnit>().map_err(|e| map.invalid(field, e.to_string()))
+}
+
+/// The name the v1 tool goes by among the trial's tools.
+pub(crate) fn main_tool_name(e: &Experiment) -> &'static str {
+    e.protocol.tool.as_str()
+}
+
+/// The name of the floor tool of `support = "friction"`.
+pub(crate) const FLOOR_TOOL: &str = "floor";
+
+/// `[[protocol.tools]]` (a project extension): names, shape keys, contact,
+/// release and keyframes; in 2D, keyframes in the plane z = 0 turning about z only.
+fn validate_tools(e: &Experiment, map: &SourceMap) -> Result<(), BundleError> {
+    let main = main_tool_name(e);
+    for (i, t) in e.protocol.tools.iter().enumerate() {
+        let at = |key: &str| format!("protocol.tools[{i}].{key}");
+        let shape = format!("shape = \"{}\"", t.shape.as_str());
+        let not_used = |key: &str, given: bool| refuse_key(map, &at(key), given, format!("not used by {shape}"));
+        // Name: written unquoted in tools.csv, as a glTF node name, and as a file
+        // name in an output (`tools/NAME.obj`).
+        let name = t.name.as_str();
+        if name.trim().is_empty()
+            || name.trim() != name
+            || name.contains([',', '"', '/', '\\'])
+            || name.chars().any(char::is_control)
+        {
+            return Err(map.invalid(
+                &at("name"),
+                format!(
+                    "{name:?}: a tool's name must be non-empty text without commas, quotes, slashes, control characters or surrounding spaces"
+                ),
+            ));
+        }
+        if name == main || name == FLOOR_TOOL {
+            return Err(map.invalid(
+                &at("name"),
+                format!(
+                    "\"{name}\" is taken: \"{main}\" names the tool of `tool = \"{main}\"` and \"{FLOOR_TOOL}\" the floor of `support = \"friction\"`"
+                ),
+            ));
+        }
+        if let Some(j) = e.protocol.tools[..i].iter().position(|o| o.name == t.name) {
+            return Err(map.invalid(&at("name"), format!("\"{name}\" is already the name of protocol.tools[{j}]")));
+        }
+        // Shape keys.
+        let length = |key: &str, v: Option<f64>| positive(map, &at(key), v, "a length");
+        match t.shape {
+            ToolKind::Plate => {
+                let h = require(map, &at("half_extents_mm"), t.half_extents_mm.as_ref(), &format!("for {shape}"))?;
+                if h.len() != 3 || !h.iter().all(|v| v.is_finite() && *v > 0.0) {
+                    return Err(
+                        map.invalid(&at("half_extents_mm"), "must be three positive half lengths [x, y, z] in mm")
+                    );
+                }
+                not_used("radius_mm", t.radius_mm.is_some())?;
+                not_used("half_height_mm", t.half_height_mm.is_some())?;
+            }
+            ToolKind::Sphere | ToolKind::Punch | ToolKind::Capsule => {
+                length("radius_mm", Some(require(map, &at("radius_mm"), t.radius_mm, &format!("for {shape}"))?))?;
+                match t.shape {
+                    ToolKind::Sphere => not_used("half_height_mm", t.half_height_mm.is_some())?,
+                    ToolKind::Capsule => length(
+                        "half_height_mm",
+                        Some(require(map, &at("half_height_mm"), t.half_height_mm, &format!("for {shape}"))?),
+                    )?,
+                    _ => length("half_height_mm", t.half_height_mm)?,
+                }
+                not_used("half_extents_mm", t.half_extents_mm.is_some())?;
+            }
+            ToolKind::Surface => {
+                let f = require(map, &at("surface"), t.surface.as_deref(), &format!("for {shape}"))?;
+                if f.trim().is_empty() {
+                    return Err(map.invalid(&at("surface"), "empty file name"));
+                }
+                not_used("radius_mm", t.radius_mm.is_some())?;
+                not_used("half_height_mm", t.half_height_mm.is_some())?;
+                not_used("half_extents_mm", t.half_extents_mm.is_some())?;
+            }
+        }
+        if t.shape != ToolKind::Surface {
+            not_used("surface", t.surface.is_some())?;
+            not_used("units", t.units.is_some())?;
+        } else if let Some(unit) = &t.units {
+            length_unit(map, &at("units"), unit)?;
+        }
+        // Contact.
+        if t.contact == Contact::Friction {
+            let mu = require(map, &at("friction"), t.friction, "when contact = \"friction\"")?;
+            if !(mu.is_finite() && mu >= 0.0) {
+                return Err(map.invalid(&at("friction"), format!("{mu} is not a friction coefficient >= 0")));
+            }
+        } else {
+            refuse_key(map, &at("friction"), t.friction.is_some(), "given, but contact is not \"friction\"".into())?;
+        }
+        positive(map, &at("release_s"), t.release_s, "a time")?;
+        // Keyframes.
+        if t.keyframes.is_empty() {
+            return Err(map.invalid(
+                &at("keyframes"),
+                "no keyframes; give [[t_s, x_mm, y_mm, z_mm], ...] (or 7 columns with rx_deg, ry_deg, rz_deg)",
+            ));
+        }
+        let columns = t.keyframes[0].len();
+        for (k, row) in t.keyframes.iter().enumerate() {
+            let field = format!("protocol.tools[{i}].keyframes[{k}]");
+            if row.len() != 4 && row.len() != 7 {
+                return Err(map.invalid(
+                    &field,
+                    format!(
+                        "{} values; a keyframe is [t_s, x_mm, y_mm, z_mm] or [t_s, x_mm, y_mm, z_mm, rx_deg, ry_deg, rz_deg]",
+                        row.len()
+                    ),
+                ));
+            }
+            if row.len() != columns {
+                return Err(map.invalid(
+                    &field,
+                    format!(
+                        "{} values, but keyframes[0] has {columns}: give every keyframe the same columns",
+                        row.len()
+                    ),
+                ));
+            }
+            if let Some(x) = row.iter().find(|x| !x.is_finite()) {
+                return Err(map.invalid(&field, format!("{x} is not finite")));
+            }
+            if row[0] < 0.0 {
+                return Err(map.invalid(&field, format!("negative time {} s", row[0])));
+            }
+            if k > 0 && row[0] <= t.keyframes[k - 1][0] {
+                return Err(map.invalid(
+                    &field,
+                    format!(
+                        "keyframes must be in increasing time: t = {} s is not after the previous t = {} s",
+                        row[0],
+                        t.keyframes[k - 1][0]
+                    ),
+                ));
+            }
+            if e.dimension == 2 {
+                let (z, rx, ry) = (row[3], row.get(4).copied().unwrap_or(0.0), row.get(5).copied().unwrap_or(0.0));
+                if z != 0.0 || rx != 0.0 || ry != 0.0 {
+                    return Err(map.invalid(
+                        &field,
+                        format!(
+                            "dimension = 2 presses in the plane z = 0: a keyframe needs z_mm = 0 and may turn about z only \
+                             (rx_deg = ry_deg = 0); got z_mm = {z}, rx_deg = {rx}, ry_deg = {ry}"
+                        ),
+                    ));
+                }
+            }
         }
     }
     Ok(())

@@ -420,6 +420,8 @@ pub fn to_bundle(raw: &RawTest, options: &ImportOptions) -> Result<ImportedTrial
             release_s,
             end_s,
             gravity: false,
+            tool_surface_units: None,
+            tools: Vec::new(),
         },
         data: None,
         extra: Some(extra),

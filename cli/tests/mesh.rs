@@ -1,0 +1,139 @@
+//! `wagashi mesh`: the real binary on the shared mesh fixtures
+//! (`<workspace>/../shared/data/meshes`, never copied into the repository).
+
+use std::path::{Path, PathBuf};
+
+mod common;
+
+use common::{assert_one_line_error, assert_success, stderr, stdout, wagashi_in};
+use wagashi_io::tetmesh::read_tetmesh;
+
+fn mesh_data(name: &str) -> PathBuf {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/meshes");
+    let path = root.join(name);
+    assert!(
+        path.is_file(),
+        "this test reads the mesh fixtures in {} (the shared data folder beside the workspace, \
+         <workspace>/../shared/data; see its README.md), and {} is missing",
+        root.display(),
+        path.display()
+    );
+    path.canonicalize().unwrap()
+}
+
+fn mesh(cwd: &Path, args: &[&str]) -> std::process::Output {
+    let mut all = vec!["mesh"];
+    all.extend_from_slice(args);
+    wagashi_in(cwd, all)
+}
+
+#[test]
+fn the_bunny_to_vtu_with_a_json_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let bunny = mesh_data("npm_bunny.obj");
+    let o = mesh(dir.path(), &[bunny.to_str().unwrap(), "-o", "bunny.vtu", "--size-mm", "0.4", "--report", "r.json"]);
+    assert_success(&o);
+    let out = stdout(&o);
+    for key in ["dihedral angles", "radius-edge", "radius ratio", "volume", "Hausdorff", "region", "time"] {
+        assert!(out.contains(key), "{key} missing:\n{out}");
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("r.json")).unwrap()).unwrap();
+    let q = &json["quality"];
+    let cells = q["num_cells"].as_u64().unwrap();
+    let nodes = q["num_nodes"].as_u64().unwrap();
+    assert!(cells > 10_000, "{cells}");
+    assert!(q["min_dihedral_deg"].as_f64().unwrap() >= 12.0, "{q}");
+    assert!(q["max_dihedral_deg"].as_f64().unwrap() <= 155.0, "{q}");
+    assert!(q["volume_error"].as_f64().unwrap().abs() < 1e-2, "{q}");
+    for key in [
+        "fraction_below_10_deg",
+        "max_radius_edge",
+        "p999_radius_edge",
+        "mean_radius_ratio",
+        "hausdorff_relative",
+        "mesh_time_s",
+    ] {
+        assert!(q[key].as_f64().unwrap().is_finite(), "{key}");
+    }
+    assert_eq!(json["input"]["triangles"].as_u64(), Some(3674));
+    assert_eq!(json["mode"], "envelope");
+    assert_eq!(json["quality"]["regions"].as_array().unwrap().len(), 1);
+    // The VTU holds what the report says.
+    let text = std::fs::read_to_string(dir.path().join("bunny.vtu")).unwrap();
+    let doc = roxmltree::Document::parse(&text).unwrap();
+    let piece = doc.descendants().find(|n| n.has_tag_name("Piece")).unwrap();
+    assert_eq!(piece.attribute("NumberOfCells").unwrap().parse::<u64>().unwrap(), cells);
+    assert_eq!(piece.attribute("NumberOfPoints").unwrap().parse::<u64>().unwrap(), nodes);
+}
+
+#[test]
+fn the_layered_bunny_to_gmsh_and_tetgen_keeps_its_three_regions() {
+    let dir = tempfile::tempdir().unwrap();
+    let layered = mesh_data("layered_bunny.obj");
+    for out in ["l.msh", "l.node"] {
+        let o = mesh(dir.path(), &[layered.to_str().unwrap(), "-o", out, "--size-mm", "0.35"]);
+        assert_success(&o);
+        let m = read_tetmesh(dir.path().join(out)).unwrap();
+        assert_eq!(m.region_names, vec!["layer0_bunny", "layer1_sphereA", "layer2_sphereB"], "{out}");
+        for r in 0..3u16 {
+            assert!(m.cell_regions.contains(&r), "{out}: region {r} empty");
+        }
+        m.validate().unwrap();
+    }
+    assert!(dir.path().join("l.ele").is_file() && dir.path().join("l.face").is_file());
+}
+
+#[test]
+fn layers_along_y_and_a_defective_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let teapot = mesh_data("npm_teapot.obj");
+    // The teapot is 15.75 mm tall along y.
+    let o = mesh(dir.path(), &[teapot.to_str().unwrap(), "-o", "t.msh", "--size-mm", "0.8", "--layers-mm", "5,5,5.75"]);
+    assert_success(&o);
+    let m = read_tetmesh(dir.path().join("t.msh")).unwrap();
+    assert_eq!(m.region_names, vec!["layer1", "layer2", "layer3"]);
+    let e = stderr(&o);
+    assert!(e.lines().all(|l| l.starts_with("warning: ")), "{e}");
+}
+
+/// An unwelded soup (1e-9 jitter) and 10 % flipped faces: both give the bunny.
+#[test]
+fn defective_bunnies_give_the_bunny() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["bad_syn_soup_jitter.obj", "bad_syn_flipped10pct.obj"] {
+        let path = mesh_data(name);
+        let o = mesh(dir.path(), &[path.to_str().unwrap(), "-o", "b.msh", "--size-mm", "0.4", "--report", "r.json"]);
+        assert_success(&o);
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.path().join("r.json")).unwrap()).unwrap();
+        // Against the clean bunny's 194.29 mm^3.
+        let v = json["quality"]["volume_mm3"].as_f64().unwrap();
+        assert!((v / 194.2884 - 1.0).abs() < 1e-2, "{name}: {v}");
+    }
+}
+
+#[test]
+fn refusals_are_one_line_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let bunny = mesh_data("npm_bunny.obj");
+    let b = bunny.to_str().unwrap();
+    let cases: [(&[&str], &str); 6] = [
+        (&[b, "-o", "x.vtu", "--size-mm", "1", "--mode", "conforming"], "--mode conforming is not available yet"),
+        (&[b, "-o", "x.stl", "--size-mm", "1"], "unknown mesh format"),
+        (&[b, "-o", "no/such/x.vtu", "--size-mm", "1"], "does not exist"),
+        (&[b, "-o", "x.vtu", "--size-mm", "1", "--units", "furlong"], "unknown length unit"),
+        (&[b, "-o", "x.vtu", "--size-mm", "1", "--layers-mm", "1,2"], "add up to 3 mm but the shape is"),
+        (&["missing.obj", "-o", "x.vtu", "--size-mm", "1"], "missing.obj"),
+    ];
+    for (args, want) in cases {
+        let o = mesh(dir.path(), args);
+        let line = assert_one_line_error(&o);
+        assert!(line.contains(want), "{args:?}: {line}");
+    }
+    // Nothing was written.
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    // Flags are checked by clap (status 2).
+    let o = mesh(dir.path(), &[b, "-o", "x.vtu", "--size-mm", "-1"]);
+    assert_eq!(o.status.code(), Some(2));
+}

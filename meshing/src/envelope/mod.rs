@@ -1,0 +1,610 @@
+//! Envelope (robust) tetrahedralization: isosurface stuffing of the inside of a
+//! triangle soup, for input the conforming mode refuses (open scans,
+//! self-intersections, non-manifold edges, overlapping parts, flipped shells).
+//!
+//! ## What it does
+//!
+//! 1. **Inside test**: the generalized winding number of the whole soup
+//!    ([`crate::WindingNumber`]), inside where `w > 1/2`; shells given inside out
+//!    count flipped.
+//! 2. **Isosurface stuffing** (Labelle and Shewchuk 2007) on a uniform BCC lattice
+//!    of spacing `size_mm` (the long lattice edges; the short ones are `0.87 h`):
+//!    every boundary node lies on the input surface (a cut point of a lattice edge,
+//!    or a lattice vertex warped onto one), and the dihedral angles are proven to
+//!    lie in [10.7°, 164.8°] for the outer boundary's stencils.
+//! 3. **Regions**: with several input regions (OBJ objects or groups, glTF meshes),
+//!    each region's shell is cut into the mesh as a conforming interface
+//!    (`cut.rs`: warp nodes onto it where close, split the cells that cross it),
+//!    then each cell belongs to the *smallest* region (by enclosed volume) whose
+//!    shell contains it: nested shells (a filling inside a skin) become nested
+//!    regions, overlapping ones go to the smaller.
+//! 4. **Layers**: with `layers_mm`, the planes `y = y_min + t1`, `y_min + t1 + t2`, ...
+//!    are cut in the same way and each cell belongs to the layer holding its
+//!    centroid (regions `layer1`, `layer2`, ... bottom-up; they replace the input's).
+//!
+//! ## What it does not promise
+//!
+//! The boundary is a piecewise-linear interpolation of the input on the lattice:
+//! its distance to the input is the chord error of triangles of size `h`, and
+//! sharp edges and corners of the input are rounded to the lattice. A part of the
+//! input thinner than half the lattice spacing may be lost or thinned: such parts
+//! are detected (inward rays shorter than `h / 2` that leave the inside) and
+//! reported as [`EnvelopeWarning::ThinFeature`], never dropped silently. Cells cut
+//! by region interfaces and layer planes have no proven angle bound; the quality
+//! report measures them.
+//!
+//! ## Example
+//!
+//! ```
+//! use meshing::envelope::{envelope_mesh, EnvelopeOptions};
+//! use meshing::Surface;
+//!
+//! // A unit cube, outward.
+//! let v = |x: f64, y: f64, z: f64| [x, y, z];
+//! let s = Surface {
+//!     vertices: vec![v(0., 0., 0.), v(1., 0., 0.), v(1., 1., 0.), v(0., 1., 0.),
+//!                    v(0., 0., 1.), v(1., 0., 1.), v(1., 1., 1.), v(0., 1., 1.)],
+//!     triangles: vec![[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4],
+//!                     [2, 3, 7], [2, 7, 6], [1, 2, 6], [1, 6, 5], [0, 4, 7], [0, 7, 3]],
+//!     triangle_regions: vec![0; 12],
+//!     region_names: vec!["cube".into()],
+//! };
+//! let out = envelope_mesh(&s, &EnvelopeOptions::new(0.25)).unwrap();
+//! assert!((out.mesh.measure() - 1.0).abs() < 1e-9);
+//! assert!(out.mesh.validate().is_ok());
+//! ```
+
+#![allow(clippy::neg_cmp_op_on_partial_ord, clippy::needless_range_loop)] // `!(x > 0.0)` also refuses NaN, deliberately.
+
+pub(crate) mod cut;
+pub(crate) mod lattice;
+pub(crate) mod smooth;
+pub(crate) mod stuffing;
+pub(crate) mod tree;
+
+use std::collections::BTreeMap;
+use std::fmt;
+use std::time::Instant;
+
+use fem_core::mesh::TetMesh;
+use rayon::prelude::*;
+use serde::Serialize;
+use thiserror::Error;
+
+pub use stuffing::{ALPHA_LONG, ALPHA_SHORT};
+pub use tree::TriangleTree;
+
+use crate::winding::WindingNumber;
+use crate::Surface;
+use tree::{cross, norm, scale, sub};
+
+/// The options of [`envelope_mesh`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct EnvelopeOptions {
+    /// Lattice spacing: the target edge length [mm]. No default: see [`Self::new`].
+    pub size_mm: f64,
+    /// Layer thicknesses along y, bottom-up from the surface's lowest point [mm];
+    /// empty (default): no layers. They must add up to the surface's height within
+    /// 1 % (the last layer reaches the top).
+    pub layers_mm: Vec<f64>,
+    /// The largest lattice (vertices) to build; default 40 million (about 3 GB of
+    /// work memory). A finer size is refused with [`EnvelopeError::TooFine`].
+    pub max_lattice_vertices: usize,
+}
+
+impl EnvelopeOptions {
+    /// Options with lattice spacing `size_mm` [mm] and the defaults.
+    pub fn new(size_mm: f64) -> Self {
+        Self { size_mm, layers_mm: Vec::new(), max_lattice_vertices: 40_000_000 }
+    }
+}
+
+/// Why the envelope mesher refused or failed.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum EnvelopeError {
+    /// The size is not a positive, finite length.
+    #[error("element size {size_mm} mm: must be finite and > 0")]
+    BadSize {
+        /// The size given [mm].
+        size_mm: f64,
+    },
+    /// The surface has no triangles.
+    #[error("the surface has no triangles")]
+    EmptySurface,
+    /// A vertex has a NaN or infinite coordinate.
+    #[error("vertex {vertex} has a non-finite coordinate {position:?}")]
+    NonFinite {
+        /// 0-based vertex index.
+        vertex: usize,
+        /// Its coordinates [mm].
+        position: [f64; 3],
+    },
+    /// A triangle names a vertex that does not exist.
+    #[error("triangle {triangle} names vertex {vertex}, but the surface has {num_vertices} vertices")]
+    BadIndex {
+        /// 0-based triangle index.
+        triangle: usize,
+        /// The vertex it names.
+        vertex: u32,
+        /// How many there are.
+        num_vertices: usize,
+    },
+    /// The lattice would be too large for this size.
+    #[error(
+        "element size {size_mm} mm is too fine for a {extent_mm:?} mm shape: {vertices} lattice vertices \
+         (at most {max}); use --size-mm {suggest_mm:.3} or larger"
+    )]
+    TooFine {
+        /// The size given [mm].
+        size_mm: f64,
+        /// The surface's extent [mm].
+        extent_mm: [f64; 3],
+        /// Lattice vertices needed.
+        vertices: usize,
+        /// The limit.
+        max: usize,
+        /// The smallest size within the limit [mm].
+        suggest_mm: f64,
+    },
+    /// Nothing is inside at this size.
+    #[error(
+        "nothing to mesh: no lattice point at size {size_mm} mm is inside the surface (winding number > 0.5); \
+         it encloses no volume (an open sheet?) or is thinner than the size everywhere"
+    )]
+    NothingInside {
+        /// The size given [mm].
+        size_mm: f64,
+    },
+    /// Layer thicknesses that do not fit the shape.
+    #[error("layers: {cause}")]
+    BadLayers {
+        /// What is wrong.
+        cause: String,
+    },
+    /// The result failed its final check (a bug: please report it with the input).
+    #[error("the envelope mesh failed its check: {cause}")]
+    Internal {
+        /// The check that failed.
+        cause: String,
+    },
+}
+
+/// Something the user should know about the result.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum EnvelopeWarning {
+    /// Part of the input is thinner than half the lattice spacing: it may be lost or thinned.
+    ThinFeature {
+        /// The input region.
+        region: String,
+        /// Triangles whose inward ray leaves the inside within `h / 2`.
+        num_triangles: usize,
+        /// Their area [mm^2].
+        area_mm2: f64,
+        /// The thinnest ray [mm].
+        min_thickness_mm: f64,
+        /// Bounding box of those triangles [mm].
+        lo_mm: [f64; 3],
+        /// Bounding box of those triangles [mm].
+        hi_mm: [f64; 3],
+        /// The lattice spacing [mm].
+        size_mm: f64,
+    },
+    /// A region's shell was given inside out; it was counted flipped.
+    InsideOut {
+        /// The input region.
+        region: String,
+    },
+    /// An input region got no cell (inside another region of smaller volume, or too thin).
+    EmptyRegion {
+        /// The input region.
+        region: String,
+    },
+}
+
+impl fmt::Display for EnvelopeWarning {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            EnvelopeWarning::ThinFeature {
+                region,
+                num_triangles,
+                area_mm2,
+                min_thickness_mm,
+                lo_mm,
+                hi_mm,
+                size_mm,
+            } => write!(
+                f,
+                "region `{region}`: {num_triangles} triangles ({area_mm2:.3e} mm^2) bound a part thinner than half \
+                 the lattice spacing {size_mm} mm (thinnest {min_thickness_mm:.3e} mm) in the box \
+                 [{:.4}, {:.4}, {:.4}]..[{:.4}, {:.4}, {:.4}] mm; it may be lost or thinned: use a smaller --size-mm",
+                lo_mm[0], lo_mm[1], lo_mm[2], hi_mm[0], hi_mm[1], hi_mm[2]
+            ),
+            EnvelopeWarning::InsideOut { region } => {
+                write!(f, "region `{region}` is inside out (negative enclosed volume); it was counted flipped")
+            }
+            EnvelopeWarning::EmptyRegion { region } => write!(f, "region `{region}` got no cells"),
+        }
+    }
+}
+
+/// Counts and timings of a run.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct EnvelopeStats {
+    /// Lattice spacing [mm].
+    pub size_mm: f64,
+    /// Lattice vertices evaluated.
+    pub lattice_vertices: usize,
+    /// Of which inside.
+    pub inside_vertices: usize,
+    /// Cut points of the outer surface.
+    pub cut_points: usize,
+    /// Lattice vertices warped onto the surface.
+    pub warped_vertices: usize,
+    /// Interfaces (region shells, layer planes) cut into the mesh.
+    pub interfaces: usize,
+    /// Nodes moved onto an interface.
+    pub interface_moved_nodes: usize,
+    /// Nodes added on interfaces.
+    pub interface_new_nodes: usize,
+    /// Nodes moved by the quality improvement.
+    pub smoothed_nodes: usize,
+    /// Wall time [s].
+    pub time_s: f64,
+}
+
+/// The result of [`envelope_mesh`].
+#[derive(Debug, Clone)]
+pub struct EnvelopeMesh {
+    /// The mesh: nodes [mm], positive tets, regions, node set and face set
+    /// `boundary` (the outer boundary).
+    pub mesh: TetMesh,
+    /// What the user should know (thin parts, flipped shells, empty regions).
+    pub warnings: Vec<EnvelopeWarning>,
+    /// Counts and timings.
+    pub stats: EnvelopeStats,
+}
+
+/// Meshes the inside of `surface` (see the module docs).
+pub fn envelope_mesh(surface: &Surface, options: &EnvelopeOptions) -> Result<EnvelopeMesh, EnvelopeError> {
+    envelope_mesh_with_progress(surface, options, &|_, _| {})
+}
+
+/// [`envelope_mesh`], calling `progress(stage, fraction)` as it goes.
+pub fn envelope_mesh_with_progress(
+    surface: &Surface,
+    options: &EnvelopeOptions,
+    progress: &(dyn Fn(&str, f64) + Sync),
+) -> Result<EnvelopeMesh, EnvelopeError> {
+    let start = Instant::now();
+    let h = options.size_mm;
+    if !(h.is_finite() && h > 0.0) {
+        return Err(EnvelopeError::BadSize { size_mm: h });
+    }
+    check_surface(surface)?;
+    let (lo, hi) = surface.bounding_box();
+    let diag = surface.diagonal();
+    let extent = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];
+    // Lattice size (as in stuffing::stuff): cubes per axis, black + red vertices.
+    let cubes = |h: f64| extent.map(|e| ((e + 2.0 * h) / h).ceil() + 3.0);
+    let count = |h: f64| {
+        let c = cubes(h);
+        (c[0] + 1.0) * (c[1] + 1.0) * (c[2] + 1.0) + c[0] * c[1] * c[2]
+    };
+    let vertices = count(h);
+    if vertices > options.max_lattice_vertices as f64 {
+        let mut s = h;
+        while count(s) > options.max_lattice_vertices as f64 {
+            s *= 1.05;
+        }
+        return Err(EnvelopeError::TooFine {
+            size_mm: h,
+            extent_mm: extent,
+            vertices: vertices.min(usize::MAX as f64) as usize,
+            max: options.max_lattice_vertices,
+            suggest_mm: s,
+        });
+    }
+    let layer_planes = crate::layers::layer_planes(&options.layers_mm, lo[1], hi[1])
+        .map_err(|e| EnvelopeError::BadLayers { cause: e.to_string() })?;
+
+    // Touching closed shells (a face shared by two cells, given once): each cell
+    // becomes a closed region of its own.
+    let split = split_cells(surface);
+    let surface = split.as_ref().unwrap_or(surface);
+
+    let mut warnings = Vec::new();
+    let num_regions = num_regions(surface);
+    let region_name = |r: usize| surface.region_names.get(r).cloned().unwrap_or_else(|| format!("region{r}"));
+    for r in 0..num_regions {
+        if surface.signed_volume(Some(r as u32)) < 0.0 {
+            warnings.push(EnvelopeWarning::InsideOut { region: region_name(r) });
+        }
+    }
+
+    // 1-2. Stuff the inside of the whole soup.
+    progress("inside test", 0.0);
+    let winding = WindingNumber::new(surface);
+    let eps = 1e-9 * diag.max(f64::MIN_POSITIVE);
+    let stuffed = stuffing::stuff(winding.tree(), lo, hi, h, eps, &|f| progress("stuffing", f));
+    if stuffed.num_inside_vertices == 0 || stuffed.cells.is_empty() {
+        return Err(EnvelopeError::NothingInside { size_mm: h });
+    }
+    let mut stats = EnvelopeStats {
+        size_mm: h,
+        lattice_vertices: stuffed.num_lattice_vertices,
+        inside_vertices: stuffed.num_inside_vertices,
+        cut_points: stuffed.num_cut_points,
+        warped_vertices: stuffed.num_warped,
+        ..EnvelopeStats::default()
+    };
+    let mut mesh = TetMesh {
+        nodes: stuffed.nodes,
+        cells: stuffed.cells,
+        cell_regions: Vec::new(),
+        region_names: vec![region_name(0)],
+        node_sets: BTreeMap::new(),
+        face_sets: BTreeMap::new(),
+    };
+    mesh.cell_regions = vec![0; mesh.cells.len()];
+
+    // 3-4. Interfaces: layer planes, or region shells.
+    let cut = if !layer_planes.is_empty() {
+        progress("layers", 0.0);
+        crate::layers::cut_into_layers(&mut mesh, &layer_planes)
+    } else if num_regions > 1 {
+        progress("regions", 0.0);
+        crate::layers::cut_shells(&mut mesh, surface)
+    } else {
+        crate::layers::InterfaceStats::default()
+    };
+    stats.interfaces = cut.interfaces;
+    stats.interface_moved_nodes = cut.moved_nodes;
+    stats.interface_new_nodes = cut.new_nodes;
+    // 5. Quality: move the worst tets' nodes (boundary ones along the input).
+    progress("smoothing", 0.0);
+    let mobility = mobility(&mesh, winding.tree(), eps);
+    stats.smoothed_nodes = smooth::improve(&mut mesh.nodes, &mesh.cells, &mobility, winding.tree());
+
+    for (r, name) in mesh.region_names.iter().enumerate() {
+        if !mesh.cell_regions.iter().any(|&c| c as usize == r) {
+            warnings.push(EnvelopeWarning::EmptyRegion { region: name.clone() });
+        }
+    }
+
+    // The thin parts of the input.
+    progress("thin parts", 0.0);
+    warnings.extend(thin_features(surface, &winding, h, diag));
+
+    let faces = mesh.boundary_facets();
+    let mut boundary: Vec<u32> = faces.iter().flatten().copied().collect();
+    boundary.sort_unstable();
+    boundary.dedup();
+    mesh.node_sets.insert("boundary".into(), boundary);
+    mesh.face_sets.insert("boundary".into(), faces);
+    mesh.validate().map_err(|e| EnvelopeError::Internal { cause: e.to_string() })?;
+    stats.time_s = start.elapsed().as_secs_f64();
+    progress("done", 1.0);
+    Ok(EnvelopeMesh { mesh, warnings, stats })
+}
+
+fn check_surface(surface: &Surface) -> Result<(), EnvelopeError> {
+    if surface.triangles.is_empty() {
+        return Err(EnvelopeError::EmptySurface);
+    }
+    for (i, p) in surface.vertices.iter().enumerate() {
+        if !p.iter().all(|x| x.is_finite()) {
+            return Err(EnvelopeError::NonFinite { vertex: i, position: *p });
+        }
+    }
+    for (i, t) in surface.triangles.iter().enumerate() {
+        for &v in t {
+            if v as usize >= surface.vertices.len() {
+                return Err(EnvelopeError::BadIndex { triangle: i, vertex: v, num_vertices: surface.vertices.len() });
+            }
+        }
+    }
+    Ok(())
+}
+
+fn num_regions(surface: &Surface) -> usize {
+    surface.region_names.len().max(surface.triangle_regions.iter().map(|&r| r as usize + 1).max().unwrap_or(1)).max(1)
+}
+
+/// Triangles whose inward ray leaves the inside within `h / 2`, grouped by region.
+fn thin_features(surface: &Surface, winding: &WindingNumber, h: f64, diag: f64) -> Vec<EnvelopeWarning> {
+    let tree = winding.tree();
+    let nreg = num_regions(surface);
+    let flip: Vec<bool> = (0..nreg as u32).map(|r| surface.signed_volume(Some(r)) < 0.0).collect();
+    let reach = 0.5 * h;
+    let min_gap = 1e-7 * diag;
+    let hits: Vec<Option<(f64, f64)>> = surface
+        .triangles
+        .par_iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let r = surface.triangle_regions.get(i).copied().unwrap_or(0) as usize;
+            let p = t.map(|v| surface.vertices[v as usize]);
+            let av = cross(sub(p[1], p[0]), sub(p[2], p[0]));
+            let len = norm(av);
+            if !(len > 0.0) {
+                return None;
+            }
+            let mut n = scale(av, 1.0 / len);
+            if flip.get(r).copied().unwrap_or(false) {
+                n = scale(n, -1.0);
+            }
+            let c = scale(
+                [p[0][0] + p[1][0] + p[2][0], p[0][1] + p[1][1] + p[2][1], p[0][2] + p[1][2] + p[2][2]],
+                1.0 / 3.0,
+            );
+            // Inward: -n. Start just inside, so the triangle itself is not hit.
+            let from = sub(c, scale(n, min_gap));
+            let to = sub(c, scale(n, reach));
+            // The inside must be there at all (an interior sheet of overlapping parts is not thin).
+            if winding.at(from) <= 0.5 {
+                return None;
+            }
+            for (s, _) in tree.segment_crossings(from, to) {
+                let d = min_gap + s * (reach - min_gap);
+                if d < 2.0 * min_gap {
+                    continue;
+                }
+                let beyond = sub(c, scale(n, d + min_gap));
+                if winding.at(beyond) <= 0.5 {
+                    return Some((d, 0.5 * len));
+                }
+            }
+            None
+        })
+        .collect();
+    let mut out = Vec::new();
+    for r in 0..nreg {
+        let mut num = 0;
+        let mut area = 0.0;
+        let mut thinnest = f64::INFINITY;
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for (i, hit) in hits.iter().enumerate() {
+            let Some((d, a)) = hit else { continue };
+            if surface.triangle_regions.get(i).copied().unwrap_or(0) as usize != r {
+                continue;
+            }
+            num += 1;
+            area += a;
+            thinnest = thinnest.min(*d);
+            for &v in &surface.triangles[i] {
+                let p = surface.vertices[v as usize];
+                for k in 0..3 {
+                    lo[k] = lo[k].min(p[k]);
+                    hi[k] = hi[k].max(p[k]);
+                }
+            }
+        }
+        if num > 0 {
+            out.push(EnvelopeWarning::ThinFeature {
+                region: surface.region_names.get(r).cloned().unwrap_or_else(|| format!("region{r}")),
+                num_triangles: num,
+                area_mm2: area,
+                min_thickness_mm: thinnest,
+                lo_mm: lo,
+                hi_mm: hi,
+                size_mm: h,
+            });
+        }
+    }
+    out
+}
+
+/// How each node may move in the quality improvement: boundary nodes on the
+/// input slide along it, nodes of cells of two regions (interfaces) and boundary
+/// nodes off the input (across a hole) stay, the others are free.
+fn mobility(mesh: &TetMesh, tree: &TriangleTree, eps: f64) -> Vec<smooth::Mobility> {
+    let n = mesh.nodes.len();
+    let mut region = vec![u16::MAX; n];
+    let mut interface = vec![false; n];
+    for (c, &r) in mesh.cells.iter().zip(&mesh.cell_regions) {
+        for &v in c {
+            let v = v as usize;
+            if region[v] == u16::MAX {
+                region[v] = r;
+            } else if region[v] != r {
+                interface[v] = true;
+            }
+        }
+    }
+    let mut boundary = vec![false; n];
+    for f in mesh.boundary_facets() {
+        for v in f {
+            boundary[v as usize] = true;
+        }
+    }
+    (0..n)
+        .into_par_iter()
+        .map(|v| {
+            if interface[v] {
+                smooth::Mobility::Fixed
+            } else if boundary[v] {
+                if tree.closest_point_within(mesh.nodes[v], eps).is_some() {
+                    smooth::Mobility::OnSurface
+                } else {
+                    smooth::Mobility::Fixed
+                }
+            } else {
+                smooth::Mobility::Free
+            }
+        })
+        .collect()
+}
+
+/// A surface whose shells meet at non-manifold edges (two boxes sharing a face
+/// given once, or touching along an edge) and that has no border edge, split into
+/// one closed region per cell of space it bounds (its shells of positive volume,
+/// `crate::topology`), each cell's triangles oriented outward: a shared face is
+/// given twice, once per cell. `None` for any other surface (meshed as it is).
+pub(crate) fn split_cells(surface: &Surface) -> Option<Surface> {
+    use crate::topology::{shells, side, Edges};
+    let skip: Vec<bool> = surface
+        .triangles
+        .iter()
+        .map(|t| {
+            crate::predicates::is_degenerate(
+                surface.vertices[t[0] as usize],
+                surface.vertices[t[1] as usize],
+                surface.vertices[t[2] as usize],
+            )
+        })
+        .collect();
+    let edges = Edges::new(&surface.triangles, &skip);
+    let counts: Vec<usize> = (0..edges.len()).map(|e| edges.uses(e).len()).collect();
+    if !counts.iter().any(|&c| c > 2) || counts.iter().any(|&c| c < 2) {
+        return None;
+    }
+    let sh = shells(&surface.vertices, &surface.triangles, &edges, &skip);
+    let tol = 1e-9 * surface.diagonal().powi(3);
+    let cells: Vec<u32> = (0..sh.volume.len() as u32).filter(|&k| sh.volume[k as usize] > tol).collect();
+    if cells.len() < 2 {
+        return None;
+    }
+    let mut out = Surface { vertices: surface.vertices.clone(), ..Surface::default() };
+    let mut name_count: BTreeMap<String, usize> = BTreeMap::new();
+    let mut names = Vec::new();
+    for (r, &k) in cells.iter().enumerate() {
+        let mut first_region = None;
+        for (t, tri) in surface.triangles.iter().enumerate() {
+            if skip[t] {
+                continue;
+            }
+            // The side facing the cell: `+` faces it (normal into the cell): reverse.
+            if sh.of_side[side(t as u32, true) as usize] == k {
+                out.triangles.push([tri[0], tri[2], tri[1]]);
+            } else if sh.of_side[side(t as u32, false) as usize] == k {
+                out.triangles.push(*tri);
+            } else {
+                continue;
+            }
+            out.triangle_regions.push(r as u32);
+            first_region.get_or_insert(surface.triangle_regions.get(t).copied().unwrap_or(0));
+        }
+        let base = first_region
+            .and_then(|g| surface.region_names.get(g as usize).cloned())
+            .unwrap_or_else(|| "region".to_string());
+        *name_count.entry(base.clone()).or_default() += 1;
+        names.push(base);
+    }
+    // Cells sharing a name are numbered.
+    let mut seen: BTreeMap<String, usize> = BTreeMap::new();
+    out.region_names = names
+        .into_iter()
+        .map(|n| {
+            if name_count[&n] > 1 {
+                let k = seen.entry(n.clone()).or_default();
+                *k += 1;
+                format!("{n}-{k}")
+            } else {
+                n
+            }
+        })
+        .collect();
+    Some(out)
+}

@@ -1,0 +1,429 @@
+//! Mesh quality and fidelity: what `wagashi mesh` prints and writes as JSON.
+//!
+//! Per tetrahedron ([`tet_quality`]):
+//!
+//! - the six **dihedral angles** [deg] (the angle between the two faces at an edge);
+//! - the **radius-edge ratio** `R / l_min` (circumradius over shortest edge;
+//!   `√6 / 4 ≈ 0.612` for the regular tet, unbounded for slivers' cousins);
+//! - the **radius ratio** `3 r / R` (inradius over circumradius, normalized to 1
+//!   for the regular tet, 0 for a flat one).
+//!
+//! Over the mesh ([`report`]): min and max dihedral angle, the fraction of tets
+//! whose smallest dihedral angle is under 10°, max and 99.9th percentile of the
+//! radius-edge ratio, mean and min radius ratio, the volume against the surface's
+//! enclosed volume, per-region volumes, and the **symmetric Hausdorff distance**
+//! between the mesh's boundary and the input surface, relative to the input's
+//! bounding-box diagonal.
+//!
+//! ## Reference volumes
+//!
+//! A region's enclosed volume is [`Surface::signed_volume`] of its triangles (the
+//! divergence theorem). Regions inside others (nested shells: a vertex of the
+//! inner shell has winding number > 1/2 for the outer one, and its volume is
+//! smaller) are subtracted from their smallest container, so the layered bunny's
+//! references are `bunny - sphereA`, `sphereA - sphereB`, `sphereB`. The whole
+//! reference is the sum over the outermost regions. Shells touching along
+//! non-manifold edges (two boxes sharing a face given once) are first split into
+//! the cells they bound, as the envelope mesher does. Overlapping, non-nested
+//! shells are counted twice: compare such input against its exact union instead
+//! (as the tests do).
+//!
+//! ## Hausdorff distance
+//!
+//! Both surfaces are sampled on a barycentric grid of spacing at most 1/300 of the
+//! diagonal (and at least one point per triangle: its corners, edge points and
+//! interior points), and each sample's exact distance to the other surface is
+//! found with a BVH. Input triangles that do not bound the inside (the winding
+//! number is on the same side of 1/2 just in front of and just behind them: interior
+//! sheets of overlapping parts, region interfaces, stray faces outside) are not
+//! sampled: the distance is to the inside's boundary, which is what a mesh can
+//! reproduce. The sampled maximum is within half a sample spacing of the true one.
+
+#![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > 0.0)` also refuses NaN, deliberately.
+
+use std::time::Instant;
+
+use fem_core::mesh::TetMesh;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::envelope::tree::{cross, dot, norm, scale, sub, TriangleTree};
+use crate::{Surface, WindingNumber};
+
+type P = [f64; 3];
+
+/// The quality of one tetrahedron.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TetQuality {
+    /// Smallest dihedral angle [deg].
+    pub min_dihedral_deg: f64,
+    /// Largest dihedral angle [deg].
+    pub max_dihedral_deg: f64,
+    /// Circumradius over shortest edge (0.612 for the regular tet).
+    pub radius_edge: f64,
+    /// 3 x inradius over circumradius (1 for the regular tet).
+    pub radius_ratio: f64,
+    /// Signed volume [mm^3].
+    pub volume_mm3: f64,
+}
+
+/// The quality of the tet with corners `p` [mm].
+pub fn tet_quality(p: &[P; 4]) -> TetQuality {
+    let mut min_d = f64::INFINITY;
+    let mut max_d: f64 = 0.0;
+    let mut l_min = f64::INFINITY;
+    for i in 0..4 {
+        for j in i + 1..4 {
+            let (k, l) = match (i, j) {
+                (0, 1) => (2, 3),
+                (0, 2) => (1, 3),
+                (0, 3) => (1, 2),
+                (1, 2) => (0, 3),
+                (1, 3) => (0, 2),
+                _ => (0, 1),
+            };
+            let e = sub(p[j], p[i]);
+            let le = norm(e);
+            l_min = l_min.min(le);
+            let angle = if le > 0.0 {
+                let e = scale(e, 1.0 / le);
+                let u = sub(p[k], p[i]);
+                let v = sub(p[l], p[i]);
+                let u = sub(u, scale(e, dot(u, e)));
+                let v = sub(v, scale(e, dot(v, e)));
+                let (nu, nv) = (norm(u), norm(v));
+                if nu > 0.0 && nv > 0.0 {
+                    (dot(u, v) / (nu * nv)).clamp(-1.0, 1.0).acos().to_degrees()
+                } else {
+                    0.0
+                }
+            } else {
+                0.0
+            };
+            min_d = min_d.min(angle);
+            max_d = max_d.max(angle);
+        }
+    }
+    let a = sub(p[1], p[0]);
+    let b = sub(p[2], p[0]);
+    let c = sub(p[3], p[0]);
+    let det = dot(a, cross(b, c));
+    let volume = det / 6.0;
+    let num = [
+        dot(a, a) * cross(b, c)[0] + dot(b, b) * cross(c, a)[0] + dot(c, c) * cross(a, b)[0],
+        dot(a, a) * cross(b, c)[1] + dot(b, b) * cross(c, a)[1] + dot(c, c) * cross(a, b)[1],
+        dot(a, a) * cross(b, c)[2] + dot(b, b) * cross(c, a)[2] + dot(c, c) * cross(a, b)[2],
+    ];
+    let circumradius = if det != 0.0 { norm(num) / (2.0 * det.abs()) } else { f64::INFINITY };
+    let area: f64 = (0..4)
+        .map(|i| {
+            let f = [p[(i + 1) % 4], p[(i + 2) % 4], p[(i + 3) % 4]];
+            0.5 * norm(cross(sub(f[1], f[0]), sub(f[2], f[0])))
+        })
+        .sum();
+    let inradius = if area > 0.0 { 3.0 * volume.abs() / area } else { 0.0 };
+    let radius_ratio = if circumradius.is_finite() && circumradius > 0.0 { 3.0 * inradius / circumradius } else { 0.0 };
+    let radius_edge = if l_min > 0.0 { circumradius / l_min } else { f64::INFINITY };
+    TetQuality { min_dihedral_deg: min_d, max_dihedral_deg: max_d, radius_edge, radius_ratio, volume_mm3: volume }
+}
+
+/// One region's share of the mesh.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RegionQuality {
+    /// The region's name.
+    pub name: String,
+    /// Its cells.
+    pub num_cells: usize,
+    /// Its volume [mm^3].
+    pub volume_mm3: f64,
+    /// The enclosed volume of its shell less the shells nested in it [mm^3], when
+    /// the mesh's regions are the surface's (see the module docs).
+    pub reference_volume_mm3: Option<f64>,
+    /// `(volume - reference) / reference`.
+    pub volume_error: Option<f64>,
+}
+
+/// The quality report (see the module docs). Angles in degrees, lengths in mm.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct QualityReport {
+    /// Nodes.
+    pub num_nodes: usize,
+    /// Tetrahedra.
+    pub num_cells: usize,
+    /// Boundary triangles.
+    pub num_boundary_faces: usize,
+    /// Smallest dihedral angle [deg].
+    pub min_dihedral_deg: f64,
+    /// Largest dihedral angle [deg].
+    pub max_dihedral_deg: f64,
+    /// Fraction of the tets whose smallest dihedral angle is under 10°.
+    pub fraction_below_10_deg: f64,
+    /// Largest radius-edge ratio.
+    pub max_radius_edge: f64,
+    /// 99.9th percentile of the radius-edge ratio.
+    pub p999_radius_edge: f64,
+    /// Mean radius ratio (1 = regular).
+    pub mean_radius_ratio: f64,
+    /// Smallest radius ratio.
+    pub min_radius_ratio: f64,
+    /// Tets of non-positive volume (0 for a valid mesh).
+    pub num_inverted: usize,
+    /// Mesh volume [mm^3].
+    pub volume_mm3: f64,
+    /// The surface's enclosed volume [mm^3] (see the module docs).
+    pub reference_volume_mm3: f64,
+    /// `(volume - reference) / reference`.
+    pub volume_error: f64,
+    /// The input's bounding-box diagonal [mm].
+    pub diagonal_mm: f64,
+    /// Symmetric Hausdorff distance between the mesh boundary and the input [mm].
+    pub hausdorff_mm: f64,
+    /// `hausdorff_mm / diagonal_mm`.
+    pub hausdorff_relative: f64,
+    /// Largest distance from the mesh boundary to the input [mm].
+    pub mesh_to_surface_mm: f64,
+    /// Largest distance from the input (its part bounding the inside) to the mesh boundary [mm].
+    pub surface_to_mesh_mm: f64,
+    /// Input triangles left out of the Hausdorff distance (not bounding the inside).
+    pub num_interior_input_triangles: usize,
+    /// Per region, in the mesh's order.
+    pub regions: Vec<RegionQuality>,
+    /// Meshing time [s], as given by the caller (0 when not given).
+    pub mesh_time_s: f64,
+    /// Time to compute this report [s].
+    pub report_time_s: f64,
+}
+
+/// The cell statistics of [`QualityReport`] alone (no surface needed):
+/// `(min dihedral, max dihedral, fraction < 10°, max radius-edge, p99.9 radius-edge,
+/// mean radius ratio, min radius ratio, inverted count)`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CellStatistics {
+    /// Smallest dihedral angle [deg].
+    pub min_dihedral_deg: f64,
+    /// Largest dihedral angle [deg].
+    pub max_dihedral_deg: f64,
+    /// Fraction of the tets whose smallest dihedral angle is under 10°.
+    pub fraction_below_10_deg: f64,
+    /// Largest radius-edge ratio.
+    pub max_radius_edge: f64,
+    /// 99.9th percentile of the radius-edge ratio.
+    pub p999_radius_edge: f64,
+    /// Mean radius ratio.
+    pub mean_radius_ratio: f64,
+    /// Smallest radius ratio.
+    pub min_radius_ratio: f64,
+    /// Tets of non-positive volume.
+    pub num_inverted: usize,
+}
+
+/// The cell statistics of `mesh`.
+pub fn cell_statistics(mesh: &TetMesh) -> CellStatistics {
+    let q: Vec<TetQuality> = mesh.cells.par_iter().map(|c| tet_quality(&c.map(|v| mesh.nodes[v as usize]))).collect();
+    let n = q.len().max(1) as f64;
+    let mut re: Vec<f64> = q.iter().map(|t| t.radius_edge).collect();
+    re.sort_by(f64::total_cmp);
+    let p999 = if re.is_empty() { 0.0 } else { re[((re.len() - 1) as f64 * 0.999).floor() as usize] };
+    CellStatistics {
+        min_dihedral_deg: q.iter().map(|t| t.min_dihedral_deg).fold(f64::INFINITY, f64::min),
+        max_dihedral_deg: q.iter().map(|t| t.max_dihedral_deg).fold(0.0, f64::max),
+        fraction_below_10_deg: q.iter().filter(|t| t.min_dihedral_deg < 10.0).count() as f64 / n,
+        max_radius_edge: re.last().copied().unwrap_or(0.0),
+        p999_radius_edge: p999,
+        mean_radius_ratio: q.iter().map(|t| t.radius_ratio).sum::<f64>() / n,
+        min_radius_ratio: q.iter().map(|t| t.radius_ratio).fold(f64::INFINITY, f64::min),
+        num_inverted: q.iter().filter(|t| !(t.volume_mm3 > 0.0)).count(),
+    }
+}
+
+/// The full report of `mesh` against the input `surface`; `mesh_time_s` is copied in.
+pub fn report(mesh: &TetMesh, surface: &Surface, mesh_time_s: f64) -> QualityReport {
+    let start = Instant::now();
+    // Touching shells given once are measured as the cells the envelope meshes.
+    let split = crate::envelope::split_cells(surface);
+    let surface = split.as_ref().unwrap_or(surface);
+    let cells = cell_statistics(mesh);
+    let volume_mm3 = mesh.measure();
+    let diagonal_mm = surface.diagonal();
+
+    // Reference volumes of nested shells.
+    let nreg =
+        surface.region_names.len().max(surface.triangle_regions.iter().map(|&r| r as usize + 1).max().unwrap_or(1));
+    let shell_volume: Vec<f64> = (0..nreg as u32).map(|r| surface.signed_volume(Some(r)).abs()).collect();
+    let parent = nesting(surface, &shell_volume);
+    let mut own = shell_volume.clone();
+    for (s, p) in parent.iter().enumerate() {
+        if let Some(p) = p {
+            own[*p] -= shell_volume[s];
+        }
+    }
+    let reference_volume_mm3: f64 = (0..nreg).filter(|&r| parent[r].is_none()).map(|r| shell_volume[r]).sum();
+    let same_regions = mesh.region_names.len() == nreg && nreg > 1 && mesh.region_names == surface.region_names;
+    let regions = mesh
+        .region_names
+        .iter()
+        .enumerate()
+        .map(|(r, name)| {
+            let mut v = 0.0;
+            let mut n = 0;
+            for (c, &cr) in mesh.cells.iter().zip(&mesh.cell_regions) {
+                if cr as usize == r {
+                    v += tet_quality(&c.map(|x| mesh.nodes[x as usize])).volume_mm3;
+                    n += 1;
+                }
+            }
+            let reference = if same_regions || (nreg == 1 && mesh.region_names.len() == 1) {
+                Some(if nreg == 1 { reference_volume_mm3 } else { own[r] })
+            } else {
+                None
+            };
+            RegionQuality {
+                name: name.clone(),
+                num_cells: n,
+                volume_mm3: v,
+                reference_volume_mm3: reference,
+                volume_error: reference.map(|rv| (v - rv) / rv),
+            }
+        })
+        .collect();
+
+    // Hausdorff distance.
+    let faces = mesh.boundary_facets();
+    let out_tris: Vec<[P; 3]> = faces.iter().map(|f| f.map(|v| mesh.nodes[v as usize])).collect();
+    let in_tris: Vec<[P; 3]> = surface.triangles.iter().map(|t| t.map(|v| surface.vertices[v as usize])).collect();
+    let spacing = diagonal_mm / 300.0;
+    let out_tree = TriangleTree::new(out_tris.clone());
+    let in_tree = TriangleTree::new(in_tris.clone());
+    let mesh_to_surface_mm = out_tris.par_iter().map(|t| max_distance(t, spacing, &in_tree)).reduce(|| 0.0, f64::max);
+    let winding = WindingNumber::new(surface);
+    let delta = 1e-6 * diagonal_mm;
+    let bounding: Vec<bool> = in_tris
+        .par_iter()
+        .map(|t| {
+            let n = cross(sub(t[1], t[0]), sub(t[2], t[0]));
+            let ln = norm(n);
+            if !(ln > 0.0) {
+                return false;
+            }
+            let n = scale(n, delta / ln);
+            let c = scale(
+                [t[0][0] + t[1][0] + t[2][0], t[0][1] + t[1][1] + t[2][1], t[0][2] + t[1][2] + t[2][2]],
+                1.0 / 3.0,
+            );
+            let front = winding.is_inside([c[0] + n[0], c[1] + n[1], c[2] + n[2]]);
+            let back = winding.is_inside([c[0] - n[0], c[1] - n[1], c[2] - n[2]]);
+            front != back
+        })
+        .collect();
+    let num_interior_input_triangles = bounding.iter().filter(|&&b| !b).count();
+    let surface_to_mesh_mm = in_tris
+        .par_iter()
+        .zip(&bounding)
+        .filter(|(_, &b)| b)
+        .map(|(t, _)| max_distance(t, spacing, &out_tree))
+        .reduce(|| 0.0, f64::max);
+    let hausdorff_mm = mesh_to_surface_mm.max(surface_to_mesh_mm);
+    QualityReport {
+        num_nodes: mesh.nodes.len(),
+        num_cells: mesh.cells.len(),
+        num_boundary_faces: faces.len(),
+        min_dihedral_deg: cells.min_dihedral_deg,
+        max_dihedral_deg: cells.max_dihedral_deg,
+        fraction_below_10_deg: cells.fraction_below_10_deg,
+        max_radius_edge: cells.max_radius_edge,
+        p999_radius_edge: cells.p999_radius_edge,
+        mean_radius_ratio: cells.mean_radius_ratio,
+        min_radius_ratio: cells.min_radius_ratio,
+        num_inverted: cells.num_inverted,
+        volume_mm3,
+        reference_volume_mm3,
+        volume_error: (volume_mm3 - reference_volume_mm3) / reference_volume_mm3,
+        diagonal_mm,
+        hausdorff_mm,
+        hausdorff_relative: if diagonal_mm > 0.0 { hausdorff_mm / diagonal_mm } else { 0.0 },
+        mesh_to_surface_mm,
+        surface_to_mesh_mm,
+        num_interior_input_triangles,
+        regions,
+        mesh_time_s,
+        report_time_s: start.elapsed().as_secs_f64(),
+    }
+}
+
+/// For each region, the smallest other region whose shell contains it.
+fn nesting(surface: &Surface, volume: &[f64]) -> Vec<Option<usize>> {
+    let n = volume.len();
+    if n < 2 {
+        return vec![None; n];
+    }
+    let windings: Vec<WindingNumber> = (0..n as u32).map(|r| WindingNumber::of_region(surface, r)).collect();
+    // Up to five vertices of each region, to test for containment by majority.
+    let mut probes: Vec<Vec<P>> = vec![Vec::new(); n];
+    for (t, &r) in surface.triangles.iter().zip(&surface.triangle_regions) {
+        let list = &mut probes[r as usize];
+        if list.len() < 5 {
+            list.push(surface.vertices[t[0] as usize]);
+        }
+    }
+    (0..n)
+        .map(|s| {
+            let mut best: Option<usize> = None;
+            for r in 0..n {
+                if r == s || !(volume[r] > volume[s]) || probes[s].is_empty() {
+                    continue;
+                }
+                let inside = probes[s].iter().filter(|&&p| windings[r].is_inside(p)).count();
+                if 2 * inside > probes[s].len() && best.is_none_or(|b| volume[r] < volume[b]) {
+                    best = Some(r);
+                }
+            }
+            best
+        })
+        .collect()
+}
+
+/// The largest distance from the samples of triangle `t` (grid of about `spacing`) to `tree`.
+fn max_distance(t: &[P; 3], spacing: f64, tree: &TriangleTree) -> f64 {
+    let longest = (0..3).map(|i| norm(sub(t[(i + 1) % 3], t[i]))).fold(0.0, f64::max);
+    let k = if spacing > 0.0 { ((longest / spacing).ceil() as usize).clamp(1, 24) } else { 1 };
+    let mut worst: f64 = 0.0;
+    for i in 0..=k {
+        for j in 0..=k - i {
+            let (a, b) = (i as f64 / k as f64, j as f64 / k as f64);
+            let c = 1.0 - a - b;
+            let p = [
+                c * t[0][0] + a * t[1][0] + b * t[2][0],
+                c * t[0][1] + a * t[1][1] + b * t[2][1],
+                c * t[0][2] + a * t[1][2] + b * t[2][2],
+            ];
+            if let Some((_, d, _)) = tree.closest_point(p) {
+                worst = worst.max(d);
+            }
+        }
+    }
+    worst
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_regular_tet_scores_its_textbook_values() {
+        let p = [[1.0, 1.0, 1.0], [1.0, -1.0, -1.0], [-1.0, 1.0, -1.0], [-1.0, -1.0, 1.0]];
+        let q = tet_quality(&p);
+        let dihedral = (1.0f64 / 3.0).acos().to_degrees();
+        assert!((q.min_dihedral_deg - dihedral).abs() < 1e-9 && (q.max_dihedral_deg - dihedral).abs() < 1e-9);
+        assert!((q.radius_edge - 6f64.sqrt() / 4.0).abs() < 1e-12);
+        assert!((q.radius_ratio - 1.0).abs() < 1e-12);
+        assert!(q.volume_mm3.abs() > 0.0);
+    }
+
+    #[test]
+    fn a_right_corner_tet_has_a_right_dihedral_angle() {
+        let q = tet_quality(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]);
+        assert!((q.max_dihedral_deg - 90.0).abs() < 1e-9);
+        assert!((q.min_dihedral_deg - 54.735_610_317_245_35).abs() < 1e-9, "{q:?}");
+        assert!((q.volume_mm3 - 1.0 / 6.0).abs() < 1e-15);
+    }
+}
