@@ -141,9 +141,9 @@ pub struct ToolSample {
 }
 
 impl ToolSample {
-    /// Whether no node touches the tool.
-    pub(crate) fn nodes_empty_or_free(&self) -> bool {
-        self.area_mm2 == 0.0
+    /// Whether some node touches the tool.
+    pub(crate) fn touches(&self) -> bool {
+        self.area_mm2 > 0.0
     }
 }
 

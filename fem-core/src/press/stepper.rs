@@ -384,11 +384,9 @@ where
             outcome.segment.plate_ends = Some([start, plate]);
             // No tool touched the specimen at either end: the reactions are fixed by
             // equilibrium at the ends, so interpolate them (as for a released plate).
-            let touching = |samples: &[ToolSample]| samples.iter().any(|s| !s.nodes_empty_or_free());
-            let before = tool_tracks
-                .first()
-                .is_some_and(|_| tool_tracks.iter().any(|t| t.samples.last().is_some_and(|s| s.area_mm2 > 0.0)));
-            if !before && !touching(&settled.samples) {
+            let before = tool_tracks.iter().any(|t| t.samples.last().is_some_and(ToolSample::touches));
+            let after = settled.samples.iter().any(ToolSample::touches);
+            if !before && !after {
                 let start = segments.last().map_or([0.0; 2], |l: &ForceSegment| l.eval(l.dt));
                 outcome.segment.detached_ends = Some([start, outcome.segment.eval_formula(h)]);
             }
