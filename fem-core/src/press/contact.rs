@@ -34,6 +34,20 @@
 //! with the traction `mu lambda_n` along the trial (explicit in the iteration). After
 //! a slipping step the anchor moves to the node's contact point.
 //!
+//! Three rules make the iteration settle when a slide starts or reverses:
+//! - **Stick predictor.** A node stuck at the step's start starts the step moved
+//!   with its anchor. Left where it was, its trial traction would be the penalty
+//!   times the tool's whole increment, far outside the cone, and every stuck node
+//!   would start the step slipping, then swing back and forth across its anchor.
+//! - **Reversal sticks.** A slip whose direction reverses within a step has
+//!   overshot its anchor; it sticks for the next iteration. The stick window is
+//!   only `2 mu N / k` wide, so the explicit slip traction alone would never
+//!   land in it.
+//! - **Slip tractions settle.** The explicit slip tractions are part of the
+//!   convergence test: a step ends when the last solve changed none of them by more
+//!   than 1e-8 of itself (or the rounding of `mu k x`). On a plate the iteration
+//!   converges linearly, about tenfold per solve.
+//!
 //! ## Glued
 //! A node that touches a glued tool sticks to it in every direction (tension
 //! too) until the tool's `release_s`.
@@ -55,6 +69,9 @@ const KAPPA: f64 = 1e6;
 const TOLERANCE: f64 = 1e-11;
 /// The same for friction (see [`ContactModel::constraint_error`]).
 const FRICTION_TOLERANCE: f64 = 1e-8;
+/// Allowed change of a slip traction in the last solve, relative to itself (the
+/// slip traction is explicit in the iteration).
+const SLIP_TOLERANCE: f64 = 1e-8;
 /// Iterations before a step counts as not settling.
 const MAX_ITERATIONS: usize = 100;
 /// Normals turning less than this (in norm of the difference) keep the factorization.
@@ -92,6 +109,11 @@ pub(crate) struct Pair {
     slipping: bool,
     /// Status flips in this step's iteration.
     flips: u8,
+    /// Friction: the direction of the slip traction in this step's last iteration
+    /// (zero when the pair did not slip).
+    slip_direction: [f64; 3],
+    /// Friction: the slip traction (explicit in the iteration) of the last pass.
+    slip_force: [f64; 3],
 }
 
 impl Default for Pair {
@@ -104,6 +126,8 @@ impl Default for Pair {
             matrix_normal: [0.0; 3],
             slipping: false,
             flips: 0,
+            slip_direction: [0.0; 3],
+            slip_force: [0.0; 3],
         }
     }
 }
@@ -190,6 +214,8 @@ pub(crate) struct ContactModel<'t> {
     pub dim: usize,
     /// Position in the pattern's values of each candidate's `D x D` diagonal block.
     block: Vec<Vec<usize>>,
+    /// Whether each dof of each candidate node is held (prescribed).
+    held: Vec<[bool; 3]>,
 }
 
 /// Solves a step with penalties: `(hash, penalty values, extra right-hand side)`
@@ -314,7 +340,9 @@ impl<'t> ContactModel<'t> {
                 pos
             })
             .collect();
+        let held = nodes.iter().map(|&i| std::array::from_fn(|k| k < D && held[i as usize * D + k])).collect();
         Ok(Self {
+            held,
             tools,
             order,
             area: nodes.iter().map(|&i| area[i as usize]).collect(),
@@ -364,19 +392,35 @@ impl<'t> ContactModel<'t> {
     ) -> Result<Settled, PressError> {
         let d = self.dim;
         let (t0, t1) = (input.t0, input.t1);
-        // Carry anchors with their tools to t1.
+        // Carry anchors with their tools to t1, and predict that stuck nodes move
+        // with them: started where they were, a stuck node's trial traction would be
+        // the penalty times the tool's whole increment, far outside the friction
+        // cone, and every stuck node would start the step slipping.
         let mut state = state0.clone();
+        let mut u = u_start;
+        let mut moved = vec![false; self.nodes.len()];
         for (c, pairs) in state.pairs.iter_mut().enumerate() {
             if !self.engaged(c, t1) {
                 pairs.iter_mut().for_each(|p| *p = Pair::default());
                 continue;
             }
-            for p in pairs.iter_mut() {
+            for (j, p) in pairs.iter_mut().enumerate() {
                 if let Some(a) = p.anchor {
-                    p.anchor = Some(self.tools[c].carry(a, t0, t1));
+                    let carried = self.tools[c].carry(a, t0, t1);
+                    if p.status == Status::Stuck && !moved[j] {
+                        moved[j] = true;
+                        let i = self.nodes[j] as usize;
+                        for k in 0..d {
+                            if !self.held[j][k] {
+                                u[i * d + k] += carried[k] - a[k];
+                            }
+                        }
+                    }
+                    p.anchor = Some(carried);
                 }
                 p.flips = 0;
                 p.slipping = false;
+                p.slip_direction = [0.0; 3];
             }
         }
         let penalty: Vec<f64> = self
@@ -384,7 +428,6 @@ impl<'t> ContactModel<'t> {
             .iter()
             .map(|&i| (0..d).map(|k| input.diagonal[i as usize * d + k]).fold(0.0, f64::max) * KAPPA)
             .collect();
-        let mut u = u_start;
         // The statuses the last solve used: when they hold again at its result, that
         // result solves the penalized problem for the current multipliers (exactly
         // for flat tools), and the multipliers take their Uzawa update.
@@ -399,12 +442,15 @@ impl<'t> ContactModel<'t> {
         let mut last_change = f64::INFINITY;
         let smallest_size = self.size.iter().copied().fold(f64::INFINITY, f64::min);
         for iteration in 1..=MAX_ITERATIONS {
+            let slip_before: Vec<Vec<[f64; 3]>> =
+                state.pairs.iter().map(|pairs| pairs.iter().map(|p| p.slip_force).collect()).collect();
             let mut pass = self.assemble(&mut state, input, &u, t1, &penalty, iteration, true);
+            let slip_settled = self.slip_settled(&state, &slip_before, input, &u, &penalty);
             let increment = u.iter().zip(input.u0).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
             // Done when a step changes the displacement by a millionth of the step's
             // increment, or by no more than the solves' rounding (1e-9 of the
             // smallest element), whichever is larger.
-            let newton_done = all_flat || last_change <= (1e-6 * increment).max(1e-9 * smallest_size);
+            let newton_done = slip_settled && (all_flat || last_change <= (1e-6 * increment).max(1e-9 * smallest_size));
             if used.as_ref() == Some(&pass.statuses) && newton_done {
                 let error = self.constraint_error(input, &u, &state, t1);
                 if error.0 <= 1.0 {
@@ -517,6 +563,30 @@ impl<'t> ContactModel<'t> {
             statuses.push(st);
         }
         Pass { statuses, rhs, blocks, signature }
+    }
+
+    /// Slip tractions are explicit in the iteration: they have settled when the
+    /// last solve changed none by more than [`SLIP_TOLERANCE`] of itself, or by more
+    /// than the rounding of the penalty force (`mu k` times the rounding of the
+    /// node's position).
+    fn slip_settled(
+        &self,
+        state: &ContactState,
+        before: &[Vec<[f64; 3]>],
+        input: &StepInput<'_>,
+        u: &[f64],
+        penalty: &[f64],
+    ) -> bool {
+        self.tools.iter().enumerate().all(|(c, placed)| {
+            let ToolContact::Friction(mu) = placed.tool.contact else {
+                return true;
+            };
+            self.nodes.iter().enumerate().all(|(j, &i)| {
+                let p = &state.pairs[c][j];
+                let rounding = 64.0 * f64::EPSILON * norm(self.position(input, u, i)) * penalty[j] * mu;
+                dist(p.slip_force, before[c][j]) <= (SLIP_TOLERANCE * norm(p.slip_force)).max(rounding)
+            })
+        })
     }
 
     fn position(&self, input: &StepInput<'_>, u: &[f64], i: u32) -> [f64; 3] {
@@ -715,6 +785,7 @@ fn law(
             let trial = pair.lambda_n - k * prox.gap;
             if opens(trial, pair.status) {
                 pair.anchor = None;
+                pair.slip_force = [0.0; 3];
                 return (Status::Open, [0.0; 3]);
             }
             // Return mapping: the tangential traction is the penalty times the
@@ -724,11 +795,20 @@ fn law(
             let tt: [f64; 3] = s.map(|c| -k * c);
             let limit = mu * trial.max(0.0);
             let mag = norm(tt);
-            if mag <= limit && !pair.slipping {
+            // A slip that reverses its direction within a step has overshot the
+            // anchor: the node sticks there for the next iteration. Held on the
+            // explicit slip traction it would swing from side to side, because the
+            // stick window is only `2 mu N / k` wide.
+            let reverses = pair.status == Status::Normal && dot(pair.slip_direction, tt) < 0.0;
+            if (mag <= limit && !pair.slipping) || reverses {
+                pair.slip_direction = [0.0; 3];
+                pair.slip_force = [0.0; 3];
                 let f = std::array::from_fn(|i| n[i] * trial + tt[i]);
                 (Status::Stuck, f)
             } else {
                 let scale = if mag > 0.0 { limit / mag } else { 0.0 };
+                pair.slip_direction = tt;
+                pair.slip_force = tt.map(|c| c * scale);
                 let f = std::array::from_fn(|i| n[i] * trial + tt[i] * scale);
                 (Status::Normal, f)
             }
