@@ -138,24 +138,7 @@ pub fn indentation_section(
              {fine_extent_mm} mm, growth {growth}: sizes must be > 0, the fine size below the extents, growth >= 1"
         )));
     }
-    // Distances from 0 to `length`: uniform, then geometric; the last interval is
-    // merged when it would be shorter than half the one before.
-    let graded = |length: f64| -> Vec<f64> {
-        let mut x = vec![0.0];
-        let mut h = fine_mm;
-        while *x.last().unwrap() < length {
-            let last = *x.last().unwrap();
-            if last >= fine_extent_mm {
-                h *= growth;
-            }
-            x.push((last + h).min(length));
-        }
-        let n = x.len();
-        if n > 2 && x[n - 1] - x[n - 2] < 0.5 * (x[n - 2] - x[n - 3]) {
-            x.remove(n - 2);
-        }
-        x
-    };
+    let graded = |length: f64| graded_coordinates(length, fine_mm, fine_extent_mm, growth);
     let rs = graded(radius_mm);
     let ys: Vec<f64> = graded(height_mm).into_iter().rev().map(|d| height_mm - d).collect();
     let (nr, ny) = (rs.len() - 1, ys.len() - 1);
@@ -187,6 +170,61 @@ pub fn indentation_section(
     Ok(mesh)
 }
 
+/// Distances from 0 to `length`: spacing `fine` up to `extent`, then growing by
+/// `growth` per interval; the last interval is merged when it would be shorter than
+/// half the one before.
+fn graded_coordinates(length: f64, fine: f64, extent: f64, growth: f64) -> Vec<f64> {
+    let mut x = vec![0.0];
+    let mut h = fine;
+    while *x.last().expect("starts with 0") < length {
+        let last = *x.last().expect("starts with 0");
+        if last >= extent {
+            h *= growth;
+        }
+        x.push((last + h).min(length));
+    }
+    let n = x.len();
+    if n > 2 && x[n - 1] - x[n - 2] < 0.5 * (x[n - 2] - x[n - 3]) {
+        x.remove(n - 2);
+    }
+    x
+}
+
+/// Kuhn simplices of an `n[0] x n[1] x n[2]` grid of cells, cell by cell in x, y, z
+/// order (six per cell): walk from corner (0,0,0) to (1,1,1) adding unit steps in
+/// every axis order; an odd permutation gives a negatively oriented path, which is
+/// swapped. Neighbouring cells share their faces' diagonals, so the mesh conforms.
+fn kuhn_tets(n: [usize; 3], id: impl Fn(usize, usize, usize) -> u32) -> Vec<[u32; 4]> {
+    const ORDERS: [([usize; 3], bool); 6] = [
+        ([0, 1, 2], false),
+        ([1, 2, 0], false),
+        ([2, 0, 1], false),
+        ([0, 2, 1], true),
+        ([2, 1, 0], true),
+        ([1, 0, 2], true),
+    ];
+    let mut cells = Vec::with_capacity(6 * n[0] * n[1] * n[2]);
+    for k in 0..n[2] {
+        for j in 0..n[1] {
+            for i in 0..n[0] {
+                for (order, odd) in ORDERS {
+                    let mut c = [i, j, k];
+                    let mut tet = [id(c[0], c[1], c[2]); 4];
+                    for (s, &axis) in order.iter().enumerate() {
+                        c[axis] += 1;
+                        tet[s + 1] = id(c[0], c[1], c[2]);
+                    }
+                    if odd {
+                        tet.swap(2, 3);
+                    }
+                    cells.push(tet);
+                }
+            }
+        }
+    }
+    cells
+}
+
 /// A `size = [W, H, T]` block (x, y, z) of one region.
 pub fn block(size_mm: [f64; 3], element_size_mm: f64, region: &str) -> Result<TetMesh, MeshError> {
     layered_block(size_mm[0], size_mm[2], &[Layer { region: region.into(), thickness_mm: size_mm[1] }], element_size_mm)
@@ -211,38 +249,9 @@ pub fn layered_block(width_mm: f64, thickness_mm: f64, layers: &[Layer], size_mm
             }
         }
     }
-    // Kuhn simplices: walk from corner (0,0,0) to (1,1,1) adding unit steps in
-    // every axis order; an odd permutation gives a negatively oriented path.
-    const ORDERS: [([usize; 3], bool); 6] = [
-        ([0, 1, 2], false),
-        ([1, 2, 0], false),
-        ([2, 0, 1], false),
-        ([0, 2, 1], true),
-        ([2, 1, 0], true),
-        ([1, 0, 2], true),
-    ];
-    let num_cells = 6 * nx * ny * nz;
-    let mut cells = Vec::with_capacity(num_cells);
-    let mut cell_regions = Vec::with_capacity(num_cells);
-    for k in 0..nz {
-        for j in 0..ny {
-            for i in 0..nx {
-                for (order, odd) in ORDERS {
-                    let mut c = [i, j, k];
-                    let mut tet = [id(c[0], c[1], c[2]); 4];
-                    for (s, &axis) in order.iter().enumerate() {
-                        c[axis] += 1;
-                        tet[s + 1] = id(c[0], c[1], c[2]);
-                    }
-                    if odd {
-                        tet.swap(2, 3);
-                    }
-                    cells.push(tet);
-                    cell_regions.push(layer_of_row[j]);
-                }
-            }
-        }
-    }
+    let cells = kuhn_tets([nx, ny, nz], id);
+    // Six tets per grid cell, cells in x, y, z order: the row of a tet is its cell's j.
+    let cell_regions = (0..cells.len()).map(|c| layer_of_row[(c / 6 / nx) % ny]).collect();
     let height = *ys.last().unwrap();
     let mut mesh =
         TetMesh { nodes, cells, cell_regions, region_names, node_sets: BTreeMap::new(), face_sets: BTreeMap::new() };
