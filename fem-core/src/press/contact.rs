@@ -104,16 +104,13 @@ pub(crate) struct Pair {
     pub status: Status,
     /// The normal used in the matrix.
     matrix_normal: [f64; 3],
-    /// Friction: held slipping for the rest of a step whose iteration flips it
-    /// between stick and slip (it sits on the cone's edge).
-    slipping: bool,
-    /// Status flips in this step's iteration.
-    flips: u8,
     /// Friction: the direction of the slip traction in this step's last iteration
     /// (zero when the pair did not slip).
     slip_direction: [f64; 3],
     /// Friction: the slip traction (explicit in the iteration) of the last pass.
     slip_force: [f64; 3],
+    /// Friction: `mu N / |trial|` of the last pass's slip (its tangent's factor).
+    slip_scale: f64,
 }
 
 impl Default for Pair {
@@ -124,10 +121,9 @@ impl Default for Pair {
             anchor: None,
             status: Status::Open,
             matrix_normal: [0.0; 3],
-            slipping: false,
-            flips: 0,
             slip_direction: [0.0; 3],
             slip_force: [0.0; 3],
+            slip_scale: 0.0,
         }
     }
 }
@@ -418,8 +414,6 @@ impl<'t> ContactModel<'t> {
                     }
                     p.anchor = Some(carried);
                 }
-                p.flips = 0;
-                p.slipping = false;
                 p.slip_direction = [0.0; 3];
             }
         }
@@ -444,7 +438,7 @@ impl<'t> ContactModel<'t> {
         for iteration in 1..=MAX_ITERATIONS {
             let slip_before: Vec<Vec<[f64; 3]>> =
                 state.pairs.iter().map(|pairs| pairs.iter().map(|p| p.slip_force).collect()).collect();
-            let mut pass = self.assemble(&mut state, input, &u, t1, &penalty, iteration, true);
+            let mut pass = self.assemble(&mut state, input, &u, t1, &penalty, true);
             let slip_settled = self.slip_settled(&state, &slip_before, input, &u, &penalty);
             let increment = u.iter().zip(input.u0).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
             // Done when a step changes the displacement by a millionth of the step's
@@ -453,13 +447,13 @@ impl<'t> ContactModel<'t> {
             let newton_done = slip_settled && (all_flat || last_change <= (1e-6 * increment).max(1e-9 * smallest_size));
             if used.as_ref() == Some(&pass.statuses) && newton_done {
                 let error = self.constraint_error(input, &u, &state, t1);
-                if error.0 <= 1.0 {
+                if error.0 <= 1.0 && !self.pulls(&state, input, &u, t1, &penalty) {
                     return Ok(self.finish(input, u, state, t1, &penalty));
                 }
                 self.update_multipliers(&mut state, input, &u, t1, &penalty);
                 // The statuses held: a pair still pulled onto the tool within the
                 // opening band truly separates.
-                pass = self.assemble(&mut state, input, &u, t1, &penalty, iteration, false);
+                pass = self.assemble(&mut state, input, &u, t1, &penalty, false);
             }
             if iteration == MAX_ITERATIONS {
                 let (_, c, nodes) = self.constraint_error(input, &u, &state, t1);
@@ -500,7 +494,6 @@ impl<'t> ContactModel<'t> {
         u: &[f64],
         t1: f64,
         penalty: &[f64],
-        iteration: usize,
         band: bool,
     ) -> Pass {
         let d = self.dim;
@@ -524,13 +517,6 @@ impl<'t> ContactModel<'t> {
                 let n = prox.normal;
                 let band = if band { OPEN_BAND * self.size[j] } else { 0.0 };
                 let (status, force) = law(placed.tool.contact, pair, &prox, x, k, band);
-                if pair.status != status && iteration > 1 {
-                    pair.flips = pair.flips.saturating_add(1);
-                    // On the edge of the friction cone: slipping for the rest of the step.
-                    if pair.flips >= 3 && matches!(placed.tool.contact, ToolContact::Friction(_)) {
-                        pair.slipping = true;
-                    }
-                }
                 if status == Status::Open {
                     pair.lambda_n = 0.0;
                     pair.lambda_t = [0.0; 3];
@@ -543,11 +529,26 @@ impl<'t> ContactModel<'t> {
                 }
                 let m = pair.matrix_normal;
                 // The matrix block: k I when stuck, k m m^T for normal contact.
-                let mblock = match status {
+                let mut mblock = match status {
                     Status::Open => [[0.0; 3]; 3],
                     Status::Normal => outer(m, m, k),
                     Status::Stuck => diag(k),
                 };
+                // A slipping pair in 3D: the return map's tangent across the slip,
+                // `k (mu N / |trial|) (I - n n^T - s s^T)`, which holds the slip's
+                // direction (its size along the slip is fixed at mu N).
+                let slip = norm(pair.slip_force);
+                let across = status == Status::Normal && d == 3 && slip > 0.0;
+                if across {
+                    let s = pair.slip_force.map(|c| c / slip);
+                    let kt = k * pair.slip_scale;
+                    for a in 0..3 {
+                        for b in 0..3 {
+                            let id = if a == b { 1.0 } else { 0.0 };
+                            mblock[a][b] += kt * (id - m[a] * m[b] - s[a] * s[b]);
+                        }
+                    }
+                }
                 for a in 0..d {
                     let mut v = force[a];
                     for b in 0..d {
@@ -559,6 +560,12 @@ impl<'t> ContactModel<'t> {
                 st.push(status);
                 let q = |x: f64| (x / NORMAL_REUSE).round() as i64;
                 signature.push((status, if status == Status::Open { [0; 3] } else { m.map(q) }));
+                if across {
+                    // The exact values: a stale tangent here stalls the iteration.
+                    let bits = |x: f64| x.to_bits() as i64;
+                    signature.push((status, pair.slip_force.map(bits)));
+                    signature.push((status, [bits(pair.slip_scale), bits(k), 0]));
+                }
             }
             statuses.push(st);
         }
@@ -586,6 +593,22 @@ impl<'t> ContactModel<'t> {
                 let rounding = 64.0 * f64::EPSILON * norm(self.position(input, u, i)) * penalty[j] * mu;
                 dist(p.slip_force, before[c][j]) <= (SLIP_TOLERANCE * norm(p.slip_force)).max(rounding)
             })
+        })
+    }
+
+    /// Whether a pair kept in contact by the opening band pulls on its tool (a
+    /// negative normal force): it must open before the step may end.
+    fn pulls(&self, state: &ContactState, input: &StepInput<'_>, u: &[f64], t1: f64, penalty: &[f64]) -> bool {
+        self.tools.iter().enumerate().any(|(c, placed)| {
+            placed.tool.contact != ToolContact::Glued
+                && self.engaged(c, t1)
+                && self.nodes.iter().enumerate().any(|(j, &i)| {
+                    let p = &state.pairs[c][j];
+                    p.status != Status::Open && {
+                        let prox = placed.proximity(self.position(input, u, i), t1, self.planar);
+                        p.lambda_n - penalty[j] * prox.gap < 0.0
+                    }
+                })
         })
     }
 
@@ -715,6 +738,12 @@ impl<'t> ContactModel<'t> {
                 }
                 let x = self.position(input, &u, i);
                 let prox = placed.proximity(x, t1, self.planar);
+                if let ToolContact::Friction(_) = placed.tool.contact {
+                    // The tangential multiplier is not part of the friction law (the
+                    // anchor is): take the traction the law gives at the result.
+                    let (_, f) = law(placed.tool.contact, pair, &prox, x, penalty[j], OPEN_BAND * self.size[j]);
+                    set_multipliers(placed.tool.contact, pair, &prox, f);
+                }
                 let (f_n, f_t) = match placed.tool.contact {
                     ToolContact::Glued => {
                         let f = pair.lambda_t;
@@ -800,7 +829,7 @@ fn law(
             // explicit slip traction it would swing from side to side, because the
             // stick window is only `2 mu N / k` wide.
             let reverses = pair.status == Status::Normal && dot(pair.slip_direction, tt) < 0.0;
-            if (mag <= limit && !pair.slipping) || reverses {
+            if mag <= limit || reverses {
                 pair.slip_direction = [0.0; 3];
                 pair.slip_force = [0.0; 3];
                 let f = std::array::from_fn(|i| n[i] * trial + tt[i]);
@@ -809,6 +838,7 @@ fn law(
                 let scale = if mag > 0.0 { limit / mag } else { 0.0 };
                 pair.slip_direction = tt;
                 pair.slip_force = tt.map(|c| c * scale);
+                pair.slip_scale = scale;
                 let f = std::array::from_fn(|i| n[i] * trial + tt[i] * scale);
                 (Status::Normal, f)
             }
