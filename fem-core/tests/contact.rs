@@ -178,7 +178,11 @@ fn hertz_sphere_indentation_converges() {
                 s.force_n[1]
             );
         }
-        eprintln!("Hertz h = {size} mm: worst relative force error {worst:.4}");
+        eprintln!(
+            "Hertz h = {size} mm: worst relative force error {worst:.4}; {} steps, {} factorizations",
+            result.steps.len(),
+            result.num_factorizations
+        );
         errors.push(worst);
     }
     assert!(errors[2] <= 0.03, "finest mesh: {:.4} off Hertz", errors[2]);
