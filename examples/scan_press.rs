@@ -391,6 +391,7 @@ pub fn run(options: &Options, log: &mut dyn FnMut(&str)) -> Result<Outcome> {
         markers: Vec::new(),
         snapshot_times: frame_times(),
         tools: tools.iter().map(|p| p.tool.clone()).collect(),
+        effects: fem_core::effects::Effects::none(),
     };
     problem.validate()?;
 

@@ -28,6 +28,12 @@
 //!
 //! Marker observations at `t = 0` are the definition of the material points and
 //! carry no residual.
+//!
+//! A bundle's `[effects]` (`fem_core::effects`) are held at their values while the
+//! materials are fitted: `force-offset` and `gravity`, whose forward sensitivities
+//! the engine carries. A trial with an active effect whose sensitivities it does
+//! not carry yet (`ageing`, `machine-compliance`, `plate-friction`) is refused by
+//! [`Campaign::new`], naming the key, rather than fitted with wrong Jacobians.
 
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -340,6 +346,16 @@ impl Campaign {
                 }
             };
             let problem = if axisymmetric { filled.to_press_axisymmetric(size)? } else { filled.to_press(size)? };
+            // Effects are held at the bundle's values; refuse those whose
+            // sensitivities the engine does not carry (wrong Jacobians otherwise).
+            if let Err(e) = problem.effects().check_sensitivities() {
+                let field = format!("effects.{}", e.key());
+                return Err(CampaignError::Invalid(format!(
+                    "{}:{}: effects.{e}",
+                    b.experiment_file().display(),
+                    b.line_of(&field)
+                )));
+            }
             trials.push(trial_of(b, problem)?);
         }
         Ok(Self {

@@ -46,6 +46,7 @@
 
 pub mod analytic;
 pub mod assembly;
+pub mod effects;
 pub mod element;
 pub mod material;
 pub mod mesh;

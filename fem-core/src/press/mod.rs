@@ -37,6 +37,11 @@ pub use sensitivity::{ParameterKind, Sensitivities, SensitivityParameter};
 pub use tools::{Keyframe, Tool, ToolContact, ToolShape};
 
 /// Runs a press problem; `progress` is called after every step.
+///
+/// With effects ([`PressProblem::effects`], [`crate::effects`]): `ageing` and
+/// `plate-friction` change the problem before the run (aged materials; friction
+/// plates as contact tools), `gravity` and `machine-compliance` act inside the
+/// steps, and `force-offset` on the reported bottom force afterwards.
 pub fn simulate<const D: usize, const N: usize, const S: usize>(
     problem: &PressProblem<D, N, S>,
     settings: &Settings,
@@ -45,13 +50,69 @@ pub fn simulate<const D: usize, const N: usize, const S: usize>(
 where
     crate::element::Simplex<D, N>: crate::element::ReferenceSimplex<D, N>,
 {
-    match settings.integrator {
+    problem.validate_effects()?;
+    let effective = effects_applied(problem)?;
+    let problem = effective.as_ref();
+    let mut result = match settings.integrator {
         Integrator::QuasiStatic | Integrator::Dynamic => stepper::run(problem, settings, &[], progress).map(|r| r.0),
         Integrator::Seed if !problem.tools.is_empty() => {
             Err(PressError::BadSettings("contact tools need the quasi-static integrator".into()))
         }
+        Integrator::Seed if problem.effects.machine_compliance_mm_per_n().is_some() => {
+            Err(PressError::BadSettings("machine compliance needs the quasi-static integrator".into()))
+        }
         Integrator::Seed => seed::run(problem, settings, progress),
+    }?;
+    if let Some(offset) = problem.effects.force_offset() {
+        result.observe_force_offset(offset);
     }
+    Ok(result)
+}
+
+/// The problem the engine runs for `problem`'s effects: `ageing` applied to the
+/// materials and `plate-friction` as contact tools (a friction plate over the top
+/// and, when the support is frictionless, a friction floor; placed as
+/// `Tool::plate_above` and `Tool::floor_below` place them around the mesh's
+/// bounding box, or around `[-R, R]` for an axisymmetric section), both then
+/// removed from its effects. Borrowed as it is when neither is active. (The
+/// engine validates the result when it builds its model.)
+fn effects_applied<const D: usize, const N: usize, const S: usize>(
+    problem: &PressProblem<D, N, S>,
+) -> Result<std::borrow::Cow<'_, PressProblem<D, N, S>>, PressError>
+where
+    crate::element::Simplex<D, N>: crate::element::ReferenceSimplex<D, N>,
+{
+    use crate::effects::{EffectId, Effects};
+    let ageing = problem.effects.ageing_scales();
+    let friction = problem.effects.plate_friction();
+    if ageing.is_none() && friction.is_none() {
+        return Ok(std::borrow::Cow::Borrowed(problem));
+    }
+    let mut p = problem.clone();
+    if let Some(scales) = ageing {
+        p.materials = p.materials.iter().map(|m| Effects::aged(m, scales)).collect();
+        p.effects.clear(EffectId::Ageing);
+    }
+    if let Some(mu) = friction {
+        let (lo, hi) = p.mesh.bounding_box();
+        let (mut lo3, mut hi3) = ([0.0; 3], [0.0; 3]);
+        for k in 0..D {
+            (lo3[k], hi3[k]) = (lo[k], hi[k]);
+        }
+        if p.formulation == crate::element::Formulation::Axisymmetric {
+            (lo3, hi3) = ([-hi[0], lo[1], -hi[0]], [hi[0], hi[1], hi[0]]);
+        }
+        let contact = ToolContact::Friction(mu);
+        let pr = &p.protocol;
+        let mut tools = vec![Tool::plate_above("plate", lo3, hi3, &pr.waypoints, contact, pr.release_s)];
+        if pr.support == Attachment::Frictionless {
+            tools.push(Tool::floor_below("floor", lo3, hi3, contact));
+            p.protocol.support = Attachment::Free;
+        }
+        p.tools = tools;
+        p.effects.clear(EffectId::PlateFriction);
+    }
+    Ok(std::borrow::Cow::Owned(p))
 }
 
 /// Runs a problem of any formulation.
@@ -82,7 +143,12 @@ where
     if parameters.is_empty() {
         return Err(PressError::BadSettings("no sensitivity parameter given".into()));
     }
-    let (result, sensitivities) = stepper::run(problem, settings, parameters, progress)?;
+    problem.validate_effects()?;
+    problem.effects.check_sensitivities()?;
+    let (mut result, sensitivities) = stepper::run(problem, settings, parameters, progress)?;
+    if let Some(offset) = problem.effects.force_offset() {
+        result.observe_force_offset(offset);
+    }
     Ok((result, sensitivities.expect("parameters were given")))
 }
 

@@ -145,9 +145,11 @@ where
             }
         }
         let mut body_force = vec![0.0; mass.len()];
-        if problem.protocol.gravity {
+        // Full gravity (`protocol.gravity`) is the factor 1: `-g * 1.0 * m` is `-g * m` bit for bit.
+        let gravity = problem.gravity_factor();
+        if gravity != 0.0 {
             for i in 0..mesh.num_nodes() {
-                body_force[i * D + 1] = -GRAVITY_MM_S2 * mass[i * D + 1];
+                body_force[i * D + 1] = -GRAVITY_MM_S2 * gravity * mass[i * D + 1];
             }
         }
 

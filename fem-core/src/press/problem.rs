@@ -1,5 +1,6 @@
 use thiserror::Error;
 
+use crate::effects::{EffectError, EffectId, Effects};
 use crate::element::{valid_strain_size, Formulation, ReferenceSimplex, Simplex};
 use crate::material::Material;
 use crate::mesh::{MeshError, SimplexMesh, TetMesh, TriMesh};
@@ -200,6 +201,9 @@ pub struct PressProblem<const D: usize, const N: usize, const S: usize> {
     /// floor with friction). The protocol's waypoints and release still set step
     /// landings.
     pub tools: Vec<super::Tool>,
+    /// Candidate effects of the gap diagnosis ([`crate::effects`]); default none
+    /// (the baseline, unchanged bit for bit).
+    pub effects: Effects,
 }
 
 /// A 2D (plane) press problem.
@@ -219,6 +223,17 @@ pub enum AnyPress {
     Solid(SolidPress),
     /// Axisymmetric triangles (a body of revolution about y).
     Axisymmetric(AxisymmetricPress),
+}
+
+impl AnyPress {
+    /// The problem's effects.
+    pub fn effects(&self) -> &Effects {
+        match self {
+            AnyPress::Plane(p) => &p.effects,
+            AnyPress::Solid(p) => &p.effects,
+            AnyPress::Axisymmetric(p) => &p.effects,
+        }
+    }
 }
 
 /// Why a press problem was refused or failed.
@@ -273,6 +288,9 @@ pub enum PressError {
         list_nodes(nodes)
     )]
     ContactNotSettled { step: usize, time_s: f64, tool: String, nodes: Vec<u32> },
+    /// Effect values refused, or an effect that does not fit the problem.
+    #[error("effects: {0}")]
+    Effect(#[from] EffectError),
 }
 
 fn list_nodes(nodes: &[u32]) -> String {
@@ -369,7 +387,59 @@ where
         if !(self.density_t_mm3.is_finite() && self.density_t_mm3 > 0.0) {
             return Err(PressError::BadProtocol(format!("density {} t/mm^3 must be > 0", self.density_t_mm3)));
         }
-        self.protocol.validate()
+        self.protocol.validate()?;
+        self.validate_effects()
+    }
+
+    /// The effects' own checks, and how they fit the problem: `gravity` not with
+    /// `protocol.gravity` (which is the factor 1 already); `plate-friction` only on
+    /// a frictionless constrained plate (the baseline it extends); `machine-compliance`
+    /// only on the constrained plate (not with contact tools).
+    pub(crate) fn validate_effects(&self) -> Result<(), PressError> {
+        let e = &self.effects;
+        e.validate()?;
+        let conflict = |effect: EffectId, detail: &str| {
+            Err(PressError::Effect(EffectError::Conflict { key: effect.params()[0].key, detail: detail.into() }))
+        };
+        if e.is_active(EffectId::Gravity) && self.protocol.gravity {
+            return conflict(
+                EffectId::Gravity,
+                "the protocol already applies full gravity (protocol gravity = true): give one of the two",
+            );
+        }
+        if e.is_active(EffectId::PlateFriction) {
+            if !self.tools.is_empty() {
+                return conflict(
+                    EffectId::PlateFriction,
+                    "acts on the constrained frictionless plate; this trial runs with contact tools \
+                     (give their friction there)",
+                );
+            }
+            if self.protocol.plate != Attachment::Frictionless {
+                return conflict(
+                    EffectId::PlateFriction,
+                    "extends a frictionless plate; this trial's plate is not frictionless",
+                );
+            }
+        }
+        if e.is_active(EffectId::MachineCompliance) && (!self.tools.is_empty() || e.is_active(EffectId::PlateFriction))
+        {
+            return conflict(
+                EffectId::MachineCompliance,
+                "acts on the constrained plate only; with contact tools (or plate friction) it is not implemented yet",
+            );
+        }
+        Ok(())
+    }
+
+    /// The fraction of standard gravity acting: 1 with `protocol.gravity`, else the
+    /// `gravity` effect's factor (0 when inactive).
+    pub fn gravity_factor(&self) -> f64 {
+        if self.protocol.gravity {
+            1.0
+        } else {
+            self.effects.gravity_factor()
+        }
     }
 }
 
@@ -426,6 +496,7 @@ impl PlanePress {
             markers: Vec::new(),
             snapshot_times: Vec::new(),
             tools: Vec::new(),
+            effects: Effects::none(),
         };
         p.validate()?;
         Ok(p)
@@ -446,6 +517,7 @@ impl AxisymmetricPress {
             markers: Vec::new(),
             snapshot_times: Vec::new(),
             tools: Vec::new(),
+            effects: Effects::none(),
         };
         p.validate()?;
         Ok(p)
@@ -464,6 +536,7 @@ impl SolidPress {
             markers: Vec::new(),
             snapshot_times: Vec::new(),
             tools: Vec::new(),
+            effects: Effects::none(),
         };
         p.validate()?;
         Ok(p)

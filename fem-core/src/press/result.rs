@@ -148,10 +148,35 @@ pub struct PressResult {
     /// empty without tools.
     pub tools: Vec<super::contact::ToolTrack>,
     pub(crate) segments: Vec<ForceSegment>,
+    /// The `force-offset` effect's `[b0 N, b1 N/s]` on the bottom force, when active.
+    pub(crate) force_offset: Option<[f64; 2]>,
 }
 
 impl PressResult {
+    /// The sensor's offset at time `t` [N] (0 without the `force-offset` effect).
+    fn offset_at(&self, t: f64) -> f64 {
+        self.force_offset.map_or(0.0, |[b0, b1]| b0 + b1 * t)
+    }
+
+    /// Applies the `force-offset` effect to the reported bottom force: `F + b0 + b1 t`
+    /// in every step record and at every time of [`PressResult::bottom_force_at`].
+    pub(crate) fn observe_force_offset(&mut self, offset: [f64; 2]) {
+        self.force_offset = Some(offset);
+        for s in &mut self.steps {
+            s.bottom_force_n += offset[0] + offset[1] * s.t_s;
+        }
+    }
+
     fn forces_at(&self, t: f64) -> [f64; 2] {
+        let mut f = self.engine_forces_at(t);
+        if self.force_offset.is_some() {
+            f[0] += self.offset_at(t);
+        }
+        f
+    }
+
+    /// The engine's forces, without the sensor's offset.
+    fn engine_forces_at(&self, t: f64) -> [f64; 2] {
         if let Some(first) = self.segments.first() {
             // Left limits at kinks (as the closed forms): nothing has moved at t <= 0.
             if t <= first.t0 {
@@ -162,23 +187,22 @@ impl PressResult {
             let s = &self.segments[i];
             return s.eval((t - s.t0).clamp(0.0, s.dt));
         }
-        // Integrators without dense output: linear interpolation of step ends.
+        // Integrators without dense output: linear interpolation of step ends (the
+        // engine's bottom force, without the sensor's offset).
+        let bottom = |s: &StepRecord| s.bottom_force_n - self.offset_at(s.t_s);
         let i = self.steps.partition_point(|s| s.t_s < t);
         if i == 0 {
             let s = &self.steps[0];
             let w = (t / s.t_s).clamp(0.0, 1.0);
-            return [w * s.bottom_force_n, w * s.plate_force_n];
+            return [w * bottom(s), w * s.plate_force_n];
         }
         if i >= self.steps.len() {
             let s = self.steps.last().unwrap();
-            return [s.bottom_force_n, s.plate_force_n];
+            return [bottom(s), s.plate_force_n];
         }
         let (a, b) = (&self.steps[i - 1], &self.steps[i]);
         let w = (t - a.t_s) / (b.t_s - a.t_s);
-        [
-            a.bottom_force_n + w * (b.bottom_force_n - a.bottom_force_n),
-            a.plate_force_n + w * (b.plate_force_n - a.plate_force_n),
-        ]
+        [bottom(a) + w * (bottom(b) - bottom(a)), a.plate_force_n + w * (b.plate_force_n - a.plate_force_n)]
     }
 
     /// The bottom reaction at time `t` [N], compression positive (exact inside each
@@ -192,7 +216,8 @@ impl PressResult {
         self.forces_at(t)[1]
     }
 
-    /// The largest bottom force over the step ends [N].
+    /// The largest bottom force over the step ends [N] (as reported: with the
+    /// `force-offset` effect, offset included).
     pub fn peak_force(&self) -> f64 {
         self.steps.iter().map(|s| s.bottom_force_n).fold(f64::NEG_INFINITY, f64::max)
     }

@@ -192,6 +192,7 @@ where
         num_free_dofs: model.released.held.iter().filter(|h| !**h).count(),
         tools: Vec::new(),
         segments: Vec::new(),
+        force_offset: None,
     })
 }
 

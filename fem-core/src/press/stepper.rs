@@ -146,6 +146,13 @@ where
     let protocol = &problem.protocol;
     let end = protocol.end_s;
     let dynamic = settings.integrator == Integrator::Dynamic;
+    // The `machine-compliance` effect [mm/N] (crate::effects: exact per step).
+    let compliance = problem.effects.machine_compliance_mm_per_n();
+    if compliance.is_some() && (settings.integrator != Integrator::QuasiStatic || tracker.is_some()) {
+        return Err(PressError::BadSettings(
+            "machine compliance needs the quasi-static integrator and no sensitivities".into(),
+        ));
+    }
     let ndof = model.num_dofs();
     let ncell = problem.mesh.num_cells();
 
@@ -320,7 +327,7 @@ where
                     settled = Some(s);
                     Ok(Some(forces))
                 };
-                step(&model, &state, h, bdf, t1, constraints, system, &mut solve, ga, dynamic, step_index + 1)
+                step(&model, &state, h, bdf, t1, constraints, system, &mut solve, ga, dynamic, step_index + 1, None)
             };
             outcome.map(|o| (o, refactored, settled))
         } else {
@@ -355,8 +362,16 @@ where
 
             let single_scale = if single_group { step_factor(&model.groups[0].kernel, h, bdf) } else { 1.0 };
             let mut solve = plain_solve(system, factor, single_scale);
-            step(&model, &state, h, bdf, t1, constraints, system, &mut solve, ga, dynamic, step_index + 1)
-                .map(|o| (o, refactored, None))
+            let mut take = |plate_d: Option<f64>| {
+                step(&model, &state, h, bdf, t1, constraints, system, &mut solve, ga, dynamic, step_index + 1, plate_d)
+            };
+            match compliance {
+                Some(c) if constraints.plate_attached => {
+                    compliant_step(&mut take, protocol.displacement(t1), model.displacement_scale, c)
+                }
+                _ => take(None),
+            }
+            .map(|o| (o, refactored, None))
         };
         let (mut outcome, refactored, mut settled) = match stepped {
             Ok(x) => x,
@@ -536,6 +551,7 @@ where
             num_free_dofs: sys_attached.num_free().max(sys_released.as_ref().map_or(0, |s| s.num_free())),
             segments,
             tools: tool_tracks,
+            force_offset: None,
         },
         tracker.map(Tracker::finish),
     ))
@@ -609,6 +625,7 @@ fn step<const D: usize, const N: usize, const S: usize>(
     ga: GeneralizedAlpha,
     dynamic: bool,
     step_index: usize,
+    plate_d: Option<f64>,
 ) -> Result<StepOutcome<S>, PressError>
 where
     Simplex<D, N>: ReferenceSimplex<D, N>,
@@ -664,6 +681,12 @@ where
     // Held values, then the coupling of held dofs into the free rows.
     let mut u1 = vec![0.0; ndof];
     model.prescribe(constraints, t1, &mut u1);
+    // The plate's displacement when it is not the protocol's (machine compliance).
+    if let Some(d) = plate_d {
+        for &dof in &constraints.plate_dofs {
+            u1[dof] = -d;
+        }
+    }
     // `stiffness_only` gives sum_g g_g K_g x, the elastic part of the internal force.
     let stiffness_only = |x: &[f64], y: &mut [f64]| {
         let mut tmp = vec![0.0; ndof];
@@ -822,6 +845,24 @@ where
         residual,
         imbalance,
     })
+}
+
+/// A step with the plate behind a series spring of compliance `c` [mm/N]: the
+/// plate displacement `d` that satisfies `d = d_cmd - c F(d)`, `F` the plate force
+/// at the step's end. The step is affine in `d`, so two steps (at `d_cmd` and
+/// `d_cmd - delta`, one factorization) give `F(d) = F(d_cmd) + k (d - d_cmd)`, the
+/// relation gives `d = d_cmd - c F(d_cmd) / (1 + c k)` in closed form, and a third
+/// step takes it there (every state variable that of the exact step).
+fn compliant_step<const S: usize>(
+    take: &mut dyn FnMut(Option<f64>) -> Result<StepOutcome<S>, PressError>,
+    d_cmd: f64,
+    delta: f64,
+    c: f64,
+) -> Result<StepOutcome<S>, PressError> {
+    let f_cmd = take(Some(d_cmd))?.segment.eval_end()[1];
+    let f_probe = take(Some(d_cmd - delta))?.segment.eval_end()[1];
+    let k = (f_cmd - f_probe) / delta;
+    take(Some(d_cmd - c * f_cmd / (1.0 + c * k)))
 }
 
 /// Records marker positions at their requested times inside `(t0, t1]` (or at 0).

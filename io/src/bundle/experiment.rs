@@ -31,6 +31,11 @@ pub struct Experiment {
     /// What was measured (or simulated); default: nothing.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub data: Option<DataSpec>,
+    /// Project extension: `[effects]`, candidate effects of the gap diagnosis
+    /// (`fem_core::effects`) by their keys (`force_offset_N = 0.01`, ...) and the
+    /// trial covariate `age_h`; see the [`super`] module docs. Default: none.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub effects: BTreeMap<String, f64>,
     /// Any table: kept and written back, never interpreted. Default: none.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub extra: Option<toml::Table>,

@@ -36,6 +36,53 @@
 //! - A material in a `--materials` file replaces the bundle's table of the same name.
 //! - `[protocol] tool_surface_units` (optional, `tool = "surface"` only): see below.
 //! - `[[protocol.tools]]` (optional): more rigid tools, see below.
+//! - `[effects]` (optional): candidate effects of the gap diagnosis, see below.
+//!
+//! ## Effects
+//!
+//! `[effects]` switches on model extensions of `fem_core::effects` (the
+//! library of the sim-to-real gap diagnosis), each key one parameter of one
+//! effect, named with its unit suffix; an effect whose keys are absent is off,
+//! and one at its null values gives the baseline's results bit for bit
+//! ([`Bundle::effects`] builds the engine's `Effects`, [`Bundle::to_press`] puts
+//! them in the problem):
+//!
+//! ```toml
+//! [effects]
+//! force_offset_N = 0.02               # force-offset b0 [N]: reported force F + b0 + b1 t
+//! force_drift_N_per_s = 1e-4          # force-offset b1 [N/s]
+//! gravity = 1.0                       # gravity factor in [0, 1] (density as below)
+//! machine_compliance_mm_per_N = 0.01  # 1/k_m [mm/N]: the plate moves d_cmd - F/k_m
+//! ageing_E_rate_per_h = 0.01          # ageing gamma_E [1/h]: E_i -> E_i exp(gamma_E age_h)
+//! ageing_c_rate_per_h = -0.02         # ageing gamma_c [1/h]: c_i -> c_i exp(gamma_c age_h)
+//! age_h = 5.0                         # trial covariate: hours since preparation (needed by ageing)
+//! plate_friction = 0.3                # Coulomb mu at a frictionless plate (and a frictionless floor)
+//! ```
+//!
+//! Unit suffixes read as the format's (`_N`, `_mm`, `_MPa`) with `_per_` for a
+//! quotient (`_N_per_s` is N/s, `_mm_per_N` mm/N, `_per_h` 1/h), since `_MPa_s`
+//! already means a product. The other effects' keys
+//! (`plastic_yield_stress_MPa`, `plastic_hardening_MPa`, `bingham_threshold_MPa`,
+//! `thinning_inverse_stress_1_per_MPa`, `thinning_exponent`,
+//! `dual_viscosity_log_ratio`, `strain_stiffening`, `finite_strain`,
+//! `adhesion_strength_MPa`, `adhesion_opening_mm`) are known and refused as
+//! "not implemented in the engine yet". Refused, naming the file, the line and
+//! the key: any other key; a value outside its parameter's bounds (`gravity` in
+//! [0, 1], `plate_friction` in [0, 10], `machine_compliance_mm_per_N` >= 0,
+//! ageing rates in [-1, 1] per hour); a negative `age_h`; ageing rates without
+//! `age_h`; `gravity` together with `[protocol] gravity = true` (the factor 1
+//! already); `plate_friction` on a plate that is not frictionless or on a trial
+//! with contact tools (give the tool's `friction` there); `machine_compliance_mm_per_N`
+//! with contact tools or plate friction.
+//!
+//! `plate_friction = mu` makes the trial the one with `tool_contact = "friction"`,
+//! `friction = mu` (and `support = "friction"` when the support is frictionless;
+//! a glued floor stays glued): the same tools, the same results. The force in
+//! `force.csv` of a simulated trial is the bottom sensor's, with the `gravity`
+//! share of the weight in it (an untared sensor under the specimen); such a
+//! trial is written with `force_tared = false`. `wagashi fit` fits with
+//! `force-offset` and `gravity` in place and refuses the other effects (no
+//! sensitivities yet).
 //!
 //! ## Rigid tools
 //!

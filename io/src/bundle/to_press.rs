@@ -30,6 +30,7 @@
 //! `sin θ = z/r0` from its initial position (θ = 0 for a marker on the axis).
 //! Other shapes are refused with the key `specimen.shape`.
 
+use fem_core::effects::Effects;
 use fem_core::element::Formulation;
 use fem_core::material::{Material, MaterialError};
 use fem_core::mesh::{self, Layer};
@@ -85,6 +86,10 @@ impl Bundle {
                 let field = self.tool_field(tool);
                 (self.experiment_file(), self.line_of(&field), field)
             }
+            PressError::Effect(e) => {
+                let field = format!("effects.{}", e.key());
+                (self.experiment_file(), self.line_of(&field), field)
+            }
             _ => (self.experiment_file(), self.line_of("protocol"), "protocol".to_string()),
         };
         BundleError::Engine { file, line, field, source: Box::new(source) }
@@ -106,6 +111,11 @@ impl Bundle {
             Shape::Cylinder => Some(std::f64::consts::PI * s.radius_mm?.powi(2) * s.height_mm?),
             Shape::Surface => None,
         }
+    }
+
+    /// The engine's effects of `[effects]` (module docs of [`super`], "Effects").
+    pub fn effects(&self) -> Result<Effects, BundleError> {
+        super::validate::effects_of(&self.experiment, &self.map)
     }
 
     /// The density [t/mm^3]: `density_g_cm3`, else `mass_g` / volume, else 1 g/cm^3.
@@ -285,6 +295,7 @@ impl Bundle {
         }
         let protocol = self.protocol()?;
         let tools = self.contact_tools(axisymmetric)?;
+        let effects = self.effects()?;
         let missing = |field: &str| self.map.invalid(field, "missing required key");
         let block_size = || s.block_size().ok_or_else(|| missing("specimen.size_mm"));
         let layers: Vec<Layer> = match &s.material {
@@ -311,6 +322,7 @@ impl Bundle {
                 markers: markers.clone(),
                 snapshot_times: Vec::new(),
                 tools: tools.clone(),
+                effects: effects.clone(),
             }))
         };
         let problem = match (s.shape, self.dimension()) {
@@ -328,6 +340,7 @@ impl Bundle {
                     markers: self.axisymmetric_marker_requests(),
                     snapshot_times: Vec::new(),
                     tools: tools.clone(),
+                    effects: effects.clone(),
                 })
             }
             (Shape::Block, 2) => {
@@ -346,6 +359,7 @@ impl Bundle {
                     markers,
                     snapshot_times: Vec::new(),
                     tools: tools.clone(),
+                    effects: effects.clone(),
                 })
             }
             (Shape::Block, _) => {

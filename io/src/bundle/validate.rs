@@ -5,6 +5,8 @@
 
 use std::collections::BTreeMap;
 
+use fem_core::effects::{EffectError, EffectId, Effects, AGE_KEY};
+
 use super::experiment::{Contact, Experiment, Shape, Tool, ToolKind, FORMAT_V1};
 use super::material_spec::MaterialSpec;
 use super::series::MarkerSeries;
@@ -53,6 +55,7 @@ pub(crate) fn validate_experiment(e: &Experiment, map: &SourceMap) -> Result<(),
         spec.validate(name, map, "materials")?;
     }
     validate_protocol(e, map)?;
+    effects_of(e, map)?;
     if let Some(data) = &e.data {
         for (key, file) in [("data.force", &data.force), ("data.markers", &data.markers)] {
             if file.as_deref().is_some_and(|f| f.trim().is_empty()) {
@@ -489,4 +492,28 @@ pub(crate) fn merge_materials(e: &mut Experiment, external: &BTreeMap<String, Ma
     for (name, spec) in external {
         e.materials.insert(name.clone(), spec.clone());
     }
+}
+
+/// The engine's effects of `[effects]`: each key an effect parameter of
+/// `fem_core::effects` or the covariate `age_h`; refuses an unknown key, an effect
+/// the engine does not implement yet, a value out of bounds, and `ageing` without
+/// `age_h`, naming the key.
+pub(crate) fn effects_of(e: &Experiment, map: &SourceMap) -> Result<Effects, BundleError> {
+    let mut effects = Effects::none();
+    for (key, &value) in &e.effects {
+        let field = format!("effects.{key}");
+        let refused = |err: EffectError| map.invalid(&field, err.to_string());
+        if key == AGE_KEY {
+            effects.set_age_h(Some(value)).map_err(refused)?;
+            continue;
+        }
+        if EffectId::from_key(key).is_none() {
+            let known: Vec<&str> =
+                EffectId::ALL.iter().flat_map(|e| e.params().iter().map(|p| p.key)).chain([AGE_KEY]).collect();
+            return Err(map.invalid(&field, format!("unknown key; the effect keys are {}", known.join(", "))));
+        }
+        effects.set_key(key, value).map_err(refused)?;
+    }
+    effects.validate().map_err(|err| map.invalid(&format!("effects.{}", err.key()), err.to_string()))?;
+    Ok(effects)
 }

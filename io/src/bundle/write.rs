@@ -42,14 +42,18 @@ pub struct BundleWrite<'a> {
 impl<'a> BundleWrite<'a> {
     /// A simulation's results for `input`, named `name` (e.g. `format!("{}-sim",
     /// input.experiment.name)`). `force_tared` is true when gravity is off (the
-    /// simulated force then holds no weight, as a tared sensor's).
+    /// simulated force then holds no weight, as a tared sensor's): neither
+    /// `[protocol] gravity` nor a non-zero `[effects] gravity` factor.
     pub fn simulated(input: &'a Bundle, name: &'a str, force: &'a ForceSeries, markers: &'a [MarkerSeries]) -> Self {
         Self {
             experiment: &input.experiment,
             name,
             force: Some(force),
             markers,
-            force_tared: Some(!input.experiment.protocol.gravity),
+            force_tared: Some(
+                !(input.experiment.protocol.gravity
+                    || input.experiment.effects.get("gravity").is_some_and(|&f| f != 0.0)),
+            ),
         }
     }
 

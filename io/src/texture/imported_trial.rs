@@ -424,6 +424,7 @@ pub fn to_bundle(raw: &RawTest, options: &ImportOptions) -> Result<ImportedTrial
             tools: Vec::new(),
         },
         data: None,
+        effects: Default::default(),
         extra: Some(extra),
     };
     Ok(ImportedTrial { experiment, force, facts })

@@ -1,0 +1,126 @@
+//! `[effects]` end to end: `wagashi press` simulates them, `wagashi fit` fits
+//! materials with force-offset and gravity held at their bundle values and
+//! refuses, in one line, the effects its sensitivities cannot carry yet.
+
+mod common;
+
+use std::path::Path;
+
+use common::*;
+
+/// A small 2D elastic trial (frictionless plate, glued floor), no data.
+const TRIAL: &str = r#"format = "wagashi-experiment/1"
+name = "gel"
+dimension = 2
+
+[specimen]
+shape = "block"
+size_mm = [20.0, 15.0, 10.0]
+density_g_cm3 = 1.1
+material = "gel"
+
+[materials.gel]
+model = "elastic"
+poisson = 0.3
+E_MPa = 0.05
+
+[protocol]
+tool = "plate"
+tool_contact = "frictionless"
+support = "glued"
+waypoints = [[0.0, 0.0], [10.0, 1.5], [20.0, 1.5]]
+release_s = 20.0
+end_s = 30.0
+"#;
+
+fn write_trial(dir: &Path, effects: &str) {
+    std::fs::create_dir_all(dir).unwrap();
+    std::fs::write(dir.join("experiment.toml"), format!("{TRIAL}{effects}")).unwrap();
+}
+
+fn force_csv(path: &Path) -> Vec<(f64, f64)> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let mut it = l.split(',').map(|v| v.parse::<f64>().unwrap());
+            (it.next().unwrap(), it.next().unwrap())
+        })
+        .collect()
+}
+
+/// `wagashi press` with a force offset and drift writes the baseline's force plus
+/// `b0 + b1 t` at every sample (to the CSV's printed precision, 1e-9 N), also
+/// after release where nothing touches; with gravity the released specimen
+/// rests its weight on the floor (rho g W H T, 1e-6 relative).
+#[test]
+fn press_simulates_effects() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cwd = tmp.path();
+    write_trial(&cwd.join("base"), "");
+    write_trial(&cwd.join("offset"), "\n[effects]\nforce_offset_N = 0.5\nforce_drift_N_per_s = 0.001\n");
+    write_trial(&cwd.join("weight"), "\n[effects]\ngravity = 1.0\n");
+    for name in ["base", "offset", "weight"] {
+        assert_success(&wagashi_in(cwd, ["press", name, "-o", &format!("out-{name}"), "--size-mm", "2.5"]));
+    }
+    let base = force_csv(&cwd.join("out-base/force.csv"));
+    let offset = force_csv(&cwd.join("out-offset/force.csv"));
+    assert_eq!(base.len(), offset.len());
+    for ((t, f0), (_, f1)) in base.iter().zip(&offset) {
+        assert!((f1 - f0 - (0.5 + 0.001 * t)).abs() < 1e-9, "t = {t}: {f0} -> {f1}");
+    }
+    let weight = force_csv(&cwd.join("out-weight/force.csv"));
+    let w = 1.1e-9 * 9810.0 * 20.0 * 15.0 * 10.0;
+    let last = weight.last().unwrap().1;
+    assert!((last - w).abs() < 1e-6 * w, "{last} vs weight {w}");
+    let toml = std::fs::read_to_string(cwd.join("out-weight/experiment.toml")).unwrap();
+    assert!(toml.contains("[effects]") && toml.contains("force_tared = false"), "{toml}");
+}
+
+/// A trial simulated with a force offset and gravity is fitted back (E to 1e-4)
+/// with the same effects in place; with ageing, compliance or plate friction
+/// `wagashi fit` refuses in one line naming the key; an effect key the engine
+/// does not implement is refused by `press` with the file, line and key.
+#[test]
+fn fit_holds_effects_or_refuses_them() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cwd = tmp.path();
+    write_trial(&cwd.join("in"), "\n[effects]\nforce_offset_N = 0.05\nforce_drift_N_per_s = -0.002\ngravity = 1.0\n");
+    assert_success(&wagashi_in(cwd, ["press", "in", "-o", "measured", "--size-mm", "2.5"]));
+    std::fs::write(cwd.join("start.toml"), "[materials.gel]\nmodel = \"elastic\"\npoisson = 0.3\nE_MPa = 0.02\n")
+        .unwrap();
+    let o = wagashi_in(
+        cwd,
+        ["fit", "measured", "--materials", "start.toml", "--size-mm", "2.5", "--procedure", "joint", "-o", "fit"],
+    );
+    assert_success(&o);
+    let fit: serde_json::Value = serde_json::from_slice(&std::fs::read(cwd.join("fit/fit.json")).unwrap()).unwrap();
+    let e = fit["sets"]["joint"]["gel"]["E_MPa"]["value"].as_f64().unwrap_or_else(|| panic!("{fit}"));
+    assert!((e - 0.05).abs() < 1e-4 * 0.05, "E = {e}");
+
+    for (effects, key) in [
+        ("ageing_E_rate_per_h = 0.01\nage_h = 2.0", "ageing_E_rate_per_h"),
+        ("machine_compliance_mm_per_N = 0.01", "machine_compliance_mm_per_N"),
+        ("plate_friction = 0.3", "plate_friction"),
+    ] {
+        let measured = cwd.join("measured/experiment.toml");
+        let text = std::fs::read_to_string(&measured).unwrap();
+        let dir = cwd.join(format!("with-{key}"));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::copy(cwd.join("measured/force.csv"), dir.join("force.csv")).unwrap();
+        std::fs::write(dir.join("experiment.toml"), text.replace("[effects]\n", &format!("[effects]\n{effects}\n")))
+            .unwrap();
+        let o = wagashi_in(cwd, ["fit", dir.to_str().unwrap(), "--materials", "start.toml", "-o", "refused"]);
+        let line = assert_one_line_error(&o);
+        assert!(line.contains(key) && line.contains("sensitivities"), "{line}");
+    }
+
+    write_trial(&cwd.join("slider"), "\n[effects]\nplastic_yield_stress_MPa = 0.01\n");
+    let o = wagashi_in(cwd, ["press", "slider", "-o", "x"]);
+    let line = assert_one_line_error(&o);
+    assert!(
+        line.contains("experiment.toml:25: effects.plastic_yield_stress_MPa:") && line.contains("not implemented"),
+        "{line}"
+    );
+}
