@@ -158,7 +158,10 @@ fn bench(c: &mut Criterion) {
         let (objective, x0) = force_objective(campaign);
         let exact = objective.evaluate(&x0, true).unwrap().jacobian.unwrap();
         let fd = ForwardDifferences(&objective).evaluate(&x0, true).unwrap().jacobian.unwrap();
-        eprintln!("{name}: Jacobians differ by {:.2e} of each column's largest entry", jacobian_difference(&exact, &fd));
+        eprintln!(
+            "{name}: Jacobians differ by {:.2e} of each column's largest entry",
+            jacobian_difference(&exact, &fd)
+        );
         g.bench_function(format!("mat1 five parameters, {name}, sensitivities"), |b| {
             b.iter(|| objective.evaluate(&x0, true).unwrap())
         });

@@ -191,7 +191,10 @@ fn fits_uniform_and_layered_trials_together() {
                 // Same mesh, noise-free data: the well-determined parameters come back.
                 for (key, value) in values {
                     let v = fit["sets"][set][material][key]["value"].as_f64().unwrap();
-                    assert!((v - value).abs() < 1e-2 * value, "{procedure} sets.{set}.{material}.{key} = {v} vs {value}");
+                    assert!(
+                        (v - value).abs() < 1e-2 * value,
+                        "{procedure} sets.{set}.{material}.{key} = {v} vs {value}"
+                    );
                 }
             }
         }
