@@ -551,10 +551,7 @@ impl NodalBatch {
         let k = &model.region_kernel[0];
         let (dt, [a0, a1, a2]) = (step.dt, step.alpha);
         // The factor's scale is the step's g (the unscaled K is factored).
-        let lift = match step.single_group_factor {
-            Some(_) => Some(self.lift(model, step).to_vec()),
-            None => None,
-        };
+        let lift = step.single_group_factor.is_some().then(|| self.lift(model, step).to_vec());
         let (u0, u1, up) = (&self.u0, step.u1, &self.u_prev);
         let (mut phi, mut decay) = ([0.0; 2], [0.0; 2]);
         for j in 0..k.num_terms {
