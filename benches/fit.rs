@@ -4,6 +4,11 @@
 //! tetrahedra, 3 mm), from the same start, one start; and the same 2D fit with a
 //! forward-difference Jacobian instead of the forward sensitivities.
 //!
+//! The `jacobian` group times one Jacobian of the same fit's residuals at the
+//! start point, by the forward sensitivities (one run) and by forward differences
+//! (six runs), after checking that the two agree (printed: the largest difference
+//! relative to the column's largest entry).
+//!
 //! The "measured" trial is the engine's own (Table II) with 1 % force noise.
 //! `cargo bench --bench fit`; figures in BENCHMARKS.md.
 
@@ -96,6 +101,23 @@ fn force_fit(campaign: &Campaign, finite_differences: bool) -> Fit {
     }
 }
 
+/// The five-parameter force objective of a campaign and its start point.
+fn force_objective(campaign: &Campaign) -> (Objective<'_>, Vec<f64>) {
+    let free: Vec<usize> = (0..campaign.unknowns.len()).filter(|&i| campaign.unknowns[i].key != "poisson").collect();
+    let x0: Vec<f64> = free.iter().map(|&i| campaign.values()[i]).collect();
+    (Objective::new(campaign, free, campaign.values(), &[Channel::Force]), x0)
+}
+
+/// The largest difference of two Jacobians relative to each column's largest entry.
+fn jacobian_difference(a: &DMatrix<f64>, b: &DMatrix<f64>) -> f64 {
+    (0..a.ncols())
+        .map(|k| {
+            let scale = a.column(k).amax();
+            (a.column(k) - b.column(k)).amax() / scale
+        })
+        .fold(0.0, f64::max)
+}
+
 fn bench(c: &mut Criterion) {
     let dir2 = tempfile::tempdir().unwrap();
     trial(dir2.path(), 2);
@@ -124,6 +146,30 @@ fn bench(c: &mut Criterion) {
             fit.x
         );
     }
+
+    // One Jacobian each way: the same matrix first, then the times.
+    let mut cases = vec![("2D", &c2)];
+    if std::env::var_os("WAGASHI_BENCH_FIT_3D").is_some() {
+        cases.push(("3D 9600 tets", &c3));
+    }
+    let mut g = c.benchmark_group("jacobian");
+    g.sample_size(10);
+    for (name, campaign) in cases {
+        let (objective, x0) = force_objective(campaign);
+        let exact = objective.evaluate(&x0, true).unwrap().jacobian.unwrap();
+        let fd = ForwardDifferences(&objective).evaluate(&x0, true).unwrap().jacobian.unwrap();
+        eprintln!(
+            "{name}: Jacobians differ by {:.2e} of each column's largest entry",
+            jacobian_difference(&exact, &fd)
+        );
+        g.bench_function(format!("mat1 five parameters, {name}, sensitivities"), |b| {
+            b.iter(|| objective.evaluate(&x0, true).unwrap())
+        });
+        g.bench_function(format!("mat1 five parameters, {name}, forward differences"), |b| {
+            b.iter(|| ForwardDifferences(&objective).evaluate(&x0, true).unwrap())
+        });
+    }
+    g.finish();
 
     let mut g = c.benchmark_group("fit");
     g.sample_size(10);

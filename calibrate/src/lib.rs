@@ -8,8 +8,8 @@
 //! - the numerical core (below): bounded least squares, multi-start, intervals,
 //!   profiles, warnings, for any [`LeastSquares`] problem;
 //! - the physics glue: [`trial`] turns experiment bundles into residuals with exact
-//!   Jacobians (the engine's forward sensitivities: one extra solve per parameter
-//!   and step), [`procedure`] runs the seed paper's three steps (two parameter
+//!   Jacobians (the engine's forward sensitivities: at most one extra solve per
+//!   parameter and step, batched), [`procedure`] runs the seed paper's three steps (two parameter
 //!   sets) or a joint fit over them. `wagashi fit` is a thin shell around
 //!   [`procedure::run`].
 //!

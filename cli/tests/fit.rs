@@ -108,3 +108,103 @@ fn refuses_trials_with_nothing_to_fit() {
     assert!(assert_one_line_error(&o).contains("nothing to fit"), "{}", stderr(&o));
     assert!(!cwd.join("out").exists(), "a refused fit left an output folder");
 }
+
+/// Writes a short 2D trial (push 2 mm in 10 s, hold to 30 s, recover to 60 s) of a
+/// 30 mm block, uniform (`layers` empty: `material`) or layered, with the true
+/// materials of the seed's Table II and side markers at the keep (25 s) and final
+/// (60 s) times.
+fn short_trial(dir: &Path, name: &str, material: &str, layers: &[&str]) {
+    std::fs::create_dir_all(dir).unwrap();
+    let mut specimen = String::new();
+    if layers.is_empty() {
+        specimen.push_str(&format!("material = \"{material}\"\n"));
+    }
+    for layer in layers {
+        specimen.push_str(&format!("[[specimen.layers]]\nmaterial = \"{layer}\"\nthickness_mm = 10.0\n"));
+    }
+    let toml = format!(
+        "format = \"wagashi-experiment/1\"\nname = \"{name}\"\ndimension = 2\n\n[specimen]\nshape = \"block\"\n\
+size_mm = [30.0, 30.0, 10.0]\n{specimen}\n\
+[materials.mat1]\nmodel = \"five-element\"\npoisson = 0.3746\nE1_MPa = 0.0349\nE2_MPa = 0.0221\nc1_MPa_s = 0.0071\n\
+c2_MPa_s = 0.1869\nc3_MPa_s = 29.719\n\n\
+[materials.mat2]\nmodel = \"five-element\"\npoisson = 0.3353\nE1_MPa = 0.0454\nE2_MPa = 0.0141\nc1_MPa_s = 0.0115\n\
+c2_MPa_s = 0.1991\nc3_MPa_s = 13.370\n\n\
+[data]\nmarkers = \"markers.csv\"\n\n\
+[protocol]\ntool = \"plate\"\ntool_contact = \"glued\"\nsupport = \"glued\"\n\
+waypoints = [[0.0, 0.0], [10.0, 2.0], [30.0, 2.0]]\nrelease_s = 30.0\nend_s = 60.0\n"
+    );
+    std::fs::write(dir.join("experiment.toml"), toml).unwrap();
+    let mut csv = String::from("marker,t_s,x_mm,y_mm\n");
+    for (marker, x, y) in [("a", 30.0, 5.0), ("b", 30.0, 15.0), ("c", 30.0, 25.0), ("d", 15.0, 30.0)] {
+        for t in ["0.0", "25", "60"] {
+            csv.push_str(&format!("{marker},{t},{x},{y}\n"));
+        }
+    }
+    std::fs::write(dir.join("markers.csv"), csv).unwrap();
+}
+
+/// Several trials at once, sharing materials (the seed's validation, small): a
+/// uniform mat1 trial, a uniform mat2 trial and a layered mat1/mat2/mat1 trial,
+/// simulated by `wagashi press`, fitted together from other start values. The two
+/// materials are two sets of unknowns, whatever the number of trials and layers
+/// that use them; the outputs carry every key per material, and materials.toml
+/// runs the layered trial again.
+#[test]
+fn fits_uniform_and_layered_trials_together() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cwd = tmp.path();
+    let trials = [("u1", "mat1", vec![]), ("u2", "mat2", vec![]), ("l121", "", vec!["mat1", "mat2", "mat1"])];
+    std::fs::create_dir_all(cwd.join("measured")).unwrap();
+    for (name, material, layers) in &trials {
+        short_trial(&cwd.join("in").join(name), name, material, layers);
+        let input = format!("in/{name}");
+        let output = format!("measured/{name}");
+        assert_success(&wagashi_in(cwd, ["press", input.as_str(), "-o", output.as_str(), "--size-mm", "5"]));
+    }
+    let start = format!("{START}\n{}", START.replace("mat1", "mat2"));
+    std::fs::write(cwd.join("start.toml"), start).unwrap();
+    let truth = [
+        ("mat1", [("poisson", 0.3746), ("E1_MPa", 0.0349), ("E2_MPa", 0.0221), ("c1_MPa_s", 0.0071)]),
+        ("mat2", [("poisson", 0.3353), ("E1_MPa", 0.0454), ("E2_MPa", 0.0141), ("c1_MPa_s", 0.0115)]),
+    ];
+    let bundles = ["measured/u1", "measured/u2", "measured/l121"];
+    for (procedure, sets) in [("seed", vec!["force", "shape"]), ("joint", vec!["joint"])] {
+        let out = format!("fit-{procedure}");
+        let mut args = vec!["fit"];
+        args.extend(bundles);
+        args.extend(["--materials", "start.toml", "--size-mm", "5", "--procedure", procedure, "-o", out.as_str()]);
+        assert_success(&wagashi_in(cwd, args));
+        let fit: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(cwd.join(&out).join("fit.json")).unwrap()).unwrap();
+        for key in ["objective", "iterations", "simulations"] {
+            assert!(fit[key].is_number(), "{procedure}: {key} missing: {fit}");
+        }
+        for set in &sets {
+            for (material, values) in &truth {
+                for key in ["poisson", "E1_MPa", "E2_MPa", "c1_MPa_s", "c2_MPa_s", "c3_MPa_s"] {
+                    let entry = &fit["sets"][set][material][key];
+                    let v = entry["value"].as_f64().unwrap_or_else(|| panic!("sets.{set}.{material}.{key}: {fit}"));
+                    let ci = entry["ci95"].as_array().unwrap_or_else(|| panic!("{procedure} {set}: {entry}"));
+                    let (lo, hi) = (ci[0].as_f64().unwrap(), ci[1].as_f64().unwrap());
+                    assert!(lo <= v && v <= hi, "{procedure} sets.{set}.{material}.{key}: {entry}");
+                }
+                // Same mesh, noise-free data: the well-determined parameters come back.
+                for (key, value) in values {
+                    let v = fit["sets"][set][material][key]["value"].as_f64().unwrap();
+                    assert!(
+                        (v - value).abs() < 1e-2 * value,
+                        "{procedure} sets.{set}.{material}.{key} = {v} vs {value}"
+                    );
+                }
+            }
+        }
+        // materials.toml runs the layered trial with the fitted materials.
+        let materials = format!("{out}/materials.toml");
+        let again = format!("again-{procedure}");
+        let o = wagashi_in(
+            cwd,
+            ["press", "in/l121", "--materials", materials.as_str(), "--size-mm", "5", "-o", again.as_str()],
+        );
+        assert_success(&o);
+    }
+}

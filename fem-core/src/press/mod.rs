@@ -129,8 +129,9 @@ pub fn simulate_any(
 }
 
 /// Runs a press problem with the quasi-static scheme and differentiates its
-/// reactions and marker positions by `parameters` (forward sensitivities: one extra
-/// solve per parameter and step with the step's own factorization).
+/// reactions and marker positions by `parameters` (forward sensitivities: at most
+/// one extra solve per parameter and step with the step's own factorization, all
+/// parameters in one batch; none for the rheology parameters of a one-region body).
 pub fn simulate_with_sensitivities<const D: usize, const N: usize, const S: usize>(
     problem: &PressProblem<D, N, S>,
     settings: &Settings,

@@ -1,7 +1,9 @@
 //! Forward sensitivities of the quasi-static scheme: the derivatives of the
 //! reactions and marker positions with respect to material parameters, at the
 //! cost of one extra right-hand side and one extra solve with the step's own
-//! factorization per parameter and step (design.md 4).
+//! factorization per parameter and step (design.md 4). The parameters go
+//! together: one pass over the cells builds all their right-hand sides and one
+//! multi-column solve takes them all (see `advance_all`).
 //!
 //! The discrete quasi-static step (see the stepper) is, per cell of region `r`,
 //!
@@ -37,11 +39,11 @@ use nalgebra::{SMatrix, SVector};
 use super::model::Model;
 use super::result::ForceSegment;
 use super::{PressError, PressProblem};
-use crate::assembly::assemble_vector;
 use crate::element::{cell_strain, nodal_force, Formulation, ReferenceSimplex, Simplex};
 use crate::material::{phi1, phi1_derivative, RelaxationKernel};
-use crate::parallel::map_collect;
+use crate::parallel::PARALLEL_MIN_ITEMS;
 use crate::solve::{Factor, ReducedSystem};
+use rayon::prelude::*;
 
 /// Which parameter of a material.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -192,11 +194,15 @@ pub(crate) fn unit_young_matrix_poisson_derivative<const S: usize>(
 struct RegionTangent<const S: usize> {
     kernel: RelaxationKernel,
     c1: SMatrix<f64, S, S>,
+    /// Whether `c1` is nonzero (Poisson's ratio of this region).
+    has_c1: bool,
 }
 
-/// The derivative of the state at a step end.
-#[derive(Clone)]
-struct TangentState<const S: usize> {
+/// The derivatives of the state at a step end, every parameter at once: `u` holds
+/// one displacement vector per parameter (`u[p * ndof + dof]`), the cell arrays
+/// one value per cell and parameter (`strain[e * P + p]`), so that a cell's
+/// values for all parameters sit together for the batched cell passes.
+struct BatchState<const S: usize> {
     u: Vec<f64>,
     strain: Vec<SVector<f64, S>>,
     strain_prev: Vec<SVector<f64, S>>,
@@ -213,6 +219,10 @@ pub(crate) struct StepView<'a, const S: usize> {
     pub strain_prev0: &'a [SVector<f64, S>],
     pub history0: &'a [[SVector<f64, S>; 2]],
     pub strain1: &'a [SVector<f64, S>],
+    /// The displacement at the step's end (held dofs at their prescribed values).
+    pub u1: &'a [f64],
+    /// The dofs held at the plate's displacement in this step's constraint set.
+    pub plate_dofs: &'a [usize],
     pub system: &'a ReducedSystem,
     pub factor: &'a Factor<'a>,
     /// `Some(g)` when the factor is of the unscaled stiffness (one kernel group).
@@ -223,11 +233,58 @@ pub(crate) struct StepView<'a, const S: usize> {
     pub segment: &'a ForceSegment,
 }
 
+/// The two ways of carrying the derivatives (see [`NodalBatch`]).
+enum TangentStates<const S: usize> {
+    /// Cell strains and histories: any regions and parameters.
+    Cells(BatchState<S>),
+    /// Nodal vectors: one region, rheology parameters only.
+    Nodal(Box<NodalBatch>),
+}
+
+/// The derivatives carried as nodal vectors, for a body of one region and
+/// rheology parameters only (no `C1'`): the common case of a uniform trial.
+///
+/// Every cell strain of the scheme is `B` of a nodal vector: `e = B u`, and the
+/// exact history `h_k1 = delta_k h_k0 + phi_k (e1 - e0)` has the same scalar
+/// coefficients in every cell of a region, so `h_k = B eta_k` with
+/// `eta_k1 = delta_k eta_k0 + phi_k (u1 - u0)`; likewise for the derivatives. The
+/// load of the sensitivity step is then `-sum_e w B^T C1 B V = -K V` with the nodal
+/// `V = g' u1 - q'` (`q'` as in the module formula, with nodal vectors for cell
+/// strains), and with the step matrix `g K` the free rows solve to
+///
+/// ```text
+/// u1'_f = -(V_f + K_ff^-1 K_fh V_h) / g .
+/// ```
+///
+/// The held values of every nodal vector are multiples of one pattern `P` (1 on
+/// the plate's dofs, 0 on the other held dofs): the primal's held values are
+/// `-d(t) P` and the derivatives vanish there. So `V_h = c P_h` with `c` read at a
+/// plate dof, and `K_ff^-1 K_fh P_h` is one solve per constraint set and run, not
+/// one per parameter and step: a sensitivity step costs a few vector operations.
+/// A column whose held values are not such a multiple (checked every step), or a
+/// step whose factor is not of the unscaled `K`, is solved with the factor
+/// instead. The reaction functionals are linear in the nodal vectors too: `rho .
+/// C1 B u = w . u` with `w` assembled once.
+struct NodalBatch {
+    /// The primal displacement at the step start and one step back, and `eta_k`.
+    u0: Vec<f64>,
+    u_prev: Vec<f64>,
+    eta: [Vec<f64>; 2],
+    /// The derivatives, `[p * ndof + dof]`.
+    du0: Vec<f64>,
+    du_prev: Vec<f64>,
+    deta: [Vec<f64>; 2],
+    /// The reaction functionals' nodal weights, bottom and plate.
+    weights: [Vec<f64>; 2],
+    /// Per constraint set (keyed by its plate dofs): `K_ff^-1 K_fh P_h` on the free rows.
+    lift: Vec<(Vec<usize>, Vec<f64>)>,
+}
+
 /// The sensitivity state of a run.
 pub(crate) struct Tracker<const S: usize> {
     /// `[p][r]`.
     tangents: Vec<Vec<RegionTangent<S>>>,
-    states: Vec<TangentState<S>>,
+    state: TangentStates<S>,
     segments: Vec<Vec<TangentSegment>>,
     /// `[m][i][p]`.
     markers: Vec<Vec<Vec<Vec<f64>>>>,
@@ -283,33 +340,41 @@ impl<const S: usize> Tracker<S> {
                         let zero_kernel =
                             RelaxationKernel { num_terms: model.region_kernel[r].num_terms, ..ZERO_KERNEL };
                         if !p.regions.contains(&r) {
-                            return RegionTangent { kernel: zero_kernel, c1: SMatrix::zeros() };
+                            return RegionTangent { kernel: zero_kernel, c1: SMatrix::zeros(), has_c1: false };
                         }
                         let m = &problem.materials[r];
                         match p.kind {
-                            ParameterKind::Rheology(k) => {
-                                RegionTangent { kernel: m.rheology.relaxation_derivatives()[k], c1: SMatrix::zeros() }
-                            }
+                            ParameterKind::Rheology(k) => RegionTangent {
+                                kernel: m.rheology.relaxation_derivatives()[k],
+                                c1: SMatrix::zeros(),
+                                has_c1: false,
+                            },
                             ParameterKind::Poisson => RegionTangent {
                                 kernel: zero_kernel,
                                 c1: unit_young_matrix_poisson_derivative::<S>(problem.formulation, m.poisson),
+                                has_c1: true,
                             },
                         }
                     })
                     .collect()
             })
             .collect();
-        let (ndof, ncell) = (model.num_dofs(), problem.mesh.num_cells());
-        let zero = TangentState {
-            u: vec![0.0; ndof],
-            strain: vec![SVector::zeros(); ncell],
-            strain_prev: vec![SVector::zeros(); ncell],
-            history: vec![[SVector::zeros(); 2]; ncell],
+        let (ndof, ncell, np) = (model.num_dofs(), problem.mesh.num_cells(), parameters.len());
+        let nodal = nreg == 1 && model.groups.len() == 1 && parameters.iter().all(|p| p.kind != ParameterKind::Poisson);
+        let state = if nodal {
+            TangentStates::Nodal(Box::new(NodalBatch::new(model, np)))
+        } else {
+            TangentStates::Cells(BatchState {
+                u: vec![0.0; ndof * np],
+                strain: vec![SVector::zeros(); ncell * np],
+                strain_prev: vec![SVector::zeros(); ncell * np],
+                history: vec![[SVector::zeros(); 2]; ncell * np],
+            })
         };
         let num_markers = problem.markers.len();
         let mut tracker = Self {
             tangents,
-            states: vec![zero; parameters.len()],
+            state,
             segments: Vec::new(),
             markers: vec![Vec::new(); num_markers],
             marker_next: vec![0; num_markers],
@@ -325,17 +390,22 @@ impl<const S: usize> Tracker<S> {
         tracker
     }
 
-    /// Advances every parameter's derivative over one accepted step.
+    /// Advances every parameter's derivative over one accepted step (one batched
+    /// pass, see [`advance_all`]).
     pub fn advance<const D: usize, const N: usize>(&mut self, model: &Model<'_, D, N, S>, step: &StepView<'_, S>)
     where
         Simplex<D, N>: ReferenceSimplex<D, N>,
     {
-        let num_parameters = self.tangents.len();
-        let mut segments = Vec::with_capacity(num_parameters);
-        let mut old_u = Vec::with_capacity(num_parameters);
-        for p in 0..num_parameters {
-            let (state, mut segment) = advance_one(model, step, &self.tangents[p], &self.states[p]);
-            old_u.push(std::mem::replace(&mut self.states[p], state).u);
+        let (old_u, mut segments) = match &mut self.state {
+            TangentStates::Cells(state) => {
+                let (next, segments) = advance_all(model, step, &self.tangents, state);
+                let old = std::mem::replace(state, next);
+                state.strain_prev = old.strain;
+                (old.u, segments)
+            }
+            TangentStates::Nodal(batch) => batch.advance(model, step, &self.tangents),
+        };
+        for (p, segment) in segments.iter_mut().enumerate() {
             let previous = self.segments.last().map(|s: &Vec<TangentSegment>| &s[p]);
             if step.segment.detached_ends.is_some() {
                 let start = match (previous, self.primal.last()) {
@@ -349,7 +419,6 @@ impl<const S: usize> Tracker<S> {
                     t.rate_start = l.rate_end;
                 }
             }
-            segments.push(segment);
         }
         self.emit_markers(model, &old_u, step);
         self.primal.push(step.segment.clone());
@@ -361,7 +430,7 @@ impl<const S: usize> Tracker<S> {
     fn emit_markers<const D: usize, const N: usize>(
         &mut self,
         model: &Model<'_, D, N, S>,
-        old_u: &[Vec<f64>],
+        old_u: &[f64],
         step: &StepView<'_, S>,
     ) where
         Simplex<D, N>: ReferenceSimplex<D, N>,
@@ -370,15 +439,20 @@ impl<const S: usize> Tracker<S> {
             return;
         }
         let (t0, t1) = (step.t0, step.t0 + step.dt);
+        let ndof = model.num_dofs();
         // marker_positions adds the initial position: subtract it (the derivative is linear in du).
-        let base = model.marker_positions(&vec![0.0; model.num_dofs()]);
-        let d0: Vec<Vec<Vec<f64>>> = old_u.iter().map(|u| model.marker_positions(u)).collect();
-        let d1: Vec<Vec<Vec<f64>>> = self.states.iter().map(|s| model.marker_positions(&s.u)).collect();
+        let base = model.marker_positions(&vec![0.0; ndof]);
+        let d0: Vec<Vec<Vec<f64>>> = old_u.chunks(ndof).map(|u| model.marker_positions(u)).collect();
+        let new_u = match &self.state {
+            TangentStates::Cells(state) => &state.u,
+            TangentStates::Nodal(batch) => &batch.du0,
+        };
+        let d1: Vec<Vec<Vec<f64>>> = new_u.chunks(ndof).map(|u| model.marker_positions(u)).collect();
         for (m, req) in model.problem.markers.iter().enumerate() {
             while self.marker_next[m] < req.times.len() && req.times[self.marker_next[m]] <= t1 * (1.0 + 1e-12) {
                 let t = req.times[self.marker_next[m]];
                 let w = if t1 <= t0 { 1.0 } else { ((t - t0) / (t1 - t0)).clamp(0.0, 1.0) };
-                let row = (0..old_u.len())
+                let row = (0..d0.len())
                     .map(|p| (0..D).map(|k| d0[p][m][k] - base[m][k] + w * (d1[p][m][k] - d0[p][m][k])).collect())
                     .collect();
                 self.markers[m].push(row);
@@ -400,142 +474,438 @@ impl<const S: usize> Tracker<S> {
 const ZERO_KERNEL: RelaxationKernel =
     RelaxationKernel { viscous: 0.0, equilibrium: 0.0, num_terms: 0, amplitudes: [0.0; 2], rates: [0.0; 2] };
 
-/// One parameter over one step: the new derivative state and force terms.
-fn advance_one<const D: usize, const N: usize, const S: usize>(
+impl NodalBatch {
+    fn new<const D: usize, const N: usize, const S: usize>(model: &Model<'_, D, N, S>, np: usize) -> Self
+    where
+        Simplex<D, N>: ReferenceSimplex<D, N>,
+    {
+        let ndof = model.num_dofs();
+        let mesh = &model.problem.mesh;
+        // w . u = sum_f rho_f . C1 B_f u: the derivative of each functional by each
+        // nodal displacement, from the strain of unit displacements.
+        let mut weights = [vec![0.0; ndof], vec![0.0; ndof]];
+        for (side, list) in model.functionals.iter().enumerate() {
+            for f in list {
+                let rc = model.region_c1[mesh.cell_regions[f.cell] as usize] * f.rho;
+                let cell = &mesh.cells[f.cell];
+                for a in 0..N {
+                    for k in 0..D {
+                        let mut unit = [SVector::<f64, D>::zeros(); N];
+                        unit[a][k] = 1.0;
+                        let e = cell_strain::<D, N, S>(&model.geometry[f.cell].gradients, &unit);
+                        weights[side][cell[a] as usize * D + k] += rc.dot(&e);
+                    }
+                }
+            }
+        }
+        Self {
+            u0: vec![0.0; ndof],
+            u_prev: vec![0.0; ndof],
+            eta: [vec![0.0; ndof], vec![0.0; ndof]],
+            du0: vec![0.0; ndof * np],
+            du_prev: vec![0.0; ndof * np],
+            deta: [vec![0.0; ndof * np], vec![0.0; ndof * np]],
+            weights,
+            lift: Vec::new(),
+        }
+    }
+
+    /// `K_ff^-1 K_fh P_h` for the step's constraint set (computed once per set).
+    fn lift<const D: usize, const N: usize, const S: usize>(
+        &mut self,
+        model: &Model<'_, D, N, S>,
+        step: &StepView<'_, S>,
+    ) -> &[f64]
+    where
+        Simplex<D, N>: ReferenceSimplex<D, N>,
+    {
+        let pos = match self.lift.iter().position(|(dofs, _)| dofs.as_slice() == step.plate_dofs) {
+            Some(pos) => pos,
+            None => {
+                let ndof = model.num_dofs();
+                let mut pattern = vec![0.0; ndof];
+                step.plate_dofs.iter().for_each(|&d| pattern[d] = 1.0);
+                let mut k_p = vec![0.0; ndof];
+                model.pattern.mul_vec(&model.groups[0].stiffness, &pattern, &mut k_p);
+                let mut z: Vec<f64> = step.system.dof_of_free.iter().map(|&d| k_p[d as usize]).collect();
+                step.factor.solve_in_place(&mut z);
+                self.lift.push((step.plate_dofs.to_vec(), z));
+                self.lift.len() - 1
+            }
+        };
+        &self.lift[pos].1
+    }
+
+    /// Advances every parameter over one step; returns the derivatives of the
+    /// displacement at the step start and the force terms.
+    fn advance<const D: usize, const N: usize, const S: usize>(
+        &mut self,
+        model: &Model<'_, D, N, S>,
+        step: &StepView<'_, S>,
+        tangents: &[Vec<RegionTangent<S>>],
+    ) -> (Vec<f64>, Vec<TangentSegment>)
+    where
+        Simplex<D, N>: ReferenceSimplex<D, N>,
+    {
+        let (ndof, np) = (model.num_dofs(), tangents.len());
+        let k = &model.region_kernel[0];
+        let (dt, [a0, a1, a2]) = (step.dt, step.alpha);
+        // The factor's scale is the step's g (the unscaled K is factored).
+        let lift = step.single_group_factor.is_some().then(|| self.lift(model, step).to_vec());
+        let (u0, u1, up) = (&self.u0, step.u1, &self.u_prev);
+        let (mut phi, mut decay) = ([0.0; 2], [0.0; 2]);
+        for j in 0..k.num_terms {
+            let x = k.rates[j] * dt;
+            phi[j] = phi1(x);
+            decay[j] = (-x).exp();
+        }
+
+        // V = g' u1 - q' per parameter, every dof.
+        let mut v = vec![0.0; ndof * np];
+        let mut dphi = vec![[0.0; 2]; np];
+        let mut ddecay = vec![[0.0; 2]; np];
+        for (p, tangent) in tangents.iter().enumerate() {
+            let dk = &tangent[0].kernel;
+            let mut dg = dk.viscous * a0 / dt + dk.equilibrium;
+            for j in 0..k.num_terms {
+                dphi[p][j] = phi1_derivative(k.rates[j] * dt) * dt * dk.rates[j];
+                ddecay[p][j] = -dt * decay[j] * dk.rates[j];
+                dg += dk.amplitudes[j] * phi[j] + k.amplitudes[j] * dphi[p][j];
+            }
+            let range = p * ndof..(p + 1) * ndof;
+            let (du0, dup) = (&self.du0[range.clone()], &self.du_prev[range.clone()]);
+            let (deta0, deta1) = (&self.deta[0][range.clone()], &self.deta[1][range.clone()]);
+            for (d, out) in v[range].iter_mut().enumerate() {
+                let mut dq =
+                    (u0[d] * a1 - up[d] * a2) * (dk.viscous / dt) + (du0[d] * a1 - dup[d] * a2) * (k.viscous / dt);
+                for j in 0..k.num_terms {
+                    let (eta, deta) = (self.eta[j][d], if j == 0 { deta0[d] } else { deta1[d] });
+                    dq += (u0[d] * phi[j] - eta * decay[j]) * dk.amplitudes[j]
+                        + (u0[d] * dphi[p][j] + du0[d] * phi[j] - eta * ddecay[p][j] - deta * decay[j])
+                            * k.amplitudes[j];
+                }
+                *out = dg * u1[d] - dq;
+            }
+        }
+
+        // Free rows: -(V_f + c z)/g where V_h = c P_h; otherwise a solve.
+        let free = &step.system.dof_of_free;
+        let held: Vec<usize> = (0..ndof).filter(|&d| step.system.free_of_dof[d] == u32::MAX).collect();
+        let mut du1 = vec![0.0; ndof * np];
+        let mut solve_columns = Vec::new();
+        let mut on_plate = vec![false; ndof];
+        step.plate_dofs.iter().for_each(|&d| on_plate[d] = true);
+        for p in 0..np {
+            let vp = &v[p * ndof..(p + 1) * ndof];
+            let c = step.plate_dofs.first().map_or(0.0, |&d| vp[d]);
+            let size = vp.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            let proportional = held.iter().all(|&d| {
+                let expected = if on_plate[d] { c } else { 0.0 };
+                (vp[d] - expected).abs() <= 1e-12 * size
+            });
+            match (&lift, step.single_group_factor, proportional) {
+                (Some(z), Some(g), true) => {
+                    for (i, &d) in free.iter().enumerate() {
+                        du1[p * ndof + d as usize] = -(vp[d as usize] + c * z[i]) / g;
+                    }
+                }
+                _ => solve_columns.push(p),
+            }
+        }
+        if !solve_columns.is_empty() {
+            let nf = free.len();
+            let mut x = vec![0.0; nf * solve_columns.len()];
+            let mut kv = vec![0.0; ndof];
+            for (col, &p) in solve_columns.iter().enumerate() {
+                model.pattern.mul_vec(&model.groups[0].stiffness, &v[p * ndof..(p + 1) * ndof], &mut kv);
+                for (i, &d) in free.iter().enumerate() {
+                    x[col * nf + i] = -kv[d as usize];
+                }
+            }
+            step.factor.solve_columns_in_place(&mut x, solve_columns.len());
+            // The factor is of K (then scaled by 1/g) or of the step matrix itself.
+            let scale = step.single_group_factor.map_or(1.0, |g| 1.0 / g);
+            for (col, &p) in solve_columns.iter().enumerate() {
+                for (i, &d) in free.iter().enumerate() {
+                    du1[p * ndof + d as usize] = x[col * nf + i] * scale;
+                }
+            }
+        }
+
+        // The reaction functionals' terms (C1' = 0: only the derivative states act).
+        let dot = |w: &[f64], x: &[f64]| w.iter().zip(x).map(|(a, b)| a * b).sum::<f64>();
+        let segments = tangents
+            .iter()
+            .enumerate()
+            .map(|(p, tangent)| {
+                let range = p * ndof..(p + 1) * ndof;
+                let (du0, dup, du1p) = (&self.du0[range.clone()], &self.du_prev[range.clone()], &du1[range.clone()]);
+                let mut t = TangentTerms {
+                    kernel: tangent[0].kernel,
+                    rate: [0.0; 2],
+                    rate_end: [0.0; 2],
+                    rate_start: [0.0; 2],
+                    strain: [0.0; 2],
+                    history: [[0.0; 2]; 2],
+                };
+                for side in 0..2 {
+                    let w = &self.weights[side];
+                    let (w1, w0, wp) = (dot(w, du1p), dot(w, du0), dot(w, dup));
+                    t.rate[side] = (w1 - w0) / dt;
+                    t.rate_end[side] = (w1 * a0 - w0 * a1 + wp * a2) / dt;
+                    t.strain[side] = w0;
+                    for j in 0..k.num_terms {
+                        t.history[j][side] = dot(w, &self.deta[j][range.clone()]);
+                    }
+                }
+                t.rate_start = t.rate;
+                TangentSegment { terms: vec![t], detached_ends: None }
+            })
+            .collect();
+
+        // Histories, then roll the states.
+        for j in 0..k.num_terms {
+            for p in 0..np {
+                for d in 0..ndof {
+                    let i = p * ndof + d;
+                    self.deta[j][i] = ddecay[p][j] * self.eta[j][d]
+                        + decay[j] * self.deta[j][i]
+                        + dphi[p][j] * (u1[d] - u0[d])
+                        + phi[j] * (du1[i] - self.du0[i]);
+                }
+            }
+            for d in 0..ndof {
+                self.eta[j][d] = decay[j] * self.eta[j][d] + phi[j] * (u1[d] - u0[d]);
+            }
+        }
+        self.u_prev = std::mem::replace(&mut self.u0, u1.to_vec());
+        let old_du0 = std::mem::replace(&mut self.du0, du1);
+        self.du_prev.clone_from(&old_du0);
+        (old_du0, segments)
+    }
+}
+
+/// `(0..ncell).flat_map(f)`, where `f(e, out)` pushes cell `e`'s `np` values: in
+/// parallel over the cells when there are many, in order either way.
+fn per_cell<T: Send>(ncell: usize, np: usize, f: impl Fn(usize, &mut Vec<T>) + Sync + Send) -> Vec<T> {
+    if ncell < PARALLEL_MIN_ITEMS {
+        let mut v = Vec::with_capacity(ncell * np);
+        (0..ncell).for_each(|e| f(e, &mut v));
+        v
+    } else {
+        (0..ncell)
+            .into_par_iter()
+            .flat_map_iter(|e| {
+                let mut v = Vec::with_capacity(np);
+                f(e, &mut v);
+                v
+            })
+            .collect()
+    }
+}
+
+/// Every parameter over one step: the new derivative state (its `strain_prev`
+/// left empty for the caller to fill with the old strains) and force terms.
+///
+/// Batched: one pass over the cells builds every parameter's load (the primal
+/// history part `q`, shared by all, is computed once per cell), one node-row
+/// assembly gathers them, one multi-column solve with the step's factorization
+/// takes all right-hand sides (faer updates four columns per pass over the
+/// factor), and one more pass over the cells updates every parameter's strains
+/// and histories. Per parameter it is the same arithmetic as one parameter at a
+/// time; only the loops are interchanged.
+fn advance_all<const D: usize, const N: usize, const S: usize>(
     model: &Model<'_, D, N, S>,
     step: &StepView<'_, S>,
-    tangent: &[RegionTangent<S>],
-    s0: &TangentState<S>,
-) -> (TangentState<S>, TangentSegment)
+    tangents: &[Vec<RegionTangent<S>>],
+    s0: &BatchState<S>,
+) -> (BatchState<S>, Vec<TangentSegment>)
 where
     Simplex<D, N>: ReferenceSimplex<D, N>,
 {
     let mesh = &model.problem.mesh;
+    let (ndof, ncell, np, nreg) = (model.num_dofs(), mesh.num_cells(), tangents.len(), model.region_kernel.len());
     let (dt, [a0, a1, a2]) = (step.dt, step.alpha);
-    // Per region: g, g', and per term phi, phi', delta, delta'.
-    struct Scalars {
+    // Per region: g and per term phi, delta; per parameter and region: g', phi', delta'.
+    struct Primal {
         g: f64,
-        dg: f64,
         phi: [f64; 2],
-        dphi: [f64; 2],
         decay: [f64; 2],
+    }
+    struct Derivative {
+        dg: f64,
+        dphi: [f64; 2],
         ddecay: [f64; 2],
     }
-    let scalars: Vec<Scalars> = model
+    let primal: Vec<Primal> = model
         .region_kernel
         .iter()
-        .zip(tangent)
-        .map(|(k, t)| {
-            let dk = &t.kernel;
-            let mut s = Scalars {
-                g: k.viscous * a0 / dt + k.equilibrium,
-                dg: dk.viscous * a0 / dt + dk.equilibrium,
-                phi: [0.0; 2],
-                dphi: [0.0; 2],
-                decay: [0.0; 2],
-                ddecay: [0.0; 2],
-            };
+        .map(|k| {
+            let mut s = Primal { g: k.viscous * a0 / dt + k.equilibrium, phi: [0.0; 2], decay: [0.0; 2] };
             for j in 0..k.num_terms {
                 let x = k.rates[j] * dt;
                 s.phi[j] = phi1(x);
-                s.dphi[j] = phi1_derivative(x) * dt * dk.rates[j];
                 s.decay[j] = (-x).exp();
-                s.ddecay[j] = -dt * s.decay[j] * dk.rates[j];
                 s.g += k.amplitudes[j] * s.phi[j];
-                s.dg += dk.amplitudes[j] * s.phi[j] + k.amplitudes[j] * s.dphi[j];
             }
             s
         })
         .collect();
+    // `[p * nreg + r]`.
+    let derivative: Vec<Derivative> = tangents
+        .iter()
+        .flat_map(|tangent| {
+            model.region_kernel.iter().zip(tangent).zip(&primal).map(|((k, t), s)| {
+                let dk = &t.kernel;
+                let mut d = Derivative { dg: dk.viscous * a0 / dt + dk.equilibrium, dphi: [0.0; 2], ddecay: [0.0; 2] };
+                for j in 0..k.num_terms {
+                    d.dphi[j] = phi1_derivative(k.rates[j] * dt) * dt * dk.rates[j];
+                    d.ddecay[j] = -dt * s.decay[j] * dk.rates[j];
+                    d.dg += dk.amplitudes[j] * s.phi[j] + k.amplitudes[j] * d.dphi[j];
+                }
+                d
+            })
+        })
+        .collect();
 
-    // The load: tau_e = C1' (g e1 - q) + C1 (g' e1 - q'), force -sum w B^T tau_e.
-    let cell_forces: Vec<[SVector<f64, D>; N]> = map_collect(mesh.num_cells(), |e| {
+    // The loads: tau_e = C1' (g e1 - q) + C1 (g' e1 - q'), force -sum w B^T tau_e;
+    // `cell_forces[e * np + p]`.
+    let cell_forces: Vec<[SVector<f64, D>; N]> = per_cell(ncell, np, |e, out| {
         let r = mesh.cell_regions[e] as usize;
-        let (k, t, s) = (&model.region_kernel[r], &tangent[r], &scalars[r]);
+        let (k, s) = (&model.region_kernel[r], &primal[r]);
         let (e0, em1, e1) = (step.strain0[e], step.strain_prev0[e], step.strain1[e]);
-        let mut q = (e0 * a1 - em1 * a2) * (k.viscous / dt);
-        let mut dq = (e0 * a1 - em1 * a2) * (t.kernel.viscous / dt)
-            + (s0.strain[e] * a1 - s0.strain_prev[e] * a2) * (k.viscous / dt);
+        let h0 = &step.history0[e];
+        let rate = (e0 * a1 - em1 * a2) / dt;
+        let mut q = rate * k.viscous;
+        let mut memory = [SVector::<f64, S>::zeros(); 2];
         for j in 0..k.num_terms {
-            let h0 = step.history0[e][j];
-            q += (e0 * s.phi[j] - h0 * s.decay[j]) * k.amplitudes[j];
-            dq += (e0 * s.phi[j] - h0 * s.decay[j]) * t.kernel.amplitudes[j]
-                + (e0 * s.dphi[j] + s0.strain[e] * s.phi[j] - h0 * s.ddecay[j] - s0.history[e][j] * s.decay[j])
-                    * k.amplitudes[j];
+            memory[j] = e0 * s.phi[j] - h0[j] * s.decay[j];
+            q += memory[j] * k.amplitudes[j];
         }
-        let tau = t.c1 * (e1 * s.g - q) + model.region_c1[r] * (e1 * s.dg - dq);
-        let load = -tau;
-        std::array::from_fn(|a| nodal_force::<D, N, S>(&model.geometry[e], &load, a))
+        let primal_stress = e1 * s.g - q;
+        let c1 = &model.region_c1[r];
+        for (p, t) in tangents.iter().enumerate() {
+            let (t, d) = (&t[r], &derivative[p * nreg + r]);
+            let i = e * np + p;
+            let mut dq = rate * t.kernel.viscous + (s0.strain[i] * a1 - s0.strain_prev[i] * a2) * (k.viscous / dt);
+            for j in 0..k.num_terms {
+                dq += memory[j] * t.kernel.amplitudes[j]
+                    + (e0 * d.dphi[j] + s0.strain[i] * s.phi[j] - h0[j] * d.ddecay[j] - s0.history[i][j] * s.decay[j])
+                        * k.amplitudes[j];
+            }
+            let mut tau = c1 * (e1 * d.dg - dq);
+            if t.has_c1 {
+                tau += t.c1 * primal_stress;
+            }
+            let load = -tau;
+            out.push(std::array::from_fn(|a| nodal_force::<D, N, S>(&model.geometry[e], &load, a)));
+        }
     });
-    let mut rhs = vec![0.0; model.num_dofs()];
-    assemble_vector::<D, N>(&model.topology, &cell_forces, &mut rhs);
-    drop(cell_forces);
-    let mut x: Vec<f64> = step.system.dof_of_free.iter().map(|&d| rhs[d as usize]).collect();
-    step.factor.solve_in_place(&mut x);
-    if let Some(g) = step.single_group_factor {
-        x.iter_mut().for_each(|v| *v /= g);
-    }
-    let mut u = vec![0.0; model.num_dofs()];
-    for (i, &d) in step.system.dof_of_free.iter().enumerate() {
-        u[d as usize] = x[i];
-    }
-
-    // Cell update.
-    let updated: Vec<(SVector<f64, S>, [SVector<f64, S>; 2])> = map_collect(mesh.num_cells(), |e| {
-        let r = mesh.cell_regions[e] as usize;
-        let (k, s) = (&model.region_kernel[r], &scalars[r]);
-        let de1 = cell_strain::<D, N, S>(&model.geometry[e].gradients, &model.cell_displacements(e, &u));
-        let mut h1 = [SVector::<f64, S>::zeros(); 2];
-        for j in 0..k.num_terms {
-            h1[j] = step.history0[e][j] * s.ddecay[j]
-                + s0.history[e][j] * s.decay[j]
-                + (step.strain1[e] - step.strain0[e]) * s.dphi[j]
-                + (de1 - s0.strain[e]) * s.phi[j];
+    // Node-row assembly, `rhs[dof * np + p]`.
+    let mut rhs = vec![0.0; ndof * np];
+    let topology = &model.topology;
+    let node_rows = |(node, o): (usize, &mut [f64])| {
+        for &(e, a) in &topology.node_cells[topology.cell_ptr[node]..topology.cell_ptr[node + 1]] {
+            for p in 0..np {
+                let f = &cell_forces[e as usize * np + p][a as usize];
+                for k in 0..D {
+                    o[k * np + p] += f[k];
+                }
+            }
         }
-        (de1, h1)
+    };
+    if topology.cell_ptr.len() - 1 < PARALLEL_MIN_ITEMS {
+        rhs.chunks_mut(D * np).enumerate().for_each(node_rows);
+    } else {
+        rhs.par_chunks_mut(D * np).enumerate().for_each(node_rows);
+    }
+    drop(cell_forces);
+    // The free rows, column after column, solved together.
+    let free = &step.system.dof_of_free;
+    let nf = free.len();
+    let mut x = vec![0.0; nf * np];
+    for p in 0..np {
+        for (i, &d) in free.iter().enumerate() {
+            x[p * nf + i] = rhs[d as usize * np + p];
+        }
+    }
+    drop(rhs);
+    step.factor.solve_columns_in_place(&mut x, np);
+    let scale = step.single_group_factor.map_or(1.0, |g| 1.0 / g);
+    let mut u = vec![0.0; ndof * np];
+    for p in 0..np {
+        for (i, &d) in free.iter().enumerate() {
+            u[p * ndof + d as usize] = x[p * nf + i] * scale;
+        }
+    }
+    drop(x);
+
+    // Cell update, `updated[e * np + p]`.
+    let updated: Vec<(SVector<f64, S>, [SVector<f64, S>; 2])> = per_cell(ncell, np, |e, out| {
+        let r = mesh.cell_regions[e] as usize;
+        let (k, s) = (&model.region_kernel[r], &primal[r]);
+        let de = step.strain1[e] - step.strain0[e];
+        let gradients = &model.geometry[e].gradients;
+        for p in 0..np {
+            let d = &derivative[p * nreg + r];
+            let i = e * np + p;
+            let de1 = cell_strain::<D, N, S>(gradients, &model.cell_displacements(e, &u[p * ndof..(p + 1) * ndof]));
+            let mut h1 = [SVector::<f64, S>::zeros(); 2];
+            for j in 0..k.num_terms {
+                h1[j] = step.history0[e][j] * d.ddecay[j]
+                    + s0.history[i][j] * s.decay[j]
+                    + de * d.dphi[j]
+                    + (de1 - s0.strain[i]) * s.phi[j];
+            }
+            out.push((de1, h1));
+        }
     });
 
     // Derivatives of the reaction functionals' terms.
-    let nreg = model.region_kernel.len();
-    let mut terms: Vec<TangentTerms> = (0..nreg)
-        .map(|r| TangentTerms {
-            kernel: tangent[r].kernel,
-            rate: [0.0; 2],
-            rate_end: [0.0; 2],
-            rate_start: [0.0; 2],
-            strain: [0.0; 2],
-            history: [[0.0; 2]; 2],
+    let mut segments: Vec<TangentSegment> = tangents
+        .iter()
+        .map(|tangent| TangentSegment {
+            terms: (0..nreg)
+                .map(|r| TangentTerms {
+                    kernel: tangent[r].kernel,
+                    rate: [0.0; 2],
+                    rate_end: [0.0; 2],
+                    rate_start: [0.0; 2],
+                    strain: [0.0; 2],
+                    history: [[0.0; 2]; 2],
+                })
+                .collect(),
+            detached_ends: None,
         })
         .collect();
     for (side, list) in model.functionals.iter().enumerate() {
         for f in list {
             let (c, r) = (f.cell, mesh.cell_regions[f.cell] as usize);
             let rc = model.region_c1[r] * f.rho;
-            let drc = tangent[r].c1 * f.rho;
             let (e0, em1, e1) = (step.strain0[c], step.strain_prev0[c], step.strain1[c]);
-            let (de0, dem1, de1) = (s0.strain[c], s0.strain_prev[c], updated[c].0);
-            let t = &mut terms[r];
-            t.rate[side] += (drc.dot(&(e1 - e0)) + rc.dot(&(de1 - de0))) / dt;
-            t.rate_end[side] +=
-                (drc.dot(&(e1 * a0 - e0 * a1 + em1 * a2)) + rc.dot(&(de1 * a0 - de0 * a1 + dem1 * a2))) / dt;
-            t.strain[side] += drc.dot(&e0) + rc.dot(&de0);
-            for j in 0..model.region_kernel[r].num_terms {
-                t.history[j][side] += drc.dot(&step.history0[c][j]) + rc.dot(&s0.history[c][j]);
+            for (p, segment) in segments.iter_mut().enumerate() {
+                let drc = tangents[p][r].c1 * f.rho;
+                let i = c * np + p;
+                let (de0, dem1, de1) = (s0.strain[i], s0.strain_prev[i], updated[i].0);
+                let t = &mut segment.terms[r];
+                t.rate[side] += (drc.dot(&(e1 - e0)) + rc.dot(&(de1 - de0))) / dt;
+                t.rate_end[side] +=
+                    (drc.dot(&(e1 * a0 - e0 * a1 + em1 * a2)) + rc.dot(&(de1 * a0 - de0 * a1 + dem1 * a2))) / dt;
+                t.strain[side] += drc.dot(&e0) + rc.dot(&de0);
+                for j in 0..model.region_kernel[r].num_terms {
+                    t.history[j][side] += drc.dot(&step.history0[c][j]) + rc.dot(&s0.history[i][j]);
+                }
             }
         }
     }
-    for t in &mut terms {
-        t.rate_start = t.rate;
+    for segment in &mut segments {
+        for t in &mut segment.terms {
+            t.rate_start = t.rate;
+        }
     }
 
-    let mut strain = Vec::with_capacity(updated.len());
-    let mut history = Vec::with_capacity(updated.len());
-    for (de1, h1) in updated {
-        strain.push(de1);
-        history.push(h1);
-    }
-    let state = TangentState { u, strain, strain_prev: s0.strain.clone(), history };
-    (state, TangentSegment { terms, detached_ends: None })
+    let (strain, history): (Vec<_>, Vec<_>) = updated.into_iter().unzip();
+    (BatchState { u, strain, strain_prev: Vec::new(), history }, segments)
 }
 
 #[cfg(test)]

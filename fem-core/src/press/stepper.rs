@@ -482,6 +482,8 @@ where
                 strain_prev0: &state.strain_prev,
                 history0: &state.history,
                 strain1: &outcome.state.strain,
+                u1: &outcome.state.u,
+                plate_dofs: &constraints.plate_dofs,
                 system,
                 factor: &cache.last().expect("a step without contact keeps its factor").1,
                 single_group_factor: single_group.then(|| step_factor(&model.groups[0].kernel, h, bdf)),
