@@ -260,6 +260,9 @@ fn read_obj(rel: &str) -> Surface {
     s
 }
 
+/// Boundary recovery alone (stage 2), no quality refinement.
+const RECOVERY_ONLY: ConformingOptions = ConformingOptions { size_mm: None, max_steiner_per_vertex: 50 };
+
 fn cube(lo: P, hi: P) -> Surface {
     let v: Vec<P> = (0..8)
         .map(|i| {
@@ -333,7 +336,7 @@ fn check_conforming(mesh: &TetMesh, surface: &Surface) -> QualityReport {
 #[test]
 fn a_cube_is_meshed_with_its_exact_boundary() {
     let s = cube([0.0, 0.0, 0.0], [10.0, 20.0, 5.0]);
-    let out = conforming_mesh(&s, &ConformingOptions::default()).unwrap();
+    let out = conforming_mesh(&s, &RECOVERY_ONLY).unwrap();
     let r = check_conforming(&out.mesh, &s);
     assert!((r.volume_mm3 - 1000.0).abs() < 1e-9);
     eprintln!("cube: {:?}", out.stats);
@@ -342,7 +345,7 @@ fn a_cube_is_meshed_with_its_exact_boundary() {
 #[test]
 fn the_bunny_is_meshed_with_its_exact_boundary() {
     let s = read_obj("meshes/npm_bunny.obj");
-    let out = conforming_mesh(&s, &ConformingOptions::default()).unwrap();
+    let out = conforming_mesh(&s, &RECOVERY_ONLY).unwrap();
     let r = check_conforming(&out.mesh, &s);
     eprintln!(
         "bunny: {:?}\n{} tets, dihedral {:.2}..{:.2}, volume error {:e}, Hausdorff {:e}",
@@ -358,7 +361,7 @@ fn two_boxes_sharing_a_face_become_two_regions() {
     let err = conforming_mesh(&raw, &ConformingOptions::default()).unwrap_err();
     assert!(matches!(err, ConformingError::Invalid(_)), "{err}");
     let s = repair(&raw, &RepairOptions::default()).unwrap().surface;
-    let out = conforming_mesh(&s, &ConformingOptions::default()).unwrap();
+    let out = conforming_mesh(&s, &RECOVERY_ONLY).unwrap();
     assert_eq!(out.mesh.region_names.len(), 2, "{:?}", out.mesh.region_names);
     let r = check_conforming(&out.mesh, &s);
     assert_eq!(r.regions.len(), 2);
@@ -376,4 +379,37 @@ fn defective_input_is_refused_with_the_defect_named() {
     let err = conforming_mesh(&s, &ConformingOptions::default()).unwrap_err();
     assert!(matches!(err, ConformingError::Invalid(_)));
     assert!(err.to_string().contains("border") || err.to_string().contains("open"), "{err}");
+}
+
+// ---- stage 3: size
+
+#[test]
+fn size_refinement_bounds_every_tet_and_keeps_the_boundary() {
+    for (name, s, h) in
+        [("cube", cube([0.0, 0.0, 0.0], [10.0, 20.0, 5.0]), 2.0), ("bunny", read_obj("meshes/npm_bunny.obj"), 0.5)]
+    {
+        let out = conforming_mesh(&s, &ConformingOptions::new(h)).unwrap();
+        let r = check_conforming(&out.mesh, &s);
+        let max_volume = h * h * h / (6.0 * 2f64.sqrt());
+        for c in &out.mesh.cells {
+            let q = c.map(|v| out.mesh.nodes[v as usize]);
+            assert!(volume(q) <= max_volume, "{name}: a tet of volume {} > {max_volume}", volume(q));
+        }
+        assert_eq!(out.stats.refinement.bad_left, 0);
+        eprintln!(
+            "{name} h {h}: {} tets, {} nodes, dihedral {:.2}..{:.2}, <10deg {:.4}, radius-edge max {:.3} p99.9 {:.3}, \
+             volume error {:.2e}, Hausdorff {:.2e}, {:.3} s\n  {:?}",
+            r.num_cells,
+            r.num_nodes,
+            r.min_dihedral_deg,
+            r.max_dihedral_deg,
+            r.fraction_below_10_deg,
+            r.max_radius_edge,
+            r.p999_radius_edge,
+            r.volume_error,
+            r.hausdorff_relative,
+            out.stats.time_s,
+            out.stats
+        );
+    }
 }

@@ -145,6 +145,62 @@ impl Delaunay {
         v
     }
 
+    /// [`Self::insert`], also listing in `destroyed` the faces (sorted corner
+    /// triples, finite or not) that the insertion removed: those between two
+    /// tets of its cavity.
+    pub fn insert_reporting(&mut self, p: Point, destroyed: &mut Vec<[u32; 3]>) -> u32 {
+        destroyed.clear();
+        let i = self.points.len() as u32;
+        self.points.push(p);
+        self.vertex_tet.push(NONE);
+        let start = self.locate(i);
+        if !self.is_ghost(start) {
+            for &v in &self.tets[start as usize] {
+                if self.points[v as usize] == p {
+                    self.points.pop();
+                    self.vertex_tet.pop();
+                    return v;
+                }
+            }
+        }
+        self.dig_cavity(start, i);
+        self.interior_faces(destroyed);
+        self.fill_cavity(i);
+        i
+    }
+
+    /// The faces the insertion of `p` would remove (see [`Self::insert_reporting`]),
+    /// without inserting it; `false` (and nothing listed) when `p` is a vertex already.
+    pub fn cavity_faces(&mut self, p: Point, out: &mut Vec<[u32; 3]>) -> bool {
+        out.clear();
+        let i = self.points.len() as u32;
+        self.points.push(p);
+        let start = self.locate(i);
+        let duplicate =
+            !self.is_ghost(start) && self.tets[start as usize].iter().any(|&v| self.points[v as usize] == p);
+        if !duplicate {
+            self.dig_cavity(start, i);
+            self.interior_faces(out);
+        }
+        self.points.pop();
+        !duplicate
+    }
+
+    /// After `dig_cavity`: the faces between two cavity tets.
+    fn interior_faces(&self, out: &mut Vec<[u32; 3]>) {
+        for &t in &self.cavity {
+            for i in 0..4 {
+                let n = self.nbrs[t as usize][i];
+                if n > t && self.mark[n as usize] == self.stamp {
+                    let v = self.tets[t as usize];
+                    let mut f = FACE[i].map(|j| v[j]);
+                    f.sort_unstable();
+                    out.push(f);
+                }
+            }
+        }
+    }
+
     /// Whether vertex `v` is in the triangulation (duplicates are not).
     pub fn is_vertex(&self, v: u32) -> bool {
         self.vertex_tet.get(v as usize).is_some_and(|&t| t != NONE)

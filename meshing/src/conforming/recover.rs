@@ -3,7 +3,7 @@
 //!
 //! See the module docs of [`crate::conforming`] for the design and why.
 
-use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 
 use super::delaunay::{Delaunay, FACE, GHOST};
 use super::facet::Facet;
@@ -16,6 +16,8 @@ pub(crate) struct Recovery {
     pub dt: Delaunay,
     /// Subsegments: `(a, b, segment id)`.
     subsegs: Vec<(u32, u32, u32)>,
+    /// The subsegments of each segment.
+    seg_subs: Vec<Vec<usize>>,
     /// Input vertex at each end of each segment (for the concentric-shell rule).
     segment_ends: Vec<[u32; 2]>,
     /// Facets containing each segment.
@@ -27,6 +29,15 @@ pub(crate) struct Recovery {
     pub steiner_on_facets: usize,
     max_steiner: usize,
     star: Vec<u32>,
+    /// The facet of each subfacet (sorted corners).
+    pub face_owner: HashMap<[u32; 3], u32>,
+    /// Facets to check for missing subsegments and subfacets.
+    pending: BTreeSet<u32>,
+    destroyed: Vec<[u32; 3]>,
+    /// What made each Steiner point (for messages): "edge", "triangle", "interior".
+    kinds: Vec<&'static str>,
+    /// The kind of the next point added.
+    pub next_kind: &'static str,
 }
 
 impl Recovery {
@@ -53,9 +64,11 @@ impl Recovery {
             facets.push(Facet::new(*t, vertices));
         }
         let subsegs = segment_ends.iter().enumerate().map(|(i, e)| (e[0], e[1], i as u32)).collect();
+        let seg_subs = (0..segment_ends.len()).map(|i| vec![i]).collect();
         Ok(Recovery {
             dt,
             subsegs,
+            seg_subs,
             segment_ends,
             segment_facets,
             facet_segments,
@@ -64,6 +77,17 @@ impl Recovery {
             steiner_on_facets: 0,
             max_steiner,
             star: Vec::new(),
+            face_owner: HashMap::new(),
+            pending: BTreeSet::new(),
+            destroyed: Vec::new(),
+            kinds: Vec::new(),
+            next_kind: "edge",
+        })
+        .map(|mut r| {
+            for f in 0..r.facets.len() {
+                r.index_facet(f, &[]);
+            }
+            r
         })
     }
 
@@ -98,13 +122,26 @@ impl Recovery {
             });
         }
         let n = self.dt.points().len() as u32;
-        let v = self.dt.insert(p);
+        let mut destroyed = std::mem::take(&mut self.destroyed);
+        let v = self.dt.insert_reporting(p, &mut destroyed);
+        for f in &destroyed {
+            if let Some(&owner) = self.face_owner.get(f) {
+                self.pending.insert(owner);
+            }
+        }
+        self.destroyed = destroyed;
         if v != n {
+            let what =
+                (v as usize).checked_sub(self.dt.points().len() - self.kinds.len()).map_or("input", |k| self.kinds[k]);
             return Err(ConformingError::RecoveryFailed {
                 steiner_points: self.steiner(),
-                missing: format!("a Steiner point at {p:?} coincides with vertex {v} (the input is too fine to split)"),
+                missing: format!(
+                    "a Steiner point ({}) at {p:?} coincides with vertex {v} (a {what} point)",
+                    self.next_kind
+                ),
             });
         }
+        self.kinds.push(self.next_kind);
         Ok(v)
     }
 
@@ -134,56 +171,99 @@ impl Recovery {
             0.5
         };
         let m = [pa[0] + t * d[0], pa[1] + t * d[1], pa[2] + t * d[2]];
+        self.next_kind = "edge";
         let v = self.add_point(m)?;
         self.steiner_on_segments += 1;
         self.subsegs[k] = (a, v, s);
         self.subsegs.push((v, b, s));
+        self.seg_subs[s as usize].push(self.subsegs.len() - 1);
         let facets = self.segment_facets[s as usize].clone();
         for f in facets {
             let boundary = self.facet_boundary(f as usize);
             let pts = self.dt.points();
+            let old = self.facets[f as usize].tris.clone();
             self.facets[f as usize].split_edge(a, b, v, pts, &boundary);
+            self.index_facet(f as usize, &old);
+            self.pending.insert(f);
         }
         Ok(())
     }
 
+    /// Indices of the subsegments on facet `f`'s sides.
+    fn facet_subsegs(&self, f: usize) -> impl Iterator<Item = usize> + '_ {
+        self.facet_segments[f].into_iter().flat_map(|s| self.seg_subs[s as usize].iter().copied())
+    }
+
     /// The subsegments on facet `f`'s sides.
     fn facet_boundary(&self, f: usize) -> Vec<(u32, u32)> {
-        let s = self.facet_segments[f];
-        self.subsegs.iter().filter(|x| s.contains(&x.2)).map(|x| (x.0, x.1)).collect()
+        self.facet_subsegs(f).map(|k| (self.subsegs[k].0, self.subsegs[k].1)).collect()
+    }
+
+    /// Replaces facet `f`'s entries in `face_owner` (its triangles were `old`).
+    fn index_facet(&mut self, f: usize, old: &[[u32; 3]]) {
+        for t in old {
+            let mut k = *t;
+            k.sort_unstable();
+            self.face_owner.remove(&k);
+        }
+        for t in &self.facets[f].tris {
+            let mut k = *t;
+            k.sort_unstable();
+            self.face_owner.insert(k, f as u32);
+        }
     }
 
     /// Recovers every subsegment and subfacet (module docs, stage 2).
     pub fn run(&mut self) -> Result<(), ConformingError> {
-        loop {
-            let mut changed = false;
-            // Segments.
-            let mut k = 0;
-            while k < self.subsegs.len() {
-                let (a, b, _) = self.subsegs[k];
-                if !self.has_edge(a, b) {
-                    self.split_subsegment(k)?;
-                    changed = true;
-                    continue;
-                }
-                k += 1;
+        let mut k = 0;
+        while k < self.subsegs.len() {
+            let (a, b, _) = self.subsegs[k];
+            if !self.has_edge(a, b) {
+                self.split_subsegment(k)?;
+                continue;
             }
-            // Facets.
-            for f in 0..self.facets.len() {
-                let tris = self.facets[f].tris.clone();
-                for t in tris {
-                    if self.has_face(t[0], t[1], t[2]) {
-                        continue;
-                    }
-                    changed = true;
-                    self.refine_subfacet(f, t)?;
+            k += 1;
+        }
+        self.pending.extend(0..self.facets.len() as u32);
+        self.recover_pending()
+    }
+
+    /// Recovers the pending facets: their missing subsegments are split, then their
+    /// missing subfacets refined, until every one is present (each Steiner point
+    /// marks the facets whose subfacets its insertion removed as pending).
+    pub fn recover_pending(&mut self) -> Result<(), ConformingError> {
+        while let Some(f) = self.pending.pop_first() {
+            let subs: Vec<usize> = self.facet_subsegs(f as usize).collect();
+            let missing_seg = subs.into_iter().find(|&k| {
+                let (a, b, _) = self.subsegs[k];
+                !self.has_edge(a, b)
+            });
+            if let Some(k) = missing_seg {
+                self.split_subsegment(k)?;
+                self.pending.insert(f);
+                continue;
+            }
+            let tris = self.facets[f as usize].tris.clone();
+            for t in tris {
+                if !self.has_face(t[0], t[1], t[2]) {
+                    self.refine_subfacet(f as usize, t)?;
+                    self.pending.insert(f);
                     break;
                 }
             }
-            if !changed {
-                return Ok(());
-            }
         }
+        Ok(())
+    }
+
+    /// Inserts a point that removes no subfacet (checked by the caller).
+    pub fn insert_free(&mut self, p: Point) -> Result<u32, ConformingError> {
+        self.next_kind = "interior";
+        self.add_point(p)
+    }
+
+    /// [`Self::refine_subfacet`] for refinement.
+    pub fn refine_subfacet_pub(&mut self, f: usize, t: [u32; 3]) -> Result<(), ConformingError> {
+        self.refine_subfacet(f, t)
     }
 
     /// A missing subfacet `t` of facet `f`: insert its circumcentre, or split a
@@ -192,17 +272,17 @@ impl Recovery {
     fn refine_subfacet(&mut self, f: usize, t: [u32; 3]) -> Result<(), ConformingError> {
         let pts = self.dt.points();
         let c = circumcentre(t.map(|v| pts[v as usize]));
-        let s = self.facet_segments[f];
         let mut worst: Option<(usize, f64)> = None;
-        for (k, &(a, b, id)) in self.subsegs.iter().enumerate() {
-            if !s.contains(&id) {
-                continue;
-            }
+        for k in self.facet_subsegs(f) {
+            let (a, b, _) = self.subsegs[k];
             let (pa, pb) = (pts[a as usize], pts[b as usize]);
             let m = [0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1]), 0.5 * (pa[2] + pb[2])];
             let r2 = 0.25 * dot(sub(pb, pa), sub(pb, pa));
             let d2 = dot(sub(c, m), sub(c, m));
-            if d2 < r2 && worst.is_none_or(|(_, w)| d2 / r2 < w) {
+            // Closed ball, with a margin for rounding: a circumcentre on a
+            // subsegment (a right subfacet's) splits the subsegment instead of
+            // landing next to it.
+            if d2 <= r2 * (1.0 + 1e-9) && worst.is_none_or(|(_, w)| d2 / r2 < w) {
                 worst = Some((k, d2 / r2));
             }
         }
@@ -216,25 +296,16 @@ impl Recovery {
             let q = t.map(|v| pts[v as usize]);
             [0, 1, 2].map(|k| (q[0][k] + q[1][k] + q[2][k]) / 3.0)
         };
+        self.next_kind = "triangle";
         let v = self.add_point(p)?;
         self.steiner_on_facets += 1;
         let boundary = self.facet_boundary(f);
         let pts = self.dt.points();
+        let old = self.facets[f].tris.clone();
         self.facets[f].insert_interior(v, pts, &boundary);
+        self.index_facet(f, &old);
+        self.pending.insert(f as u32);
         Ok(())
-    }
-
-    /// The constrained faces: every subfacet, as sorted vertex triples.
-    pub fn constrained_faces(&self) -> HashSet<[u32; 3]> {
-        let mut out = HashSet::new();
-        for f in &self.facets {
-            for t in &f.tris {
-                let mut k = *t;
-                k.sort_unstable();
-                out.insert(k);
-            }
-        }
-        out
     }
 }
 
@@ -254,7 +325,10 @@ pub(crate) fn circumcentre(q: [Point; 3]) -> Point {
 /// The finite tets not reachable from the outside (the ghosts) without
 /// crossing a constrained face, grouped into the components that constrained
 /// faces separate: `(tet corners, component)` and the number of components.
-pub(crate) fn interior_components(dt: &Delaunay, constrained: &HashSet<[u32; 3]>) -> (Vec<([u32; 4], u32)>, usize) {
+pub(crate) fn interior_components(
+    dt: &Delaunay,
+    constrained: &HashMap<[u32; 3], u32>,
+) -> (Vec<(u32, [u32; 4], u32)>, usize) {
     let live: Vec<(u32, [u32; 4])> = dt.live_tets().collect();
     let slots = live.iter().map(|(t, _)| *t as usize + 1).max().unwrap_or(0);
     const UNSEEN: u32 = u32::MAX;
@@ -278,7 +352,7 @@ pub(crate) fn interior_components(dt: &Delaunay, constrained: &HashSet<[u32; 3]>
                     continue;
                 }
                 let k = face_key(v, i);
-                if !k.contains(&GHOST) && constrained.contains(&k) {
+                if !k.contains(&GHOST) && constrained.contains_key(&k) {
                     continue;
                 }
                 comp[n[i] as usize] = label;
@@ -295,7 +369,8 @@ pub(crate) fn interior_components(dt: &Delaunay, constrained: &HashSet<[u32; 3]>
             count += 1;
         }
     }
-    let out = live.iter().filter(|(t, _)| comp[*t as usize] < OUTSIDE).map(|(t, v)| (*v, comp[*t as usize])).collect();
+    let out =
+        live.iter().filter(|(t, _)| comp[*t as usize] < OUTSIDE).map(|(t, v)| (*t, *v, comp[*t as usize])).collect();
     (out, count as usize)
 }
 
