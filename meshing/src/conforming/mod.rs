@@ -114,7 +114,7 @@ impl ConformingOptions {
 pub enum ConformingError {
     /// The surface is not clean and closed (strict mode): the defect, named.
     #[error("conforming mode needs a clean, closed surface: {0}")]
-    Invalid(#[from] InvalidSurface),
+    Invalid(InvalidSurface),
     /// The points have no tetrahedralization.
     #[error(transparent)]
     Delaunay(DelaunayError),
@@ -138,6 +138,14 @@ pub enum ConformingError {
         /// The check that failed.
         cause: String,
     },
+}
+
+// Not `#[from]`: that would also make it the error's source, and error chains
+// would name the defect twice.
+impl From<InvalidSurface> for ConformingError {
+    fn from(e: InvalidSurface) -> Self {
+        ConformingError::Invalid(e)
+    }
 }
 
 /// Counts and timings of a run.
