@@ -372,6 +372,17 @@ fn two_boxes_sharing_a_face_become_two_regions() {
 }
 
 #[test]
+fn the_layered_bunny_keeps_its_three_nested_regions_exactly() {
+    let s = read_obj("meshes/layered_bunny.obj");
+    let out = conforming_mesh(&s, &RECOVERY_ONLY).unwrap();
+    assert_eq!(out.mesh.region_names.len(), 3);
+    let r = check_conforming(&out.mesh, &s);
+    // Each region against its shell less the shells nested in it (1e-9, checked above).
+    assert_eq!(r.regions.len(), 3);
+    assert!(r.regions.iter().all(|g| g.num_cells > 0 && g.volume_error.is_some()), "{:?}", r.regions);
+}
+
+#[test]
 fn defective_input_is_refused_with_the_defect_named() {
     let mut s = cube([0.0; 3], [1.0; 3]);
     s.triangles.pop();

@@ -139,6 +139,46 @@ impl Facet {
         k
     }
 
+    /// The flips open to triangle `t`: for each of its edges `(u, v)` off the
+    /// boundary whose quad with the triangle `(v, u, x)` across it is strictly
+    /// convex, `(u, v, w, x)` with `w` the third corner of `t`. Flipping gives
+    /// `(w, u, x)` and `(x, v, w)`.
+    pub fn flips_of(&self, t: [u32; 3], boundary: &[(u32, u32)]) -> Vec<(u32, u32, u32, u32)> {
+        let mut out = Vec::new();
+        for e in 0..3 {
+            let (u, v, w) = (t[e], t[(e + 1) % 3], t[(e + 2) % 3]);
+            if Self::is_boundary(boundary, u, v) {
+                continue;
+            }
+            let Some(&j) = self.edge_tri.get(&(v, u)) else { continue };
+            let s = self.tris[j];
+            let k = (0..3).find(|&k| s[k] == v && s[(k + 1) % 3] == u).unwrap_or(0);
+            let x = s[(k + 2) % 3];
+            let (pu, pv, pw, px) = (self.xy(u), self.xy(v), self.xy(w), self.xy(x));
+            if robust::orient2d(pw, pu, px) > 0.0 && robust::orient2d(px, pv, pw) > 0.0 {
+                out.push((u, v, w, x));
+            }
+        }
+        out
+    }
+
+    /// Flips the edge `(u, v)` (one of [`Self::flips_of`]).
+    pub fn flip(&mut self, u: u32, v: u32) {
+        let (Some(&i), Some(&j)) = (self.edge_tri.get(&(u, v)), self.edge_tri.get(&(v, u))) else { return };
+        let t = self.tris[i];
+        let e = (0..3).find(|&e| t[e] == u && t[(e + 1) % 3] == v).unwrap_or(0);
+        let w = t[(e + 2) % 3];
+        let s = self.tris[j];
+        let k = (0..3).find(|&k| s[k] == v && s[(k + 1) % 3] == u).unwrap_or(0);
+        let x = s[(k + 2) % 3];
+        self.unindex(i);
+        self.unindex(j);
+        self.tris[i] = [w, u, x];
+        self.tris[j] = [x, v, w];
+        self.index(i);
+        self.index(j);
+    }
+
     /// Lawson flips from the directed edges on `stack` (each with the new point
     /// on its left): an edge is flipped when it is not on the facet's boundary,
     /// the point across it is inside the circumcircle (in the facet's frame) and

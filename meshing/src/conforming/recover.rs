@@ -246,6 +246,12 @@ impl Recovery {
             let tris = self.facets[f as usize].tris.clone();
             for t in tris {
                 if !self.has_face(t[0], t[1], t[2]) {
+                    // Cocircular points have two Delaunay triangulations: when the
+                    // tetrahedralization took the other diagonal, flip to it.
+                    if self.match_by_flip(f as usize, t) {
+                        self.pending.insert(f);
+                        break;
+                    }
                     self.refine_subfacet(f as usize, t)?;
                     self.pending.insert(f);
                     break;
@@ -253,6 +259,21 @@ impl Recovery {
             }
         }
         Ok(())
+    }
+
+    /// Flips an edge of the missing subfacet `t` of facet `f` when both triangles
+    /// of the flipped quad are faces of the tetrahedralization; whether it did.
+    fn match_by_flip(&mut self, f: usize, t: [u32; 3]) -> bool {
+        let boundary = self.facet_boundary(f);
+        for (u, v, w, x) in self.facets[f].flips_of(t, &boundary) {
+            if self.has_face(w, u, x) && self.has_face(x, v, w) {
+                let old = self.facets[f].tris.clone();
+                self.facets[f].flip(u, v);
+                self.index_facet(f, &old);
+                return true;
+            }
+        }
+        false
     }
 
     /// Inserts a point that removes no subfacet (checked by the caller).
