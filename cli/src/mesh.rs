@@ -12,7 +12,9 @@
 //!    its pieces apart;
 //! 3. mesh it: `--mode envelope` (the default; `meshing::envelope`, isosurface
 //!    stuffing on the generalized winding number), with `--layers-mm` cutting
-//!    layers along y; `--mode conforming` is not available yet and says so;
+//!    layers along y; or `--mode conforming` (`meshing::conforming`: a boundary
+//!    made of the input triangles exactly), which is strict: the surface as read,
+//!    no repair, and a defective one is refused with the defect named;
 //! 4. measure it (`meshing::quality::report`) and write the mesh (by extension:
 //!    `.vtu`, `.msh`, or `.node`/`.ele` for TetGen's three files) and, with
 //!    `--report`, the report as JSON.
@@ -27,6 +29,7 @@ use std::time::{Duration, Instant};
 use anyhow::{bail, Context};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use meshing::conforming::{conforming_mesh, ConformingOptions, ConformingStats};
 use meshing::envelope::{envelope_mesh_with_progress, EnvelopeOptions, EnvelopeStats, EnvelopeWarning};
 use meshing::quality::{report, QualityReport};
 use meshing::repair::{repair, RepairOptions};
@@ -56,7 +59,8 @@ pub enum Mode {
     /// self-intersecting, non-manifold), guaranteed angles, boundary within the
     /// lattice's chord error of the input.
     Envelope,
-    /// A boundary that reproduces the input exactly (clean, closed input): not available yet.
+    /// A boundary that reproduces the input exactly (clean, closed input only:
+    /// a defect is refused, named); no radius-edge quality refinement yet.
     Conforming,
 }
 
@@ -147,17 +151,17 @@ struct MeshReport<'a> {
     size_mm: f64,
     layers_mm: &'a [f64],
     quality: &'a QualityReport,
-    envelope: &'a EnvelopeStats,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    envelope: Option<&'a EnvelopeStats>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    conforming: Option<&'a ConformingStats>,
     warnings: Vec<WarningEntry<'a>>,
 }
 
 /// Runs `wagashi mesh`.
 pub fn run(args: &MeshArgs) -> anyhow::Result<()> {
-    if args.mode == Mode::Conforming {
-        bail!(
-            "--mode conforming is not available yet (a boundary that reproduces the input exactly is still \
-             being built); use --mode envelope, the default"
-        );
+    if args.mode == Mode::Conforming && !args.layers_mm.is_empty() {
+        bail!("--layers-mm works with --mode envelope only (conforming mode keeps the input's regions)");
     }
     // Refuse bad outputs before the (possibly long) work.
     let format = TetMeshFormat::of_path(&args.output)?;
@@ -172,24 +176,33 @@ pub fn run(args: &MeshArgs) -> anyhow::Result<()> {
 
     let clock = Instant::now();
     let imported = read_surface(&args.surface, &SurfaceOptions { units, scale: args.scale, format: None })?;
+    let conforming = args.mode == Mode::Conforming;
     let repaired = repair(&imported.surface, &RepairOptions::default())
         .with_context(|| format!("{}: repairing the surface", args.surface.display()))?;
     // Repair orients by walking across edges; on a soup it cannot weld it may turn
     // faces the wrong way. Keep the version whose inside is less ambiguous.
+    // Conforming mode is strict: the file's surface, as read.
     let (lo, hi) = imported.surface.bounding_box();
     let ambiguity = |s: &meshing::Surface| WindingNumber::new(s).ambiguous_fraction(lo, hi, 16);
-    let repair_used = ambiguity(&repaired.surface) <= ambiguity(&imported.surface);
+    let repair_used = !conforming && ambiguity(&repaired.surface) <= ambiguity(&imported.surface);
     let surface = if repair_used { &repaired.surface } else { &imported.surface };
 
-    let bar = Progress::new();
-    let options = EnvelopeOptions { layers_mm: args.layers_mm.clone(), ..EnvelopeOptions::new(args.size_mm) };
-    let meshed = envelope_mesh_with_progress(surface, &options, &|stage, f| bar.update(stage, f));
-    bar.finish();
-    let meshed = meshed.with_context(|| format!("meshing {}", args.surface.display()))?;
+    let (mesh, warnings, envelope_stats, conforming_stats) = if conforming {
+        let out = conforming_mesh(surface, &ConformingOptions::new(args.size_mm))
+            .with_context(|| format!("{} (for defective input use --mode envelope)", args.surface.display()))?;
+        (out.mesh, Vec::new(), None, Some(out.stats))
+    } else {
+        let bar = Progress::new();
+        let options = EnvelopeOptions { layers_mm: args.layers_mm.clone(), ..EnvelopeOptions::new(args.size_mm) };
+        let meshed = envelope_mesh_with_progress(surface, &options, &|stage, f| bar.update(stage, f));
+        bar.finish();
+        let meshed = meshed.with_context(|| format!("meshing {}", args.surface.display()))?;
+        (meshed.mesh, meshed.warnings, Some(meshed.stats), None)
+    };
     let mesh_time_s = clock.elapsed().as_secs_f64();
-    let quality = report(&meshed.mesh, surface, mesh_time_s);
+    let quality = report(&mesh, surface, mesh_time_s);
 
-    write_tetmesh(&args.output, &meshed.mesh)?;
+    write_tetmesh(&args.output, &mesh)?;
     let r = &repaired.report;
     let input = InputReport {
         file: args.surface.display().to_string(),
@@ -209,12 +222,20 @@ pub fn run(args: &MeshArgs) -> anyhow::Result<()> {
         },
     };
     let mut out = std::io::stdout().lock();
-    print_table(&mut out, args, format, &input, &quality, &meshed.stats)?;
+    let detail = match (&envelope_stats, &conforming_stats) {
+        (Some(e), _) => format!("{} lattice vertices, {} warped", e.lattice_vertices, e.warped_vertices),
+        (_, Some(c)) => format!(
+            "{} Steiner points on input edges, {} in input triangles, {} inside",
+            c.steiner_on_edges, c.steiner_on_triangles, c.refinement.circumcentres
+        ),
+        _ => String::new(),
+    };
+    print_table(&mut out, args, format, &input, &quality, &detail)?;
     let mut err = std::io::stderr().lock();
     for w in &imported.warnings {
         writeln!(err, "warning: {}: {w}", args.surface.display())?;
     }
-    for w in &meshed.warnings {
+    for w in &warnings {
         writeln!(err, "warning: {w}")?;
     }
     if let Some(path) = &args.report {
@@ -222,12 +243,13 @@ pub fn run(args: &MeshArgs) -> anyhow::Result<()> {
             wagashi_version: env!("CARGO_PKG_VERSION"),
             input,
             output: args.output.display().to_string(),
-            mode: "envelope",
+            mode: if conforming { "conforming" } else { "envelope" },
             size_mm: args.size_mm,
             layers_mm: &args.layers_mm,
             quality: &quality,
-            envelope: &meshed.stats,
-            warnings: meshed.warnings.iter().map(|w| WarningEntry { message: w.to_string(), detail: w }).collect(),
+            envelope: envelope_stats.as_ref(),
+            conforming: conforming_stats.as_ref(),
+            warnings: warnings.iter().map(|w| WarningEntry { message: w.to_string(), detail: w }).collect(),
         };
         let text = serde_json::to_string_pretty(&json).context("formatting the report")?;
         write_atomic(path, (text + "\n").as_bytes())?;
@@ -254,7 +276,7 @@ fn print_table(
     format: TetMeshFormat,
     input: &InputReport,
     q: &QualityReport,
-    stats: &EnvelopeStats,
+    detail: &str,
 ) -> std::io::Result<()> {
     let written = match format {
         TetMeshFormat::TetGen => {
@@ -263,7 +285,8 @@ fn print_table(
         }
         _ => args.output.display().to_string(),
     };
-    writeln!(out, "{} -> {written} (envelope, {} mm)", input.file, args.size_mm)?;
+    let mode = if args.mode == Mode::Conforming { "conforming" } else { "envelope" };
+    writeln!(out, "{} -> {written} ({mode}, {} mm)", input.file, args.size_mm)?;
     let row = |out: &mut dyn Write, k: &str, v: String| writeln!(out, "  {k:<18} {v}");
     row(
         out,
@@ -318,14 +341,7 @@ fn print_table(
         };
         row(out, &format!("region {}", r.name), format!("{} tets, {:.6e} mm^3{reference}", r.num_cells, r.volume_mm3))?;
     }
-    row(
-        out,
-        "time",
-        format!(
-            "{:.2} s meshing ({} lattice vertices, {} warped), {:.2} s report",
-            q.mesh_time_s, stats.lattice_vertices, stats.warped_vertices, q.report_time_s
-        ),
-    )?;
+    row(out, "time", format!("{:.2} s meshing ({detail}), {:.2} s report", q.mesh_time_s, q.report_time_s))?;
     Ok(())
 }
 

@@ -114,12 +114,38 @@ fn defective_bunnies_give_the_bunny() {
 }
 
 #[test]
+fn conforming_mode_keeps_the_input_boundary_and_refuses_defects() {
+    let dir = tempfile::tempdir().unwrap();
+    let bunny = mesh_data("npm_bunny.obj");
+    let o = mesh(
+        dir.path(),
+        &[bunny.to_str().unwrap(), "-o", "b.node", "--size-mm", "0.8", "--mode", "conforming", "--report", "r.json"],
+    );
+    assert_success(&o);
+    assert!(stdout(&o).contains("(conforming, 0.8 mm)"), "{}", stdout(&o));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("r.json")).unwrap()).unwrap();
+    assert_eq!(json["mode"], "conforming");
+    assert!(json["quality"]["volume_error"].as_f64().unwrap().abs() <= 1e-9);
+    assert!(json["quality"]["hausdorff_relative"].as_f64().unwrap() <= 1e-9);
+    assert_eq!(json["quality"]["num_inverted"], 0);
+    let m = read_tetmesh(dir.path().join("b.node")).unwrap();
+    assert!(m.cells.len() > 1000);
+    // A bunny with a hole: refused in strict mode, the defect named, nothing written.
+    let hole = mesh_data("bad_syn_hole.obj");
+    let o = mesh(dir.path(), &[hole.to_str().unwrap(), "-o", "h.vtu", "--size-mm", "0.8", "--mode", "conforming"]);
+    let line = assert_one_line_error(&o);
+    assert!(line.contains("conforming mode") && line.contains("border"), "{line}");
+    assert!(!dir.path().join("h.vtu").exists());
+}
+
+#[test]
 fn refusals_are_one_line_errors() {
     let dir = tempfile::tempdir().unwrap();
     let bunny = mesh_data("npm_bunny.obj");
     let b = bunny.to_str().unwrap();
     let cases: [(&[&str], &str); 6] = [
-        (&[b, "-o", "x.vtu", "--size-mm", "1", "--mode", "conforming"], "--mode conforming is not available yet"),
+        (&[b, "-o", "x.vtu", "--size-mm", "1", "--mode", "conforming", "--layers-mm", "1"], "--mode envelope only"),
         (&[b, "-o", "x.stl", "--size-mm", "1"], "unknown mesh format"),
         (&[b, "-o", "no/such/x.vtu", "--size-mm", "1"], "does not exist"),
         (&[b, "-o", "x.vtu", "--size-mm", "1", "--units", "furlong"], "unknown length unit"),

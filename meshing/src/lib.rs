@@ -7,6 +7,7 @@
 //! and runs no simulation.
 
 pub mod bvh;
+pub mod conforming;
 pub mod envelope;
 pub mod layers;
 pub mod predicates;

@@ -1,0 +1,405 @@
+//! Boundary recovery by conforming Delaunay refinement (stage 2), exterior
+//! removal and region tagging.
+//!
+//! See the module docs of [`crate::conforming`] for the design and why.
+
+use std::collections::{BTreeMap, BTreeSet, HashMap};
+
+use super::delaunay::{Delaunay, FACE, GHOST};
+use super::facet::Facet;
+use super::ConformingError;
+use crate::predicates::{cross, dot, sub, Point};
+
+/// The input as a piecewise-linear complex: vertices, the unique input edges
+/// (*segments*) and triangles (*facets*), each split as Steiner points arrive.
+pub(crate) struct Recovery {
+    pub dt: Delaunay,
+    /// Subsegments: `(a, b, segment id)`.
+    subsegs: Vec<(u32, u32, u32)>,
+    /// The subsegments of each segment.
+    seg_subs: Vec<Vec<usize>>,
+    /// Input vertex at each end of each segment (for the concentric-shell rule).
+    segment_ends: Vec<[u32; 2]>,
+    /// Facets containing each segment.
+    segment_facets: Vec<Vec<u32>>,
+    /// Segment ids of each facet's three sides.
+    facet_segments: Vec<[u32; 3]>,
+    pub facets: Vec<Facet>,
+    pub steiner_on_segments: usize,
+    pub steiner_on_facets: usize,
+    max_steiner: usize,
+    star: Vec<u32>,
+    /// The facet of each subfacet (sorted corners).
+    pub face_owner: HashMap<[u32; 3], u32>,
+    /// Facets to check for missing subsegments and subfacets.
+    pending: BTreeSet<u32>,
+    destroyed: Vec<[u32; 3]>,
+    /// What made each Steiner point (for messages): "edge", "triangle", "interior".
+    kinds: Vec<&'static str>,
+    /// The kind of the next point added.
+    pub next_kind: &'static str,
+}
+
+impl Recovery {
+    pub fn new(vertices: &[Point], triangles: &[[u32; 3]], max_steiner: usize) -> Result<Self, ConformingError> {
+        let dt = Delaunay::new(vertices).map_err(ConformingError::Delaunay)?;
+        let mut seg_id: HashMap<(u32, u32), u32> = HashMap::new();
+        let mut segment_ends = Vec::new();
+        let mut segment_facets: Vec<Vec<u32>> = Vec::new();
+        let mut facet_segments = Vec::new();
+        let mut facets = Vec::new();
+        for (f, t) in triangles.iter().enumerate() {
+            let mut ids = [0u32; 3];
+            for i in 0..3 {
+                let (a, b) = (t[i].min(t[(i + 1) % 3]), t[i].max(t[(i + 1) % 3]));
+                let id = *seg_id.entry((a, b)).or_insert_with(|| {
+                    segment_ends.push([a, b]);
+                    segment_facets.push(Vec::new());
+                    (segment_ends.len() - 1) as u32
+                });
+                segment_facets[id as usize].push(f as u32);
+                ids[i] = id;
+            }
+            facet_segments.push(ids);
+            facets.push(Facet::new(*t, vertices));
+        }
+        let subsegs = segment_ends.iter().enumerate().map(|(i, e)| (e[0], e[1], i as u32)).collect();
+        let seg_subs = (0..segment_ends.len()).map(|i| vec![i]).collect();
+        Ok(Recovery {
+            dt,
+            subsegs,
+            seg_subs,
+            segment_ends,
+            segment_facets,
+            facet_segments,
+            facets,
+            steiner_on_segments: 0,
+            steiner_on_facets: 0,
+            max_steiner,
+            star: Vec::new(),
+            face_owner: HashMap::new(),
+            pending: BTreeSet::new(),
+            destroyed: Vec::new(),
+            kinds: Vec::new(),
+            next_kind: "edge",
+        })
+        .map(|mut r| {
+            for f in 0..r.facets.len() {
+                r.index_facet(f, &[]);
+            }
+            r
+        })
+    }
+
+    fn has_edge(&mut self, a: u32, b: u32) -> bool {
+        let mut star = std::mem::take(&mut self.star);
+        self.dt.star(a, &mut star);
+        let found = star.iter().any(|&t| self.dt.tet(t).contains(&b));
+        self.star = star;
+        found
+    }
+
+    fn has_face(&mut self, a: u32, b: u32, c: u32) -> bool {
+        let mut star = std::mem::take(&mut self.star);
+        self.dt.star(a, &mut star);
+        let found = star.iter().any(|&t| {
+            let v = self.dt.tet(t);
+            v.contains(&b) && v.contains(&c)
+        });
+        self.star = star;
+        found
+    }
+
+    fn steiner(&self) -> usize {
+        self.steiner_on_segments + self.steiner_on_facets
+    }
+
+    fn add_point(&mut self, p: Point) -> Result<u32, ConformingError> {
+        if self.steiner() >= self.max_steiner {
+            return Err(ConformingError::RecoveryFailed {
+                steiner_points: self.steiner(),
+                missing: "the Steiner point budget ran out".into(),
+            });
+        }
+        let n = self.dt.points().len() as u32;
+        let mut destroyed = std::mem::take(&mut self.destroyed);
+        let v = self.dt.insert_reporting(p, &mut destroyed);
+        for f in &destroyed {
+            if let Some(&owner) = self.face_owner.get(f) {
+                self.pending.insert(owner);
+            }
+        }
+        self.destroyed = destroyed;
+        if v != n {
+            let what =
+                (v as usize).checked_sub(self.dt.points().len() - self.kinds.len()).map_or("input", |k| self.kinds[k]);
+            return Err(ConformingError::RecoveryFailed {
+                steiner_points: self.steiner(),
+                missing: format!(
+                    "a Steiner point ({}) at {p:?} coincides with vertex {v} (a {what} point)",
+                    self.next_kind
+                ),
+            });
+        }
+        self.kinds.push(self.next_kind);
+        Ok(v)
+    }
+
+    /// Splits subsegment `k`: at its midpoint, or, when one end is an input
+    /// vertex, at the power-of-two distance from it nearest to the midpoint
+    /// (Ruppert's concentric shells: subsegments meeting at an input vertex at a
+    /// small angle are split at equal radii and stop encroaching each other).
+    fn split_subsegment(&mut self, k: usize) -> Result<(), ConformingError> {
+        let (a, b, s) = self.subsegs[k];
+        let pts = self.dt.points();
+        let (pa, pb) = (pts[a as usize], pts[b as usize]);
+        let d = sub(pb, pa);
+        let len = dot(d, d).sqrt();
+        let ends = self.segment_ends[s as usize];
+        let a_input = ends.contains(&a);
+        let b_input = ends.contains(&b);
+        let t = if a_input != b_input {
+            // The power of two in [len / 3, 2 len / 3] (there is always one).
+            let r = 2f64.powi((len / 3.0).log2().ceil() as i32);
+            let r = if r <= 2.0 * len / 3.0 { r } else { 0.5 * len };
+            if a_input {
+                r / len
+            } else {
+                1.0 - r / len
+            }
+        } else {
+            0.5
+        };
+        let m = [pa[0] + t * d[0], pa[1] + t * d[1], pa[2] + t * d[2]];
+        self.next_kind = "edge";
+        let v = self.add_point(m)?;
+        self.steiner_on_segments += 1;
+        self.subsegs[k] = (a, v, s);
+        self.subsegs.push((v, b, s));
+        self.seg_subs[s as usize].push(self.subsegs.len() - 1);
+        let facets = self.segment_facets[s as usize].clone();
+        for f in facets {
+            let boundary = self.facet_boundary(f as usize);
+            let pts = self.dt.points();
+            let old = self.facets[f as usize].tris.clone();
+            self.facets[f as usize].split_edge(a, b, v, pts, &boundary);
+            self.index_facet(f as usize, &old);
+            self.pending.insert(f);
+        }
+        Ok(())
+    }
+
+    /// Indices of the subsegments on facet `f`'s sides.
+    fn facet_subsegs(&self, f: usize) -> impl Iterator<Item = usize> + '_ {
+        self.facet_segments[f].into_iter().flat_map(|s| self.seg_subs[s as usize].iter().copied())
+    }
+
+    /// The subsegments on facet `f`'s sides.
+    fn facet_boundary(&self, f: usize) -> Vec<(u32, u32)> {
+        self.facet_subsegs(f).map(|k| (self.subsegs[k].0, self.subsegs[k].1)).collect()
+    }
+
+    /// Replaces facet `f`'s entries in `face_owner` (its triangles were `old`).
+    fn index_facet(&mut self, f: usize, old: &[[u32; 3]]) {
+        for t in old {
+            let mut k = *t;
+            k.sort_unstable();
+            self.face_owner.remove(&k);
+        }
+        for t in &self.facets[f].tris {
+            let mut k = *t;
+            k.sort_unstable();
+            self.face_owner.insert(k, f as u32);
+        }
+    }
+
+    /// Recovers every subsegment and subfacet (module docs, stage 2).
+    pub fn run(&mut self) -> Result<(), ConformingError> {
+        let mut k = 0;
+        while k < self.subsegs.len() {
+            let (a, b, _) = self.subsegs[k];
+            if !self.has_edge(a, b) {
+                self.split_subsegment(k)?;
+                continue;
+            }
+            k += 1;
+        }
+        self.pending.extend(0..self.facets.len() as u32);
+        self.recover_pending()
+    }
+
+    /// Recovers the pending facets: their missing subsegments are split, then their
+    /// missing subfacets refined, until every one is present (each Steiner point
+    /// marks the facets whose subfacets its insertion removed as pending).
+    pub fn recover_pending(&mut self) -> Result<(), ConformingError> {
+        while let Some(f) = self.pending.pop_first() {
+            let subs: Vec<usize> = self.facet_subsegs(f as usize).collect();
+            let missing_seg = subs.into_iter().find(|&k| {
+                let (a, b, _) = self.subsegs[k];
+                !self.has_edge(a, b)
+            });
+            if let Some(k) = missing_seg {
+                self.split_subsegment(k)?;
+                self.pending.insert(f);
+                continue;
+            }
+            let tris = self.facets[f as usize].tris.clone();
+            for t in tris {
+                if !self.has_face(t[0], t[1], t[2]) {
+                    // Cocircular points have two Delaunay triangulations: when the
+                    // tetrahedralization took the other diagonal, flip to it.
+                    if self.match_by_flip(f as usize, t) {
+                        self.pending.insert(f);
+                        break;
+                    }
+                    self.refine_subfacet(f as usize, t)?;
+                    self.pending.insert(f);
+                    break;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Flips an edge of the missing subfacet `t` of facet `f` when both triangles
+    /// of the flipped quad are faces of the tetrahedralization; whether it did.
+    fn match_by_flip(&mut self, f: usize, t: [u32; 3]) -> bool {
+        let boundary = self.facet_boundary(f);
+        for (u, v, w, x) in self.facets[f].flips_of(t, &boundary) {
+            if self.has_face(w, u, x) && self.has_face(x, v, w) {
+                let old = self.facets[f].tris.clone();
+                self.facets[f].flip(u, v);
+                self.index_facet(f, &old);
+                return true;
+            }
+        }
+        false
+    }
+
+    /// Inserts a point that removes no subfacet (checked by the caller).
+    pub fn insert_free(&mut self, p: Point) -> Result<u32, ConformingError> {
+        self.next_kind = "interior";
+        self.add_point(p)
+    }
+
+    /// [`Self::refine_subfacet`] for refinement.
+    pub fn refine_subfacet_pub(&mut self, f: usize, t: [u32; 3]) -> Result<(), ConformingError> {
+        self.refine_subfacet(f, t)
+    }
+
+    /// A missing subfacet `t` of facet `f`: insert its circumcentre, or split a
+    /// subsegment of `f` that the circumcentre encroaches (lies in the diametral
+    /// ball of).
+    fn refine_subfacet(&mut self, f: usize, t: [u32; 3]) -> Result<(), ConformingError> {
+        let pts = self.dt.points();
+        let c = circumcentre(t.map(|v| pts[v as usize]));
+        let mut worst: Option<(usize, f64)> = None;
+        for k in self.facet_subsegs(f) {
+            let (a, b, _) = self.subsegs[k];
+            let (pa, pb) = (pts[a as usize], pts[b as usize]);
+            let m = [0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1]), 0.5 * (pa[2] + pb[2])];
+            let r2 = 0.25 * dot(sub(pb, pa), sub(pb, pa));
+            let d2 = dot(sub(c, m), sub(c, m));
+            // Closed ball, with a margin for rounding: a circumcentre on a
+            // subsegment (a right subfacet's) splits the subsegment instead of
+            // landing next to it.
+            if d2 <= r2 * (1.0 + 1e-9) && worst.is_none_or(|(_, w)| d2 / r2 < w) {
+                worst = Some((k, d2 / r2));
+            }
+        }
+        if let Some((k, _)) = worst {
+            return self.split_subsegment(k);
+        }
+        let inside = self.facets[f].contains(c, pts);
+        let p = if inside {
+            c
+        } else {
+            let q = t.map(|v| pts[v as usize]);
+            [0, 1, 2].map(|k| (q[0][k] + q[1][k] + q[2][k]) / 3.0)
+        };
+        self.next_kind = "triangle";
+        let v = self.add_point(p)?;
+        self.steiner_on_facets += 1;
+        let boundary = self.facet_boundary(f);
+        let pts = self.dt.points();
+        let old = self.facets[f].tris.clone();
+        self.facets[f].insert_interior(v, pts, &boundary);
+        self.index_facet(f, &old);
+        self.pending.insert(f as u32);
+        Ok(())
+    }
+}
+
+/// The circumcentre of a triangle in 3D.
+pub(crate) fn circumcentre(q: [Point; 3]) -> Point {
+    let a = sub(q[1], q[0]);
+    let b = sub(q[2], q[0]);
+    let n = cross(a, b);
+    let nn = dot(n, n);
+    let t1 = cross(n, a);
+    let t2 = cross(b, n);
+    let (aa, bb) = (dot(a, a), dot(b, b));
+    // c - q0 = (|a|^2 (b x n) + |b|^2 (n x a)) / (2 |n|^2)
+    [0, 1, 2].map(|k| q[0][k] + (aa * t2[k] + bb * t1[k]) / (2.0 * nn))
+}
+
+/// The finite tets not reachable from the outside (the ghosts) without
+/// crossing a constrained face, grouped into the components that constrained
+/// faces separate: `(tet corners, component)` and the number of components.
+pub(crate) fn interior_components(
+    dt: &Delaunay,
+    constrained: &HashMap<[u32; 3], u32>,
+) -> (Vec<(u32, [u32; 4], u32)>, usize) {
+    let live: Vec<(u32, [u32; 4])> = dt.live_tets().collect();
+    let slots = live.iter().map(|(t, _)| *t as usize + 1).max().unwrap_or(0);
+    const UNSEEN: u32 = u32::MAX;
+    const OUTSIDE: u32 = u32::MAX - 1;
+    let mut comp = vec![UNSEEN; slots];
+    let face_key = |v: [u32; 4], i: usize| {
+        let mut k = FACE[i].map(|j| v[j]);
+        k.sort_unstable();
+        k
+    };
+    let flood = |seeds: Vec<u32>, label: u32, comp: &mut Vec<u32>| {
+        let mut stack = seeds;
+        for &s in &stack {
+            comp[s as usize] = label;
+        }
+        while let Some(t) = stack.pop() {
+            let v = dt.tet(t);
+            let n = dt.neighbours(t);
+            for i in 0..4 {
+                if comp[n[i] as usize] != UNSEEN {
+                    continue;
+                }
+                let k = face_key(v, i);
+                if !k.contains(&GHOST) && constrained.contains_key(&k) {
+                    continue;
+                }
+                comp[n[i] as usize] = label;
+                stack.push(n[i]);
+            }
+        }
+    };
+    let ghosts: Vec<u32> = live.iter().filter(|(_, v)| v.contains(&GHOST)).map(|(t, _)| *t).collect();
+    flood(ghosts, OUTSIDE, &mut comp);
+    let mut count = 0u32;
+    for &(t, _) in &live {
+        if comp[t as usize] == UNSEEN {
+            flood(vec![t], count, &mut comp);
+            count += 1;
+        }
+    }
+    let out =
+        live.iter().filter(|(t, _)| comp[*t as usize] < OUTSIDE).map(|(t, v)| (*t, *v, comp[*t as usize])).collect();
+    (out, count as usize)
+}
+
+/// Compacts the vertices used by `tets`: `(nodes, renumbered tets)`.
+pub(crate) fn compact(points: &[Point], tets: &[[u32; 4]]) -> (Vec<Point>, Vec<[u32; 4]>) {
+    let used: BTreeSet<u32> = tets.iter().flatten().copied().collect();
+    let map: BTreeMap<u32, u32> = used.iter().enumerate().map(|(i, &v)| (v, i as u32)).collect();
+    let nodes = used.iter().map(|&v| points[v as usize]).collect();
+    let cells = tets.iter().map(|t| t.map(|v| map[&v])).collect();
+    (nodes, cells)
+}

@@ -1,0 +1,426 @@
+//! The conforming mesher: its Delaunay core on random and degenerate point sets,
+//! and boundary recovery on a cube, the shared bunny and two boxes sharing a face
+//! (`../shared/data/meshes`, read in place).
+
+use std::path::PathBuf;
+
+use fem_core::mesh::TetMesh;
+use meshing::conforming::{conforming_mesh, insphere, ConformingError, ConformingOptions, Delaunay, FACE, GHOST};
+use meshing::predicates::orient3d;
+use meshing::quality::{report, QualityReport};
+use meshing::repair::{repair, RepairOptions};
+use meshing::Surface;
+
+type P = [f64; 3];
+
+/// A SplitMix64 stream of uniform numbers in [0, 1).
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+fn random_points(n: usize, seed: u64) -> Vec<P> {
+    let mut r = Rng(seed);
+    (0..n).map(|_| [r.next(), r.next(), r.next()]).collect()
+}
+
+fn grid(n: usize) -> Vec<P> {
+    let mut v = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            for k in 0..n {
+                v.push([i as f64, j as f64, k as f64]);
+            }
+        }
+    }
+    v
+}
+
+/// All integer points on the sphere x^2 + y^2 + z^2 = r2 (exactly cospherical).
+fn sphere_points(r2: i64) -> Vec<P> {
+    let r = (r2 as f64).sqrt() as i64 + 1;
+    let mut v = Vec::new();
+    for x in -r..=r {
+        for y in -r..=r {
+            for z in -r..=r {
+                if x * x + y * y + z * z == r2 {
+                    v.push([x as f64, y as f64, z as f64]);
+                }
+            }
+        }
+    }
+    v
+}
+
+fn volume(q: [P; 4]) -> f64 {
+    let d = |a: P, b: P| [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let (a, b, c) = (d(q[0], q[1]), d(q[0], q[2]), d(q[0], q[3]));
+    (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0])) / 6.0
+}
+
+/// Everything the Delaunay tetrahedralization of `pts` must satisfy, checked
+/// exactly and independently of the structure's own bookkeeping:
+/// - its own structural check (neighbours, orientation, local Delaunay);
+/// - every distinct input point is a vertex;
+/// - every finite tet is positive (exact orient3d) and its circumsphere has no
+///   input point strictly inside (exact insphere, brute force over all points);
+/// - the hull faces (the ghosts' finite faces) have every point on their inner
+///   side or on them (so the union of tets is convex and contains the points:
+///   the convex hull), and the tet volumes add up to the volume the hull faces
+///   enclose.
+///
+/// Returns the sorted tets as coordinate quadruples (for comparisons).
+fn check_delaunay(pts: &[P]) -> Vec<[[u64; 3]; 4]> {
+    let d = Delaunay::new(pts).expect("tetrahedralization");
+    d.check().unwrap();
+    let mut distinct: Vec<P> = pts.to_vec();
+    distinct.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    distinct.dedup();
+    let used: std::collections::BTreeSet<u32> = d.finite_tets().flatten().collect();
+    let used_points: std::collections::BTreeSet<[u64; 3]> =
+        used.iter().map(|&v| pts[v as usize].map(f64::to_bits)).collect();
+    assert_eq!(used_points.len(), distinct.len(), "every distinct point is a vertex");
+    let mut tet_volume = 0.0;
+    for t in d.finite_tets() {
+        let q = t.map(|v| pts[v as usize]);
+        assert_eq!(orient3d(q[0], q[1], q[2], q[3]), 1, "tet {t:?} is not positive");
+        for (i, p) in pts.iter().enumerate() {
+            assert!(insphere(q[0], q[1], q[2], q[3], *p) <= 0, "point {i} is strictly inside the sphere of {t:?}");
+        }
+        tet_volume += volume(q);
+    }
+    let mut hull_volume = 0.0;
+    for (_, t) in d.live_tets() {
+        let Some(g) = t.iter().position(|&v| v == GHOST) else { continue };
+        let f = FACE[g].map(|k| pts[t[k] as usize]);
+        for p in pts {
+            // The outside is the infinite vertex's side: no point may be there.
+            assert!(orient3d(f[0], f[1], f[2], *p) <= 0, "a point is outside hull face {t:?}");
+        }
+        // The face's normal points to the ghost's side: outward (divergence theorem).
+        hull_volume += volume([[0.0; 3], f[0], f[1], f[2]]);
+    }
+    assert!((tet_volume - hull_volume).abs() <= 1e-12 * hull_volume.abs(), "{tet_volume} vs hull {hull_volume}");
+    let mut out: Vec<[[u64; 3]; 4]> = d
+        .finite_tets()
+        .map(|t| {
+            let mut c = t.map(|v| pts[v as usize].map(f64::to_bits));
+            c.sort_unstable();
+            c
+        })
+        .collect();
+    out.sort_unstable();
+    out
+}
+
+#[test]
+fn random_points_give_a_delaunay_tetrahedralization_of_their_hull() {
+    for (n, seed) in [(5, 1), (50, 2), (1500, 3)] {
+        check_delaunay(&random_points(n, seed));
+    }
+}
+
+#[test]
+fn a_grid_is_fully_degenerate_and_still_exact() {
+    // Every cube of the grid has eight cospherical corners and every hull face is
+    // a plane of many points: only the perturbation decides.
+    let pts = grid(7);
+    let tets = check_delaunay(&pts);
+    // Each unit cube is split into tets of volume adding to 1: 6^3 cubes.
+    let total: f64 = tets.iter().map(|t| volume(t.map(|c| c.map(f64::from_bits))).abs()).sum();
+    assert!((total - 216.0).abs() < 1e-12 * 216.0, "{total}");
+}
+
+#[test]
+fn cospherical_points_and_duplicates() {
+    let mut pts = sphere_points(194); // 240 integer points on one sphere
+    assert_eq!(pts.len(), 240);
+    let n = pts.len();
+    pts.extend_from_within(0..10); // duplicates map to the first copies
+    pts.push([0.0, 0.0, 0.0]); // the centre
+    let tets = check_delaunay(&pts);
+    assert!(!tets.is_empty());
+    let _ = n;
+}
+
+#[test]
+fn the_result_does_not_depend_on_the_input_order() {
+    for pts in [random_points(800, 7), grid(5), sphere_points(101)] {
+        eprintln!("{} points", pts.len());
+        let a = check_delaunay(&pts);
+        let mut shuffled = pts.clone();
+        shuffled.reverse();
+        let mut r = Rng(9);
+        for i in (1..shuffled.len()).rev() {
+            let j = (r.next() * (i + 1) as f64) as usize;
+            shuffled.swap(i, j);
+        }
+        let b = check_delaunay(&shuffled);
+        assert_eq!(a, b, "same point set, different tetrahedralization");
+        // And running twice gives the same tets in the same slots.
+        let d1 = Delaunay::new(&pts).unwrap();
+        let d2 = Delaunay::new(&pts).unwrap();
+        assert_eq!(d1.finite_tets().collect::<Vec<_>>(), d2.finite_tets().collect::<Vec<_>>());
+    }
+}
+
+#[test]
+fn flat_and_non_finite_input_is_refused() {
+    let flat: Vec<P> = (0..20).map(|i| [i as f64, (i * i) as f64, 0.0]).collect();
+    assert!(Delaunay::new(&flat).is_err());
+    assert!(Delaunay::new(&[[0.0; 3]; 5]).is_err());
+    let bad = vec![[0.0, 0.0, 0.0], [1.0, f64::NAN, 0.0]];
+    assert!(Delaunay::new(&bad).unwrap_err().to_string().contains("point 1"));
+}
+
+#[test]
+fn points_added_later_keep_it_delaunay() {
+    let pts = random_points(200, 11);
+    let mut d = Delaunay::new(&pts[..100]).unwrap();
+    for p in &pts[100..] {
+        d.insert(*p);
+    }
+    // Outside the hull, on a hull face's plane, and a duplicate.
+    d.insert([2.0, 0.5, 0.5]);
+    let dup = d.insert(pts[3]);
+    assert_eq!(dup, 3);
+    d.check().unwrap();
+    let all = d.points().to_vec();
+    for t in d.finite_tets() {
+        let q = t.map(|v| all[v as usize]);
+        for p in &all {
+            assert!(insphere(q[0], q[1], q[2], q[3], *p) <= 0);
+        }
+    }
+}
+
+/// Cospherical points inserted one at a time (each outside the hull of the
+/// previous ones, many on the planes of hull faces): the structure is checked
+/// after every insertion.
+#[test]
+fn each_insertion_keeps_the_structure_valid() {
+    let pts = sphere_points(101);
+    let mut d = Delaunay::new(&pts[..6]).unwrap();
+    d.check().unwrap();
+    for (k, p) in pts[6..].iter().enumerate() {
+        let v = d.insert(*p);
+        if let Err(e) = d.check() {
+            panic!("after inserting point {} ({v}) {:?}: {e}", k + 6, p);
+        }
+    }
+}
+
+// ---- stage 2: boundary recovery
+
+fn data(rel: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data").join(rel)
+}
+
+/// The fixtures' OBJ subset: `v`, `f` (first index of each corner, polygons as
+/// fans), `o`/`g` regions (as in `tests/validate.rs`).
+fn read_obj(rel: &str) -> Surface {
+    let path = data(rel);
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| {
+        panic!("{}: {e} (the shared data folder beside the workspace, <workspace>/../shared/data)", path.display())
+    });
+    let mut s = Surface::default();
+    let mut region: Option<u32> = None;
+    for line in text.lines() {
+        let mut tok = line.split_whitespace();
+        match tok.next() {
+            Some("v") => {
+                let p: Vec<f64> = tok.take(3).map(|x| x.parse().expect("number")).collect();
+                s.vertices.push([p[0], p[1], p[2]]);
+            }
+            Some("f") => {
+                let r = *region.get_or_insert_with(|| {
+                    s.region_names.push("default".into());
+                    s.region_names.len() as u32 - 1
+                });
+                let c: Vec<u32> =
+                    tok.map(|x| x.split('/').next().unwrap().parse::<u32>().expect("index") - 1).collect();
+                for k in 1..c.len() - 1 {
+                    s.triangles.push([c[0], c[k], c[k + 1]]);
+                    s.triangle_regions.push(r);
+                }
+            }
+            Some("o") | Some("g") => {
+                s.region_names.push(tok.collect::<Vec<_>>().join(" "));
+                region = Some(s.region_names.len() as u32 - 1);
+            }
+            _ => {}
+        }
+    }
+    s
+}
+
+/// Boundary recovery alone (stage 2), no quality refinement.
+const RECOVERY_ONLY: ConformingOptions = ConformingOptions { size_mm: None, max_steiner_per_vertex: 50 };
+
+fn cube(lo: P, hi: P) -> Surface {
+    let v: Vec<P> = (0..8)
+        .map(|i| {
+            [
+                if i & 1 == 0 { lo[0] } else { hi[0] },
+                if i & 2 == 0 { lo[1] } else { hi[1] },
+                if i & 4 == 0 { lo[2] } else { hi[2] },
+            ]
+        })
+        .collect();
+    let f = vec![
+        [0, 2, 1],
+        [1, 2, 3],
+        [4, 5, 6],
+        [5, 7, 6],
+        [0, 1, 4],
+        [1, 5, 4],
+        [2, 6, 3],
+        [3, 6, 7],
+        [0, 4, 2],
+        [2, 4, 6],
+        [1, 3, 5],
+        [3, 7, 5],
+    ];
+    Surface { vertices: v, triangles: f, triangle_regions: vec![0; 12], region_names: vec!["cube".into()] }
+}
+
+/// The gates every conforming mesh must pass, checked here independently of the
+/// mesher: exact positive orientation of every tet, every face shared by at most
+/// two tets, a closed boundary (every boundary edge on exactly two boundary
+/// faces), and against the input (the quality report): volume error and
+/// Hausdorff distance at most 1e-9 (relative), per-region volumes too.
+fn check_conforming(mesh: &TetMesh, surface: &Surface) -> QualityReport {
+    for (e, c) in mesh.cells.iter().enumerate() {
+        let q = c.map(|v| mesh.nodes[v as usize]);
+        assert_eq!(orient3d(q[0], q[1], q[2], q[3]), 1, "cell {e} is not positively oriented (exact)");
+    }
+    let mut faces: std::collections::HashMap<[u32; 3], usize> = std::collections::HashMap::new();
+    for c in &mesh.cells {
+        for i in 0..4 {
+            let mut f: Vec<u32> = (0..4).filter(|&k| k != i).map(|k| c[k]).collect();
+            f.sort_unstable();
+            *faces.entry([f[0], f[1], f[2]]).or_default() += 1;
+        }
+    }
+    assert!(faces.values().all(|&n| n <= 2), "a face is shared by more than two tets");
+    let boundary = mesh.boundary_facets();
+    let mut edges: std::collections::HashMap<(u32, u32), usize> = std::collections::HashMap::new();
+    let mut directed = std::collections::HashSet::new();
+    for f in &boundary {
+        for i in 0..3 {
+            let (a, b) = (f[i], f[(i + 1) % 3]);
+            *edges.entry((a.min(b), a.max(b))).or_default() += 1;
+            assert!(directed.insert((a, b)), "boundary faces are not consistently oriented");
+        }
+    }
+    assert!(edges.values().all(|&n| n == 2), "the boundary is not closed");
+    mesh.validate().unwrap();
+    let r = report(mesh, surface, 0.0);
+    assert_eq!(r.num_inverted, 0);
+    assert!(r.volume_error.abs() <= 1e-9, "volume error {:e}", r.volume_error);
+    assert!(r.hausdorff_relative <= 1e-9, "Hausdorff {:e} of the diagonal", r.hausdorff_relative);
+    for reg in &r.regions {
+        if let Some(e) = reg.volume_error {
+            assert!(e.abs() <= 1e-9, "region {}: volume error {e:e}", reg.name);
+        }
+    }
+    r
+}
+
+#[test]
+fn a_cube_is_meshed_with_its_exact_boundary() {
+    let s = cube([0.0, 0.0, 0.0], [10.0, 20.0, 5.0]);
+    let out = conforming_mesh(&s, &RECOVERY_ONLY).unwrap();
+    let r = check_conforming(&out.mesh, &s);
+    assert!((r.volume_mm3 - 1000.0).abs() < 1e-9);
+    eprintln!("cube: {:?}", out.stats);
+}
+
+#[test]
+fn the_bunny_is_meshed_with_its_exact_boundary() {
+    let s = read_obj("meshes/npm_bunny.obj");
+    let out = conforming_mesh(&s, &RECOVERY_ONLY).unwrap();
+    let r = check_conforming(&out.mesh, &s);
+    eprintln!(
+        "bunny: {:?}\n{} tets, dihedral {:.2}..{:.2}, volume error {:e}, Hausdorff {:e}",
+        out.stats, r.num_cells, r.min_dihedral_deg, r.max_dihedral_deg, r.volume_error, r.hausdorff_relative
+    );
+}
+
+#[test]
+fn two_boxes_sharing_a_face_become_two_regions() {
+    let raw = read_obj("meshes/layered_two_boxes.obj");
+    // The file's x = 0 face faces into box 1 (a fixture defect): strict mode
+    // refuses it, naming the defect; once repaired it meshes.
+    let err = conforming_mesh(&raw, &ConformingOptions::default()).unwrap_err();
+    assert!(matches!(err, ConformingError::Invalid(_)), "{err}");
+    let s = repair(&raw, &RepairOptions::default()).unwrap().surface;
+    let out = conforming_mesh(&s, &RECOVERY_ONLY).unwrap();
+    assert_eq!(out.mesh.region_names.len(), 2, "{:?}", out.mesh.region_names);
+    let r = check_conforming(&out.mesh, &s);
+    assert_eq!(r.regions.len(), 2);
+    for reg in &r.regions {
+        assert!(reg.num_cells > 0);
+        assert!(reg.volume_error.is_some_and(|e| e.abs() <= 1e-9), "{reg:?}");
+    }
+}
+
+#[test]
+fn the_layered_bunny_keeps_its_three_nested_regions_exactly() {
+    let s = read_obj("meshes/layered_bunny.obj");
+    let out = conforming_mesh(&s, &RECOVERY_ONLY).unwrap();
+    assert_eq!(out.mesh.region_names.len(), 3);
+    let r = check_conforming(&out.mesh, &s);
+    // Each region against its shell less the shells nested in it (1e-9, checked above).
+    assert_eq!(r.regions.len(), 3);
+    assert!(r.regions.iter().all(|g| g.num_cells > 0 && g.volume_error.is_some()), "{:?}", r.regions);
+}
+
+#[test]
+fn defective_input_is_refused_with_the_defect_named() {
+    let mut s = cube([0.0; 3], [1.0; 3]);
+    s.triangles.pop();
+    s.triangle_regions.pop();
+    let err = conforming_mesh(&s, &ConformingOptions::default()).unwrap_err();
+    assert!(matches!(err, ConformingError::Invalid(_)));
+    assert!(err.to_string().contains("border") || err.to_string().contains("open"), "{err}");
+}
+
+// ---- stage 3: size
+
+#[test]
+fn size_refinement_bounds_every_tet_and_keeps_the_boundary() {
+    for (name, s, h) in
+        [("cube", cube([0.0, 0.0, 0.0], [10.0, 20.0, 5.0]), 2.0), ("bunny", read_obj("meshes/npm_bunny.obj"), 0.5)]
+    {
+        let out = conforming_mesh(&s, &ConformingOptions::new(h)).unwrap();
+        let r = check_conforming(&out.mesh, &s);
+        let max_volume = h * h * h / (6.0 * 2f64.sqrt());
+        for c in &out.mesh.cells {
+            let q = c.map(|v| out.mesh.nodes[v as usize]);
+            assert!(volume(q) <= max_volume, "{name}: a tet of volume {} > {max_volume}", volume(q));
+        }
+        assert_eq!(out.stats.refinement.bad_left, 0);
+        eprintln!(
+            "{name} h {h}: {} tets, {} nodes, dihedral {:.2}..{:.2}, <10deg {:.4}, radius-edge max {:.3} p99.9 {:.3}, \
+             volume error {:.2e}, Hausdorff {:.2e}, {:.3} s\n  {:?}",
+            r.num_cells,
+            r.num_nodes,
+            r.min_dihedral_deg,
+            r.max_dihedral_deg,
+            r.fraction_below_10_deg,
+            r.max_radius_edge,
+            r.p999_radius_edge,
+            r.volume_error,
+            r.hausdorff_relative,
+            out.stats.time_s,
+            out.stats
+        );
+    }
+}
