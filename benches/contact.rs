@@ -87,15 +87,20 @@ fn bench_sphere(c: &mut Criterion) {
     let mut group = c.benchmark_group("sphere_indentation");
     group.sample_size(10).measurement_time(Duration::from_secs(60));
     let p = sphere_problem();
+    // One run, timed here too: at 100k tets criterion's ten samples take ten times
+    // as long, which is often more than a session can give.
+    let start = std::time::Instant::now();
     let r = press::simulate(&p, &Settings::default(), &mut |_| {}).unwrap();
+    let elapsed = start.elapsed();
     let last = r.tools[0].samples.last().unwrap();
     eprintln!(
-        "sphere_indentation: {} cells, {} steps, {} factorizations, final force {:.4} N on {:.2} mm^2",
+        "sphere_indentation: {} cells, {} steps, {} factorizations, final force {:.4} N on {:.2} mm^2, one run {:.1} s",
         p.mesh.num_cells(),
         r.steps.len(),
         r.num_factorizations,
         last.force_n[1],
-        last.area_mm2
+        last.area_mm2,
+        elapsed.as_secs_f64()
     );
     group.bench_function("100k", |b| {
         b.iter(|| press::simulate(&sphere_problem(), &Settings::default(), &mut |_| {}).unwrap())
