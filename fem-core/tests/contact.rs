@@ -133,6 +133,36 @@ fn elastic(e_mpa: f64, nu: f64) -> Material {
     Material::new(fem_core::material::Rheology::Elastic { e_mpa }, nu).unwrap()
 }
 
+/// A frictionless rigid sphere of `radius` pressed `depth` in `push_s` into the
+/// axisymmetric cylinder (radius and height `body`) on a frictionless floor, on the
+/// section graded toward the contact (`size` within 4 mm, then `growth`), in fixed
+/// 0.25 s steps.
+fn sphere_indentation(
+    material: Material,
+    radius: f64,
+    body: f64,
+    depth: f64,
+    push_s: f64,
+    size: f64,
+    growth: f64,
+) -> PressResult {
+    let mesh = mesh::indentation_section(body, body, size, 4.0, growth, "gel").unwrap();
+    let mut protocol = ramp(depth, push_s);
+    protocol.support = Attachment::Frictionless;
+    protocol.plate = Attachment::Frictionless;
+    let mut problem = AxisymmetricPress::new_axisymmetric(mesh, vec![material], protocol.clone()).unwrap();
+    problem.tools = vec![Tool::moving_down(
+        "sphere",
+        ToolShape::Sphere { radius },
+        [0.0, body + radius, 0.0],
+        &protocol.waypoints,
+        ToolContact::Frictionless,
+        f64::INFINITY,
+    )];
+    let settings = Settings { fixed_dt_s: Some(0.25), max_dt_s: Some(0.25), ..Settings::default() };
+    press::simulate(&problem, &settings, &mut |_| {}).unwrap()
+}
+
 /// Hertz: a rigid sphere (R = 50 mm) pressed 0.1 mm into an elastic cylinder
 /// (radius and height 200 mm, 90 contact radii: the half-space solution holds to
 /// well under 1 %; a/R = 0.045 keeps the small-slope terms Hertz neglects, e.g.
@@ -148,21 +178,7 @@ fn hertz_sphere_indentation_converges() {
     let hertz = |d: f64| 4.0 / 3.0 * e_star * radius.sqrt() * d.powf(1.5);
     let mut errors = Vec::new();
     for (size, growth) in [(0.2, 1.2), (0.1, 1.1), (0.05, 1.05)] {
-        let mesh = mesh::indentation_section(body, body, size, 4.0, growth, "gel").unwrap();
-        let mut protocol = ramp(depth, 1.0);
-        protocol.support = Attachment::Frictionless;
-        protocol.plate = Attachment::Frictionless;
-        let mut problem = AxisymmetricPress::new_axisymmetric(mesh, vec![elastic(e, nu)], protocol.clone()).unwrap();
-        problem.tools = vec![Tool::moving_down(
-            "sphere",
-            ToolShape::Sphere { radius },
-            [0.0, body + radius, 0.0],
-            &protocol.waypoints,
-            ToolContact::Frictionless,
-            f64::INFINITY,
-        )];
-        let settings = Settings { fixed_dt_s: Some(0.25), max_dt_s: Some(0.25), ..Settings::default() };
-        let result = press::simulate(&problem, &settings, &mut |_| {}).unwrap();
+        let result = sphere_indentation(elastic(e, nu), radius, body, depth, 1.0, size, growth);
         // Compare where the contact spans several elements (d >= 0.125 mm: a >= 1.1 mm).
         let mut worst: f64 = 0.0;
         for s in result.tools[0].samples.iter().filter(|s| s.t_s >= 0.5 - 1e-9) {
@@ -445,21 +461,7 @@ fn lee_radok_viscoelastic_sphere_indentation() {
     };
     let mut errors = Vec::new();
     for (size, growth) in [(0.2, 1.2), (0.1, 1.1)] {
-        let mesh = mesh::indentation_section(body, body, size, 4.0, growth, "gel").unwrap();
-        let mut protocol = ramp(depth, push_s);
-        protocol.support = Attachment::Frictionless;
-        protocol.plate = Attachment::Frictionless;
-        let mut problem = AxisymmetricPress::new_axisymmetric(mesh, vec![material.clone()], protocol.clone()).unwrap();
-        problem.tools = vec![Tool::moving_down(
-            "sphere",
-            ToolShape::Sphere { radius },
-            [0.0, body + radius, 0.0],
-            &protocol.waypoints,
-            ToolContact::Frictionless,
-            f64::INFINITY,
-        )];
-        let settings = Settings { fixed_dt_s: Some(0.25), max_dt_s: Some(0.25), ..Settings::default() };
-        let result = press::simulate(&problem, &settings, &mut |_| {}).unwrap();
+        let result = sphere_indentation(material.clone(), radius, body, depth, push_s, size, growth);
         let mut worst: f64 = 0.0;
         for s in result.tools[0].samples.iter().filter(|s| s.t_s >= 0.5 * push_s - 1e-9) {
             let exact = lee_radok(s.t_s);

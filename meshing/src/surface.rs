@@ -19,6 +19,28 @@ pub struct Surface {
 }
 
 impl Surface {
+    /// The axis-aligned box `[lo, hi]` as one closed region named `region`: eight
+    /// vertices (bit `k` of a vertex's index picks `hi[k]`), twelve triangles, all
+    /// outward.
+    pub fn cuboid(lo: [f64; 3], hi: [f64; 3], region: &str) -> Self {
+        let vertices = (0..8).map(|i| std::array::from_fn(|k| if i & (1 << k) == 0 { lo[k] } else { hi[k] })).collect();
+        let triangles = vec![
+            [0, 2, 1],
+            [1, 2, 3],
+            [4, 5, 6],
+            [5, 7, 6],
+            [0, 1, 4],
+            [1, 5, 4],
+            [2, 6, 3],
+            [3, 6, 7],
+            [0, 4, 2],
+            [2, 4, 6],
+            [1, 3, 5],
+            [3, 7, 5],
+        ];
+        Self { vertices, triangles, triangle_regions: vec![0; 12], region_names: vec![region.to_string()] }
+    }
+
     /// Number of vertices.
     pub fn num_vertices(&self) -> usize {
         self.vertices.len()

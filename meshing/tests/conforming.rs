@@ -2,14 +2,15 @@
 //! and boundary recovery on a cube, the shared bunny and two boxes sharing a face
 //! (`../shared/data/meshes`, read in place).
 
-use std::path::PathBuf;
-
 use fem_core::mesh::TetMesh;
 use meshing::conforming::{conforming_mesh, insphere, ConformingError, ConformingOptions, Delaunay, FACE, GHOST};
 use meshing::predicates::orient3d;
 use meshing::quality::{report, QualityReport};
 use meshing::repair::{repair, RepairOptions};
 use meshing::Surface;
+
+mod common;
+use common::read_obj;
 
 type P = [f64; 3];
 
@@ -218,77 +219,8 @@ fn each_insertion_keeps_the_structure_valid() {
 
 // ---- stage 2: boundary recovery
 
-fn data(rel: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data").join(rel)
-}
-
-/// The fixtures' OBJ subset: `v`, `f` (first index of each corner, polygons as
-/// fans), `o`/`g` regions (as in `tests/validate.rs`).
-fn read_obj(rel: &str) -> Surface {
-    let path = data(rel);
-    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| {
-        panic!("{}: {e} (the shared data folder beside the workspace, <workspace>/../shared/data)", path.display())
-    });
-    let mut s = Surface::default();
-    let mut region: Option<u32> = None;
-    for line in text.lines() {
-        let mut tok = line.split_whitespace();
-        match tok.next() {
-            Some("v") => {
-                let p: Vec<f64> = tok.take(3).map(|x| x.parse().expect("number")).collect();
-                s.vertices.push([p[0], p[1], p[2]]);
-            }
-            Some("f") => {
-                let r = *region.get_or_insert_with(|| {
-                    s.region_names.push("default".into());
-                    s.region_names.len() as u32 - 1
-                });
-                let c: Vec<u32> =
-                    tok.map(|x| x.split('/').next().unwrap().parse::<u32>().expect("index") - 1).collect();
-                for k in 1..c.len() - 1 {
-                    s.triangles.push([c[0], c[k], c[k + 1]]);
-                    s.triangle_regions.push(r);
-                }
-            }
-            Some("o") | Some("g") => {
-                s.region_names.push(tok.collect::<Vec<_>>().join(" "));
-                region = Some(s.region_names.len() as u32 - 1);
-            }
-            _ => {}
-        }
-    }
-    s
-}
-
 /// Boundary recovery alone (stage 2), no quality refinement.
 const RECOVERY_ONLY: ConformingOptions = ConformingOptions { size_mm: None, max_steiner_per_vertex: 50 };
-
-fn cube(lo: P, hi: P) -> Surface {
-    let v: Vec<P> = (0..8)
-        .map(|i| {
-            [
-                if i & 1 == 0 { lo[0] } else { hi[0] },
-                if i & 2 == 0 { lo[1] } else { hi[1] },
-                if i & 4 == 0 { lo[2] } else { hi[2] },
-            ]
-        })
-        .collect();
-    let f = vec![
-        [0, 2, 1],
-        [1, 2, 3],
-        [4, 5, 6],
-        [5, 7, 6],
-        [0, 1, 4],
-        [1, 5, 4],
-        [2, 6, 3],
-        [3, 6, 7],
-        [0, 4, 2],
-        [2, 4, 6],
-        [1, 3, 5],
-        [3, 7, 5],
-    ];
-    Surface { vertices: v, triangles: f, triangle_regions: vec![0; 12], region_names: vec!["cube".into()] }
-}
 
 /// The gates every conforming mesh must pass, checked here independently of the
 /// mesher: exact positive orientation of every tet, every face shared by at most
@@ -335,7 +267,7 @@ fn check_conforming(mesh: &TetMesh, surface: &Surface) -> QualityReport {
 
 #[test]
 fn a_cube_is_meshed_with_its_exact_boundary() {
-    let s = cube([0.0, 0.0, 0.0], [10.0, 20.0, 5.0]);
+    let s = Surface::cuboid([0.0, 0.0, 0.0], [10.0, 20.0, 5.0], "cube");
     let out = conforming_mesh(&s, &RECOVERY_ONLY).unwrap();
     let r = check_conforming(&out.mesh, &s);
     assert!((r.volume_mm3 - 1000.0).abs() < 1e-9);
@@ -384,7 +316,7 @@ fn the_layered_bunny_keeps_its_three_nested_regions_exactly() {
 
 #[test]
 fn defective_input_is_refused_with_the_defect_named() {
-    let mut s = cube([0.0; 3], [1.0; 3]);
+    let mut s = Surface::cuboid([0.0; 3], [1.0; 3], "cube");
     s.triangles.pop();
     s.triangle_regions.pop();
     let err = conforming_mesh(&s, &ConformingOptions::default()).unwrap_err();
@@ -396,9 +328,10 @@ fn defective_input_is_refused_with_the_defect_named() {
 
 #[test]
 fn size_refinement_bounds_every_tet_and_keeps_the_boundary() {
-    for (name, s, h) in
-        [("cube", cube([0.0, 0.0, 0.0], [10.0, 20.0, 5.0]), 2.0), ("bunny", read_obj("meshes/npm_bunny.obj"), 0.5)]
-    {
+    for (name, s, h) in [
+        ("cube", Surface::cuboid([0.0, 0.0, 0.0], [10.0, 20.0, 5.0], "cube"), 2.0),
+        ("bunny", read_obj("meshes/npm_bunny.obj"), 0.5),
+    ] {
         let out = conforming_mesh(&s, &ConformingOptions::new(h)).unwrap();
         let r = check_conforming(&out.mesh, &s);
         let max_volume = h * h * h / (6.0 * 2f64.sqrt());

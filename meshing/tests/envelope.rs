@@ -79,34 +79,6 @@ fn icosphere(r: f64, c: [f64; 3], level: usize) -> Surface {
     Surface { vertices: v, triangles: f, triangle_regions: vec![0; n], region_names: vec!["sphere".into()] }
 }
 
-/// An axis-aligned box, outward, 12 triangles.
-fn cuboid(lo: [f64; 3], hi: [f64; 3]) -> Surface {
-    let v = (0..8)
-        .map(|i| {
-            [
-                if i & 1 == 0 { lo[0] } else { hi[0] },
-                if i & 2 == 0 { lo[1] } else { hi[1] },
-                if i & 4 == 0 { lo[2] } else { hi[2] },
-            ]
-        })
-        .collect();
-    let f = vec![
-        [0, 2, 1],
-        [1, 2, 3],
-        [4, 5, 6],
-        [5, 7, 6],
-        [0, 1, 4],
-        [1, 5, 4],
-        [2, 6, 3],
-        [3, 6, 7],
-        [0, 4, 2],
-        [2, 4, 6],
-        [1, 3, 5],
-        [3, 7, 5],
-    ];
-    Surface { vertices: v, triangles: f, triangle_regions: vec![0; 12], region_names: vec!["box".into()] }
-}
-
 // ---- the shared fixtures
 
 fn data(name: &str) -> PathBuf {
@@ -263,7 +235,7 @@ fn sphere_quality_and_volume_convergence() {
 /// its edges and corners are rounded by the lattice, an error that converges too.
 #[test]
 fn cube_quality_and_volume_convergence() {
-    let mut s = cuboid([-0.465; 3], [0.465; 3]);
+    let mut s = Surface::cuboid([-0.465; 3], [0.465; 3], "box");
     let (axis, angle) = ([1.0, 2.0, 3.0].map(|x: f64| x / 14f64.sqrt()), 20f64.to_radians());
     for p in &mut s.vertices {
         // Rodrigues' rotation.
@@ -292,7 +264,7 @@ fn cube_quality_and_volume_convergence() {
 /// Faces on lattice planes: lattice vertices exactly on the surface count as on it.
 #[test]
 fn a_cube_on_the_lattice_planes_is_meshed_exactly() {
-    let s = cuboid([0.0, 0.0, 0.0], [1.0, 1.0, 1.0]);
+    let s = Surface::cuboid([0.0, 0.0, 0.0], [1.0, 1.0, 1.0], "box");
     let out = envelope_mesh(&s, &EnvelopeOptions::new(0.25)).unwrap();
     assert_conforming(&out.mesh);
     assert!((out.mesh.measure() - 1.0).abs() < 1e-12, "{}", out.mesh.measure());
@@ -546,7 +518,7 @@ fn output_does_not_depend_on_the_thread_count() {
 
 #[test]
 fn bad_input_is_a_typed_error_never_an_empty_success() {
-    let cube = cuboid([0.0; 3], [1.0; 3]);
+    let cube = Surface::cuboid([0.0; 3], [1.0; 3], "box");
     assert_eq!(
         envelope_mesh(&Surface::default(), &EnvelopeOptions::new(0.1)).unwrap_err(),
         EnvelopeError::EmptySurface

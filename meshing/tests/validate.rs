@@ -1,7 +1,6 @@
 //! Validation and repair on the shared defect corpus (`../shared/data/meshes`)
 //! and the scans (`../shared/data/real/scans`), read in place, never copied.
 
-use std::path::PathBuf;
 use std::time::Instant;
 
 use meshing::repair::{repair, RepairOptions};
@@ -9,45 +8,8 @@ use meshing::validate::{validate, Defect, DegenerateKind, ValidateOptions};
 use meshing::InvalidSurface;
 use meshing::{Surface, SurfaceReport};
 
-fn data(rel: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data").join(rel)
-}
-
-/// The fixtures' OBJ subset: `v`, `f` (first index of each corner, polygons as
-/// fans), `o`/`g` regions. The full reader is `wagashi_io::surface` (which
-/// depends on this crate); these files need nothing more.
-fn read_obj(rel: &str) -> Surface {
-    let text = std::fs::read_to_string(data(rel)).unwrap_or_else(|e| panic!("{rel}: {e}"));
-    let mut s = Surface::default();
-    let mut region: Option<u32> = None;
-    for line in text.lines() {
-        let mut tok = line.split_whitespace();
-        match tok.next() {
-            Some("v") => {
-                let p: Vec<f64> = tok.take(3).map(|x| x.parse().expect("number")).collect();
-                s.vertices.push([p[0], p[1], p[2]]);
-            }
-            Some("f") => {
-                let r = *region.get_or_insert_with(|| {
-                    s.region_names.push("default".into());
-                    s.region_names.len() as u32 - 1
-                });
-                let c: Vec<u32> =
-                    tok.map(|x| x.split('/').next().unwrap().parse::<u32>().expect("index") - 1).collect();
-                for k in 1..c.len() - 1 {
-                    s.triangles.push([c[0], c[k], c[k + 1]]);
-                    s.triangle_regions.push(r);
-                }
-            }
-            Some("o") | Some("g") => {
-                s.region_names.push(tok.collect::<Vec<_>>().join(" "));
-                region = Some(s.region_names.len() as u32 - 1);
-            }
-            _ => {}
-        }
-    }
-    s
-}
+mod common;
+use common::read_obj;
 
 fn check(s: &Surface) -> SurfaceReport {
     validate(s, &ValidateOptions::default()).expect("well-formed")
