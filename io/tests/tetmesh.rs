@@ -45,6 +45,22 @@ fn tetgen_and_gmsh_round_trip_nodes_cells_and_regions() {
     assert_eq!(back.face_sets.keys().collect::<Vec<_>>(), vec!["boundary"]);
 }
 
+/// TetGen names its output `STEM.1.node`, `STEM.1.ele`, `STEM.1.face`: the `.1`
+/// belongs to the stem, whichever of the files is named.
+#[test]
+fn tetgen_output_names_keep_their_numbered_stem() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = two_layers();
+    write_tetmesh(dir.path().join("bunny.1.node"), &mesh).unwrap();
+    for f in ["bunny.1.node", "bunny.1.ele", "bunny.1.face"] {
+        assert!(dir.path().join(f).is_file(), "{f}");
+    }
+    assert!(!dir.path().join("bunny.node").exists());
+    for name in ["bunny.1.node", "bunny.1.ele"] {
+        same(&mesh, &read_tetmesh(dir.path().join(name)).unwrap());
+    }
+}
+
 #[test]
 fn a_vtu_is_written_with_regions() {
     let dir = tempfile::tempdir().unwrap();

@@ -95,9 +95,13 @@ fn read_text(path: &Path) -> Result<String, TetMeshError> {
     std::fs::read_to_string(path).map_err(|source| TetMeshError::Read { file: path.to_path_buf(), source })
 }
 
-/// `path` with its extension replaced by `ext`.
-fn sibling(path: &Path, ext: &str) -> PathBuf {
-    path.with_extension(ext)
+/// `STEM.ext`: the extension appended to the stem, which may hold dots of its own
+/// (TetGen names its output `bunny.1.node`, whose stem is `bunny.1`).
+fn sibling(stem: &Path, ext: &str) -> PathBuf {
+    let mut name = stem.as_os_str().to_owned();
+    name.push(".");
+    name.push(ext);
+    PathBuf::from(name)
 }
 
 /// Reads `STEM.node`, `STEM.ele` and, if it exists, `STEM.face`, given any of
