@@ -436,8 +436,16 @@ impl<'t> ContactModel<'t> {
         let mut last_change = f64::INFINITY;
         let smallest_size = self.size.iter().copied().fold(f64::INFINITY, f64::min);
         for iteration in 1..=MAX_ITERATIONS {
-            let slip_before: Vec<Vec<[f64; 3]>> =
-                state.pairs.iter().map(|pairs| pairs.iter().map(|p| p.slip_force).collect()).collect();
+            // Only friction tools' slip tractions are read (see `slip_settled`).
+            let slip_before: Vec<Vec<[f64; 3]>> = self
+                .tools
+                .iter()
+                .zip(&state.pairs)
+                .map(|(t, pairs)| match t.tool.contact {
+                    ToolContact::Friction(_) => pairs.iter().map(|p| p.slip_force).collect(),
+                    _ => Vec::new(),
+                })
+                .collect();
             let mut pass = self.assemble(&mut state, input, &u, t1, &penalty, true);
             let slip_settled = self.slip_settled(&state, &slip_before, input, &u, &penalty);
             let increment = u.iter().zip(input.u0).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
