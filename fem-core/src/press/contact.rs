@@ -53,6 +53,9 @@
 //! too) until the tool's `release_s`.
 
 use std::collections::HashMap;
+use std::sync::Mutex;
+
+use nalgebra::{DMatrix, DVector};
 
 use super::tools::{PlacedTool, ToolContact};
 use super::{PressError, PressProblem};
@@ -212,11 +215,34 @@ pub(crate) struct ContactModel<'t> {
     block: Vec<Vec<usize>>,
     /// Whether each dof of each candidate node is held (prescribed).
     held: Vec<[bool; 3]>,
+    /// Columns of the unpenalized step matrix's inverse, for the low-rank path.
+    columns: Mutex<ColumnCache>,
+}
+
+/// Columns `A^{-1} e_dof` of the unpenalized step matrix at unit scale (see
+/// [`StepInput::scale`]), valid for one factorization ([`StepInput::factor_key`]).
+#[derive(Default)]
+struct ColumnCache {
+    key: Option<u64>,
+    columns: HashMap<usize, Vec<f64>>,
 }
 
 /// Solves a step with penalties: `(hash, penalty values, extra right-hand side)`
 /// to the full displacement (see [`ContactModel::settle`]).
-pub(crate) type PenalizedSolve<'a> = dyn FnMut(u64, &dyn Fn() -> Vec<f64>, &[f64]) -> Result<Vec<f64>, PressError> + 'a;
+///
+/// With `Some(ncols)` as the last argument, the request is instead `ncols`
+/// columns (one after the other, each over all dofs) to solve with the step
+/// matrix without penalties (`hash` is then [`PLAIN`] and the penalty zero): the
+/// result holds `A^{-1}` of each column on the free dofs and zeros on the held ones.
+pub(crate) type PenalizedSolve<'a> =
+    dyn FnMut(u64, &dyn Fn() -> Vec<f64>, &[f64], Option<usize>) -> Result<Vec<f64>, PressError> + 'a;
+
+/// The hash of the step matrix without penalties (the low-rank path's factor).
+pub(crate) const PLAIN: u64 = 0x706c_6169_6e00_0000;
+
+/// The low-rank path keeps at most this many columns of `A^{-1}` times the number
+/// of dofs (in f64: 256 MB); past it, a step refactors the penalized matrix.
+const COLUMN_BUDGET: usize = 32 << 20;
 
 /// One pass over the pairs: statuses, the Newton right-hand side and blocks.
 struct Pass {
@@ -237,6 +263,11 @@ pub(crate) struct StepInput<'a> {
     pub diagonal: &'a [f64],
     /// The displacement at the step's start.
     pub u0: &'a [f64],
+    /// Identifies the unpenalized step matrix up to its scale: columns of its
+    /// inverse are kept while this stays the same.
+    pub factor_key: u64,
+    /// The unpenalized step matrix is `scale` times the one `factor_key` names.
+    pub scale: f64,
 }
 
 /// The outcome of a converged contact step.
@@ -347,6 +378,7 @@ impl<'t> ContactModel<'t> {
             planar: D == 2,
             dim: D,
             block,
+            columns: Mutex::new(ColumnCache::default()),
         })
     }
 
@@ -485,11 +517,111 @@ impl<'t> ContactModel<'t> {
                 }
                 v
             };
-            let next = solve(hash_signature(&signature), &values, &rhs)?;
+            let low_rank = if all_flat { None } else { self.low_rank_solve(input, solve, &blocks, &rhs, &u, nnz)? };
+            let next = match low_rank {
+                Some(next) => next,
+                None => solve(hash_signature(&signature), &values, &rhs, None)?,
+            };
             last_change = next.iter().zip(&u).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
             u = next;
         }
         unreachable!("the loop returns on its last iteration")
+    }
+
+    /// Solves `(A + P) u = b + rhs` through the Woodbury identity with the factor of
+    /// the unpenalized matrix `A`: with `E` the penalized free dofs, `G = A^{-1} E`
+    /// (columns kept from step to step while `A`'s factor stays), `S = E^T G`, and the
+    /// right-hand side split as `rhs = r + E P E^T u_old` (the Newton step's `P u_old`;
+    /// left in, its size `k u` would cost `y` six digits), `y = A^{-1}(b + r)` and
+    /// the dense system `(I + P S) z = P E^T (u_old - y)` give `u = y + G z`. One sparse solve per
+    /// iteration, plus one per new column: a curved tool's normals turn and its set
+    /// grows at every Newton step, which would otherwise refactor the matrix each
+    /// time. `None` when the columns would not fit [`COLUMN_BUDGET`] (the caller
+    /// then refactors the penalized matrix) or the dense system is singular.
+    fn low_rank_solve(
+        &self,
+        input: &StepInput<'_>,
+        solve: &mut PenalizedSolve<'_>,
+        blocks: &[[[f64; 3]; 3]],
+        rhs: &[f64],
+        u_old: &[f64],
+        nnz: usize,
+    ) -> Result<Option<Vec<f64>>, PressError> {
+        let d = self.dim;
+        let ndof = rhs.len();
+        // The penalized free dofs: (dof, candidate, component).
+        let mut dofs: Vec<(usize, usize, usize)> = Vec::new();
+        for (j, b) in blocks.iter().enumerate() {
+            if b.iter().flatten().all(|&v| v == 0.0) {
+                continue;
+            }
+            for a in 0..d {
+                if !self.held[j][a] {
+                    dofs.push((self.nodes[j] as usize * d + a, j, a));
+                }
+            }
+        }
+        if dofs.len() * ndof > COLUMN_BUDGET {
+            return Ok(None);
+        }
+        let zero = || vec![0.0; nnz];
+        let p_at = |r: usize, c: usize| {
+            let ((_, jr, ar), (_, jc, ac)) = (dofs[r], dofs[c]);
+            if jr == jc {
+                blocks[jr][ar][ac]
+            } else {
+                0.0
+            }
+        };
+        let mut r = rhs.to_vec();
+        for (row, &(dof, j, _)) in dofs.iter().enumerate() {
+            for (col, &(other, jc, _)) in dofs.iter().enumerate() {
+                if jc == j {
+                    r[dof] -= p_at(row, col) * u_old[other];
+                }
+            }
+        }
+        let y = solve(PLAIN, &zero, &r, None)?;
+        if dofs.is_empty() {
+            return Ok(Some(y));
+        }
+        let mut cache = self.columns.lock().unwrap_or_else(|e| e.into_inner());
+        if cache.key != Some(input.factor_key) {
+            cache.columns.clear();
+            cache.key = Some(input.factor_key);
+        }
+        let mut missing: Vec<usize> = dofs.iter().map(|x| x.0).filter(|k| !cache.columns.contains_key(k)).collect();
+        if (cache.columns.len() + missing.len()) * ndof > COLUMN_BUDGET {
+            cache.columns.clear();
+            missing = dofs.iter().map(|x| x.0).collect();
+        }
+        if !missing.is_empty() {
+            let mut e = vec![0.0; ndof * missing.len()];
+            for (c, &dof) in missing.iter().enumerate() {
+                e[c * ndof + dof] = 1.0;
+            }
+            let x = solve(PLAIN, &zero, &e, Some(missing.len()))?;
+            for (c, &dof) in missing.iter().enumerate() {
+                cache.columns.insert(dof, x[c * ndof..(c + 1) * ndof].iter().map(|v| v * input.scale).collect());
+            }
+        }
+        let m = dofs.len();
+        let columns: Vec<&Vec<f64>> = dofs.iter().map(|x| &cache.columns[&x.0]).collect();
+        let p = DMatrix::from_fn(m, m, p_at);
+        let s = DMatrix::from_fn(m, m, |r, c| columns[c][dofs[r].0] / input.scale);
+        let system = DMatrix::identity(m, m) + &p * s;
+        let lag = DVector::from_iterator(m, dofs.iter().map(|x| u_old[x.0] - y[x.0]));
+        let Some(z) = system.lu().solve(&(p * lag)) else {
+            return Ok(None);
+        };
+        let mut u = y;
+        for (c, column) in columns.iter().enumerate() {
+            let zc = z[c] / input.scale;
+            if zc != 0.0 {
+                u.iter_mut().zip(column.iter()).for_each(|(ui, g)| *ui += g * zc);
+            }
+        }
+        Ok(Some(u))
     }
 
     /// Statuses, forces and penalty blocks at `u` for the current multipliers: the

@@ -278,14 +278,23 @@ where
                     diagonal[d] += c * g.stiffness[p];
                 }
             }
-            let input =
-                StepInput { t0: state.t, t1, step: step_index + 1, rest: &rest, diagonal: &diagonal, u0: &state.u };
             let step_key = if single_group { (0, 0) } else { (h.to_bits(), bdf.alpha[0].to_bits()) };
+            let factor_key = (constraints.plate_attached as u64) ^ step_key.0.rotate_left(1) ^ step_key.1.rotate_left(2);
+            let input = StepInput {
+                t0: state.t,
+                t1,
+                step: step_index + 1,
+                rest: &rest,
+                diagonal: &diagonal,
+                u0: &state.u,
+                factor_key,
+                scale: single_scale,
+            };
             let mut settled = None;
             let mut refactored = false;
             let outcome = {
                 let mut solve = |b: &[f64], u: &mut Vec<f64>| -> Result<Option<Vec<f64>>, PressError> {
-                    let mut inner = |hash: u64, penalty: &dyn Fn() -> Vec<f64>, extra: &[f64]| {
+                    let mut inner = |hash: u64, penalty: &dyn Fn() -> Vec<f64>, extra: &[f64], cols: Option<usize>| {
                         let key = (hash, step_key);
                         if contact_factor.as_ref().map(|(k, _)| *k) != Some(key) {
                             contact_factor = None;
@@ -306,6 +315,24 @@ where
                             contact_factor = Some((key, factor));
                         }
                         let factor = &contact_factor.as_ref().expect("set above").1;
+                        if let Some(ncols) = cols {
+                            // Columns of the unpenalized matrix's inverse (contact's low-rank path).
+                            let (nf, nd) = (system.dof_of_free.len(), u.len());
+                            let mut x = vec![0.0; nf * ncols];
+                            for c in 0..ncols {
+                                for (i, &d) in system.dof_of_free.iter().enumerate() {
+                                    x[c * nf + i] = extra[c * nd + d as usize];
+                                }
+                            }
+                            factor.solve_columns_in_place(&mut x, ncols);
+                            let mut out = vec![0.0; nd * ncols];
+                            for c in 0..ncols {
+                                for (i, &d) in system.dof_of_free.iter().enumerate() {
+                                    out[c * nd + d as usize] = x[c * nf + i] / single_scale;
+                                }
+                            }
+                            return Ok(out);
+                        }
                         let mut x: Vec<f64> =
                             system.dof_of_free.iter().map(|&d| b[d as usize] + extra[d as usize]).collect();
                         factor.solve_in_place(&mut x);
