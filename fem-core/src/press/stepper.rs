@@ -279,7 +279,12 @@ where
                 }
             }
             let step_key = if single_group { (0, 0) } else { (h.to_bits(), bdf.alpha[0].to_bits()) };
-            let factor_key = (constraints.plate_attached as u64) ^ step_key.0.rotate_left(1) ^ step_key.1.rotate_left(2);
+            let factor_key = {
+                use std::hash::{Hash, Hasher};
+                let mut hasher = std::collections::hash_map::DefaultHasher::new();
+                (constraints.plate_attached, step_key).hash(&mut hasher);
+                hasher.finish()
+            };
             let input = StepInput {
                 t0: state.t,
                 t1,
