@@ -10,7 +10,11 @@
 //! - `sphere_indentation`: a frictionless rigid sphere (R = 20 mm) pressed 2 mm
 //!   into an elastic block of about 100k tetrahedra, glued on the floor, end to end.
 //!
-//! Steps, solves and factorizations are printed once per case on stderr.
+//! Steps, solves and factorizations are printed once per case on stderr. The
+//! sphere case also prints one timed run before criterion's samples: at 100k tets
+//! ten samples take long on the shared machine, so BENCHMARKS.md records that run
+//! (`cargo bench -p wagashi-workspace-tests --bench contact -- plate_step` prints
+//! it and skips the sphere's samples).
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use fem_core::material::{Material, Rheology};
