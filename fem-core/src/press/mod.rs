@@ -19,6 +19,7 @@
 //! as a reference.
 
 mod contact;
+mod inelastic;
 mod model;
 mod problem;
 mod result;
@@ -57,6 +58,9 @@ where
         Integrator::QuasiStatic | Integrator::Dynamic => stepper::run(problem, settings, &[], progress).map(|r| r.0),
         Integrator::Seed if !problem.tools.is_empty() => {
             Err(PressError::BadSettings("contact tools need the quasi-static integrator".into()))
+        }
+        Integrator::Seed if problem.effects.material_point().is_some() => {
+            Err(PressError::BadSettings("material-point effects need the quasi-static integrator".into()))
         }
         Integrator::Seed if problem.effects.machine_compliance_mm_per_n().is_some() => {
             Err(PressError::BadSettings("machine compliance needs the quasi-static integrator".into()))
