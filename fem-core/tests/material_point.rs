@@ -214,7 +214,8 @@ fn forced_material_point_path_at_the_null_is_the_baseline() {
         let mut worst: f64 = 0.0;
         for (x, y) in reference.steps.iter().zip(&r.steps) {
             assert_eq!(x.t_s, y.t_s, "{id}");
-            worst = worst.max((x.bottom_force_n - y.bottom_force_n).abs()).max((x.plate_force_n - y.plate_force_n).abs());
+            worst =
+                worst.max((x.bottom_force_n - y.bottom_force_n).abs()).max((x.plate_force_n - y.plate_force_n).abs());
         }
         for (x, y) in reference.snapshots.iter().zip(&r.snapshots) {
             let size = x.displacement.iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -263,7 +264,11 @@ fn slider_knee_and_set_match_the_closed_form() {
     let waypoints = vec![[0.0, 0.0], [10.0, depth], [15.0, depth]];
     let slider = effect(EffectId::PlasticSlider, &[sy, hh]);
     for (name, settings) in [("fixed 1 s", fixed(1.0)), ("adaptive", Settings::default())] {
-        let mut p = block(material(Rheology::Elastic { e_mpa: e }, nu), uniaxial(waypoints.clone(), 15.0, 25.0), slider.clone());
+        let mut p = block(
+            material(Rheology::Elastic { e_mpa: e }, nu),
+            uniaxial(waypoints.clone(), 15.0, 25.0),
+            slider.clone(),
+        );
         p.markers = vec![MarkerRequest { name: "top".into(), position: vec![W / 2.0, H], times: vec![25.0] }];
         let r = press::simulate(&p, &settings, &mut |_| {}).unwrap();
         let mut worst: f64 = 0.0;
@@ -393,7 +398,10 @@ fn bingham_hold_relaxes_to_the_plateau() {
         assert!(s60 > sb, "still above the threshold at 60 s into the hold");
         let rate = ((s20 - sb) / (s60 - sb)).ln() / 40.0;
         let plateau = r.steps.last().unwrap().plate_force_n / (sb * A) - 1.0;
-        println!("dt = {dt}: hold-start stress {:.5} MPa, decay rate {rate:.6} vs {lambda:.6}, plateau {plateau:.2e}", at(10.0));
+        println!(
+            "dt = {dt}: hold-start stress {:.5} MPa, decay rate {rate:.6} vs {lambda:.6}, plateau {plateau:.2e}",
+            at(10.0)
+        );
         assert!(plateau.abs() < 1e-8, "dt = {dt}: plateau {plateau}");
         assert!((rate / lambda - 1.0).abs() < 1e-10, "dt = {dt}: rate {rate} vs {lambda}");
     }

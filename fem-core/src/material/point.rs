@@ -266,7 +266,12 @@ mod tests {
                 down[j] -= h;
                 let fd = (at(&up).tau - at(&down).tau) / (2.0 * h);
                 for i in 0..4 {
-                    assert!((u.tangent[(i, j)] - fd[i]).abs() < 1e-7, "{law:?} ({i}, {j}): {} vs {}", u.tangent[(i, j)], fd[i]);
+                    assert!(
+                        (u.tangent[(i, j)] - fd[i]).abs() < 1e-7,
+                        "{law:?} ({i}, {j}): {} vs {}",
+                        u.tangent[(i, j)],
+                        fd[i]
+                    );
                 }
             }
             let ct = c * u.tangent;

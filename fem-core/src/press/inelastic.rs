@@ -101,8 +101,7 @@ where
     let ncell = mesh.num_cells();
     let ndof = model.num_dofs();
     let directional = laws.iter().any(|l| l.needs_direction());
-    let mut unloading: Vec<bool> =
-        if directional { input.unloading0.to_vec() } else { Vec::new() };
+    let mut unloading: Vec<bool> = if directional { input.unloading0.to_vec() } else { Vec::new() };
     let not_converged = |detail: String| PressError::NotConverged { step: input.step, time_s: input.t1, detail };
     let mut factorizations = 0usize;
 
@@ -142,8 +141,8 @@ where
 
         let mut f_in = inelastic_force(&|e| input.inelastic0[e]);
         // The force scale: the linear step's, and the inelastic strains' own share.
-        let scale = (input.scale.powi(2) + system.dof_of_free.iter().map(|&d| f_in[d as usize].powi(2)).sum::<f64>())
-            .sqrt();
+        let scale =
+            (input.scale.powi(2) + system.dof_of_free.iter().map(|&d| f_in[d as usize].powi(2)).sum::<f64>()).sqrt();
         let mut previous = f64::INFINITY;
         let mut tangent_mode = false;
         let mut newton_step: Option<Vec<f64>> = None;
