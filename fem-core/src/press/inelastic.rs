@@ -50,6 +50,9 @@ pub(crate) const SLOW_CONTRACTION: f64 = 0.5;
 /// The most passes of one step for E4's direction flags.
 pub(crate) const DIRECTION_PASSES: usize = 3;
 
+/// A cell's total strain and local update.
+type CellPoint<const S: usize> = (SVector<f64, S>, PointUpdate<S>);
+
 /// The material-point state of the cells at a step's end.
 pub(crate) struct PointStep<const S: usize> {
     /// Inelastic strain per cell.
@@ -120,8 +123,8 @@ where
     for pass in 0..DIRECTION_PASSES {
         let flags = &unloading;
         // Local updates of every cell for a displacement.
-        let local = |u: &[f64]| -> Result<Vec<(SVector<f64, S>, PointUpdate<S>)>, (usize, PointFailure)> {
-            let updates: Vec<Result<(SVector<f64, S>, PointUpdate<S>), PointFailure>> = map_collect(ncell, |e| {
+        let local = |u: &[f64]| -> Result<Vec<CellPoint<S>>, (usize, PointFailure)> {
+            let updates: Vec<Result<CellPoint<S>, PointFailure>> = map_collect(ncell, |e| {
                 let r = mesh.cell_regions[e] as usize;
                 let e1 = cell_strain::<D, N, S>(&model.geometry[e].gradients, &model.cell_displacements(e, u));
                 let trial = (e1 - input.inelastic0[e]) * input.g[r] - input.q[e];

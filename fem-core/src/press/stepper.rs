@@ -748,7 +748,7 @@ where
     let point = match model.point.as_ref() {
         None => None,
         Some(_) => {
-            let q: Vec<SVector<f64, S>> = map_collect(mesh.num_cells(), &history_part);
+            let q: Vec<SVector<f64, S>> = map_collect(mesh.num_cells(), history_part);
             let g: Vec<f64> = factors.iter().map(|f| f.g).collect();
             let scale = system
                 .dof_of_free
