@@ -115,7 +115,14 @@
 //! three passes). Quasi-static integrator only; refused with contact tools (and
 //! `plate-friction`), `machine-compliance` (its exact step needs a step linear in
 //! the plate displacement), two material-point effects at once, and a dashpot law on
-//! a chain without `c3` (an elastic region).
+//! a chain without `c3` (an elastic region). The slider's tangent is taken with
+//! at least 1 % of `g` as hardening ([`crate::material::TANGENT_HARDENING`]): with
+//! `H = 0` a yielded cell would make it singular. Perfect plasticity (`H = 0`) in
+//! an inhomogeneous state can still fail to converge, or flow until a cell
+//! inverts (small strain); both end the run with a typed error naming the step.
+//! The dashpot laws need `g dt/c3` well below 1: true for chains whose `c3`
+//! dominates the instantaneous viscosity `B2` (the seed's: `B2/c3` = 2e-4); a
+//! chain with `c1 >> c3` takes a consistent tangent nearly every step.
 //!
 //! **Forces.** The reactions use the reaction functionals on the chain's strain,
 //! so the step-end forces are exactly `sum rho . s1`; inside a step the chain's

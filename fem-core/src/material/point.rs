@@ -64,7 +64,8 @@ pub struct PointUpdate<const S: usize> {
     pub inelastic: SVector<f64, S>,
     /// The stress image `tau1` at the step's end (the stress is `C1 tau1`).
     pub tau: SVector<f64, S>,
-    /// `d tau1 / d tau_trial` (so `d s1 / d e1 = g C1 T`, symmetric).
+    /// `d tau1 / d tau_trial` (so `d s1 / d e1 = g C1 T`, symmetric); for a
+    /// slider with `H < TANGENT_HARDENING g` the tangent of `H = TANGENT_HARDENING g`.
     pub tangent: SMatrix<f64, S, S>,
 }
 
@@ -87,6 +88,10 @@ pub fn energy_norm<const S: usize>(c1: &SMatrix<f64, S, S>, x: &SVector<f64, S>)
 /// ratio is refused and retried shorter: near 1 the correction amplifies the trial
 /// by `1 / (1 - ratio)`).
 pub const MAX_DASHPOT_RATIO: f64 = 0.95;
+
+/// The least hardening, relative to the step factor `g`, the slider's tangent is
+/// taken with (the update itself uses the true `H`, 0 included).
+pub const TANGENT_HARDENING: f64 = 1e-2;
 
 impl InelasticLaw {
     /// Whether the law is at its null (gives back the linear chain exactly).
@@ -132,9 +137,13 @@ impl InelasticLaw {
                 let n = x / sigma;
                 let dl = (sigma - yield_mpa) / (g + h);
                 let de = n * dl;
-                // d(dl n)/dx = n (C1 n)^T / (g + H) + (dl / |x|) (I - n (C1 n)^T).
+                // d(dl n)/dx = n (C1 n)^T / (g + H) + (dl / |x|) (I - n (C1 n)^T). With
+                // little hardening the radial part g H/(g + H) vanishes and a cell makes
+                // the tangent singular: it is taken with H at least TANGENT_HARDENING g
+                // (the Newton iteration then contracts by about that factor).
                 let nn = radial(&n);
-                let d = nn / (g + h) + (identity - nn) * (dl / sigma);
+                let ht = h.max(TANGENT_HARDENING * g);
+                let d = nn / (g + ht) + (identity - nn) * (dl / sigma);
                 Ok(PointUpdate { inelastic: inelastic0 + de, tau: tau_trial - de * g, tangent: identity - d * g })
             }
             InelasticLaw::Bingham { threshold_mpa: sb, c3_mpa_s } => {
