@@ -21,6 +21,12 @@
 //! plate exactly (their acceleration is zero between kinks), so reactions carry no
 //! spurious inertia.
 //!
+//! Material-point effects (E1 to E4, [`crate::effects`]): each cell carries an
+//! inelastic strain in series with the chain, the chain's strain and histories
+//! are those of `e - e_in`, and the step is solved by the iteration of
+//! `super::inelastic` (modified Newton on the same factorization, full Newton when
+//! it contracts slowly). Without such an effect none of it runs.
+//!
 //! Step control: the local error of the displacement is estimated against an
 //! extrapolation of the previous steps (quadratic for BDF2 steps, linear for BDF1
 //! ones), relative to `rtol` times the largest plate displacement; steps land on every
