@@ -15,9 +15,10 @@
 //!    (a strong effect: a slider with little hardening, a Bingham threshold at a
 //!    large step), *full Newton*: assemble the consistent tangent
 //!    `sum_e w B^T g C1 T_e B` (symmetric, [`crate::material`]'s laws are
-//!    associative in the energy norm), factor it, and refactor at every further
-//!    iteration. If that factorization fails (a perfectly plastic cell, `H = 0`,
-//!    can make it singular) the modified iteration goes on.
+//!    associative in the energy norm), factor it, and keep it while it reduces
+//!    the residual tenfold an iteration ([`TANGENT_REUSE`]; refactored at the
+//!    current state otherwise). If that factorization fails the modified
+//!    iteration goes on.
 //!
 //! Converged when the free rows' residual `|f_int(u1) - f_body|` is at most
 //! [`TOLERANCE`] of the step's force scale (the same scale as the linear step's
@@ -47,6 +48,9 @@ pub(crate) const MAX_ITERATIONS: usize = 60;
 /// Switch to the consistent tangent when a modified iteration reduces the
 /// residual by less than this factor.
 pub(crate) const SLOW_CONTRACTION: f64 = 0.5;
+/// Keep a factored tangent while it reduces the residual by at least this factor
+/// an iteration; refactor at the current state otherwise.
+pub(crate) const TANGENT_REUSE: f64 = 0.1;
 /// The most passes of one step for E4's direction flags.
 pub(crate) const DIRECTION_PASSES: usize = 3;
 
@@ -148,6 +152,7 @@ where
             (input.scale.powi(2) + system.dof_of_free.iter().map(|&d| f_in[d as usize].powi(2)).sum::<f64>()).sqrt();
         let mut previous = f64::INFINITY;
         let mut tangent_mode = false;
+        let mut tangent: Option<crate::solve::Factor<'_>> = None;
         let mut newton_step: Option<Vec<f64>> = None;
         let mut converged = None;
         for iteration in 0..MAX_ITERATIONS {
@@ -193,24 +198,29 @@ where
             if !tangent_mode && iteration >= 1 && norm > SLOW_CONTRACTION * previous {
                 tangent_mode = true;
             }
+            let contraction = norm / previous;
             previous = norm;
             if tangent_mode {
-                // Consistent tangent sum_e w B^T g C1 T_e B, factored afresh.
-                let cell_matrix = |e: usize| {
-                    let r = mesh.cell_regions[e] as usize;
-                    let ct = model.region_c1[r] * updates[e].1.tangent * input.g[r];
-                    Some((ct + ct.transpose()) * 0.5)
-                };
-                let values = assemble_stiffness::<D, N, S>(
-                    &model.topology,
-                    &model.pattern,
-                    &mesh.cells,
-                    &model.geometry,
-                    &cell_matrix,
-                );
-                match system.factor(&[(1.0, values.as_slice())], None) {
-                    Ok(factor) => {
-                        factorizations += 1;
+                // Consistent tangent sum_e w B^T g C1 T_e B: factored when first
+                // needed, and again whenever the last one contracts slowly.
+                if tangent.is_none() || contraction > TANGENT_REUSE {
+                    let cell_matrix = |e: usize| {
+                        let r = mesh.cell_regions[e] as usize;
+                        let ct = model.region_c1[r] * updates[e].1.tangent * input.g[r];
+                        Some((ct + ct.transpose()) * 0.5)
+                    };
+                    let values = assemble_stiffness::<D, N, S>(
+                        &model.topology,
+                        &model.pattern,
+                        &mesh.cells,
+                        &model.geometry,
+                        &cell_matrix,
+                    );
+                    tangent = system.factor(&[(1.0, values.as_slice())], None).ok();
+                    factorizations += usize::from(tangent.is_some());
+                }
+                match tangent.as_ref() {
+                    Some(factor) => {
                         let mut x: Vec<f64> = system.dof_of_free.iter().map(|&d| -residual[d as usize]).collect();
                         factor.solve_in_place(&mut x);
                         let mut du = vec![0.0; ndof];
@@ -221,7 +231,7 @@ where
                         continue;
                     }
                     // Not positive definite: go on with the linear matrix.
-                    Err(_) => tangent_mode = false,
+                    None => tangent_mode = false,
                 }
             }
             f_in = inelastic_force(&|e| updates[e].1.inelastic);
