@@ -116,11 +116,56 @@ fn fit_holds_effects_or_refuses_them() {
         assert!(line.contains(key) && line.contains("sensitivities"), "{line}");
     }
 
-    write_trial(&cwd.join("slider"), "\n[effects]\nplastic_yield_stress_MPa = 0.01\n");
-    let o = wagashi_in(cwd, ["press", "slider", "-o", "x"]);
+    write_trial(&cwd.join("stiff"), "\n[effects]\nstrain_stiffening = 1.0\n");
+    let o = wagashi_in(cwd, ["press", "stiff", "-o", "x"]);
     let line = assert_one_line_error(&o);
     assert!(
-        line.contains("experiment.toml:25: effects.plastic_yield_stress_MPa:") && line.contains("not implemented"),
+        line.contains("experiment.toml:25: effects.strain_stiffening:") && line.contains("not implemented"),
         "{line}"
     );
+}
+
+/// The material-point effects in `wagashi press`: a slider (yield stress below
+/// the gel's peak stress of 0.005 MPa) lowers the force at the end of the push
+/// and leaves the released specimen pressed (the force file ends at zero force
+/// either way); an out-of-bounds value is refused naming the file, the line and
+/// the key; `wagashi fit` refuses the slider in one line naming its key.
+#[test]
+fn press_runs_material_point_effects() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cwd = tmp.path();
+    write_trial(&cwd.join("base"), "");
+    write_trial(&cwd.join("slider"), "\n[effects]\nplastic_yield_stress_MPa = 0.003\nplastic_hardening_MPa = 0.02\n");
+    for name in ["base", "slider"] {
+        assert_success(&wagashi_in(cwd, ["press", name, "-o", &format!("out-{name}"), "--size-mm", "5"]));
+    }
+    let force_at = |name: &str, t: f64| {
+        let f = force_csv(&cwd.join(format!("out-{name}/force.csv")));
+        f.iter().min_by(|a, b| (a.0 - t).abs().total_cmp(&(b.0 - t).abs())).unwrap().1
+    };
+    // Elastic gel, uniaxial-like push to 10 %: 0.005 MPa on 200 mm^2 at 10 s.
+    let (base, slider) = (force_at("base", 10.0), force_at("slider", 10.0));
+    assert!(slider < 0.9 * base, "{slider} vs {base}");
+    assert!(force_at("slider", 5.0) > 0.0);
+
+    write_trial(&cwd.join("bad"), "\n[effects]\nplastic_yield_stress_MPa = -0.003\n");
+    let o = wagashi_in(cwd, ["press", "bad", "-o", "x"]);
+    let line = assert_one_line_error(&o);
+    assert!(
+        line.contains("experiment.toml:25: effects.plastic_yield_stress_MPa:") && line.contains("outside"),
+        "{line}"
+    );
+
+    assert_success(&wagashi_in(cwd, ["press", "base", "-o", "measured", "--size-mm", "5"]));
+    let text = std::fs::read_to_string(cwd.join("measured/experiment.toml")).unwrap();
+    std::fs::write(
+        cwd.join("measured/experiment.toml"),
+        format!("{text}\n[effects]\nplastic_yield_stress_MPa = 0.003\n"),
+    )
+    .unwrap();
+    std::fs::write(cwd.join("start.toml"), "[materials.gel]\nmodel = \"elastic\"\npoisson = 0.3\nE_MPa = 0.02\n")
+        .unwrap();
+    let o = wagashi_in(cwd, ["fit", "measured", "--materials", "start.toml", "-o", "refused"]);
+    let line = assert_one_line_error(&o);
+    assert!(line.contains("plastic_yield_stress_MPa") && line.contains("sensitivities"), "{line}");
 }

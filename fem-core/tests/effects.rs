@@ -141,7 +141,20 @@ fn registry_lists_the_twelve_effects() {
 #[test]
 fn unimplemented_effects_are_refused_by_key() {
     let implemented: Vec<&str> = EffectId::ALL.iter().filter(|e| e.implemented()).map(|e| e.id()).collect();
-    assert_eq!(implemented, ["plate-friction", "machine-compliance", "gravity", "force-offset", "ageing"]);
+    assert_eq!(
+        implemented,
+        [
+            "plastic-slider",
+            "bingham-dashpot",
+            "stress-thinning",
+            "dual-viscosity",
+            "plate-friction",
+            "machine-compliance",
+            "gravity",
+            "force-offset",
+            "ageing"
+        ]
+    );
     for e in EffectId::ALL.into_iter().filter(|e| !e.implemented()) {
         let err = Effects::none().with(e, &e.params().iter().map(|p| p.reference).collect::<Vec<_>>()).unwrap_err();
         assert!(matches!(err, EffectError::NotImplemented { .. }), "{err}");

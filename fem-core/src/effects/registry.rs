@@ -380,7 +380,7 @@ impl EffectId {
     /// What it models, in one line.
     pub fn description(self) -> &'static str {
         match self {
-            EffectId::PlasticSlider => "rate-independent yield in series (J2, linear kinematic hardening)",
+            EffectId::PlasticSlider => "rate-independent yield in series (linear kinematic hardening)",
             EffectId::BinghamDashpot => "the dashpot c3 flows only above a threshold stress",
             EffectId::StressThinning => "stress-thinning viscosity of c3 (Cross law)",
             EffectId::DualViscosity => "c3 differs between loading and unloading (Wang & Hirai 2012)",
@@ -440,7 +440,11 @@ impl EffectId {
     pub fn implemented(self) -> bool {
         matches!(
             self,
-            EffectId::PlateFriction
+            EffectId::PlasticSlider
+                | EffectId::BinghamDashpot
+                | EffectId::StressThinning
+                | EffectId::DualViscosity
+                | EffectId::PlateFriction
                 | EffectId::MachineCompliance
                 | EffectId::Gravity
                 | EffectId::ForceOffset

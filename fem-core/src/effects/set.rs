@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use thiserror::Error;
 
 use super::registry::EffectId;
-use crate::material::{Material, Rheology};
+use crate::material::{InelasticLaw, Material, Rheology};
 
 /// Why effect values were refused.
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -61,6 +61,8 @@ pub const AGE_KEY: &str = "age_h";
 pub struct Effects {
     values: BTreeMap<EffectId, Vec<f64>>,
     age_h: Option<f64>,
+    /// Run the material-point path even with its effect at the nulls (verification).
+    force_material_point: bool,
 }
 
 impl Effects {
@@ -224,6 +226,55 @@ impl Effects {
         Material { rheology, poisson: material.poisson }
     }
 
+    /// For verification: run the material-point path (the inelastic strain, the
+    /// global iteration) even when the material-point effect that is set sits at
+    /// its null values, which otherwise leaves the linear path untouched. The null
+    /// tests compare the two.
+    pub fn force_material_point_path(&mut self, on: bool) {
+        self.force_material_point = on;
+    }
+
+    /// The material-point effect (E1 to E4) the engine runs, with its values: the
+    /// active one, or with [`Effects::force_material_point_path`] the one that is
+    /// set. `None`: the linear path. At most one is allowed ([`Effects::validate`]).
+    pub fn material_point(&self) -> Option<(EffectId, Vec<f64>)> {
+        EffectId::ALL
+            .into_iter()
+            .filter(|&e| e.hook() == super::HookPoint::MaterialPoint)
+            .find(|&e| self.is_active(e) || (self.force_material_point && self.is_set(e)))
+            .map(|e| (e, self.values(e)))
+    }
+
+    /// The inelastic law of the material-point effect for a region with
+    /// `rheology`, if one runs. Refuses a dashpot law (E2 to E4) on a chain without
+    /// the dashpot `c3` (an elastic region), naming the key.
+    pub fn inelastic_law(&self, rheology: &Rheology) -> Result<Option<InelasticLaw>, EffectError> {
+        let Some((effect, v)) = self.material_point() else {
+            return Ok(None);
+        };
+        let key = effect.params()[0].key;
+        let c3 = || {
+            rheology.dashpot_c3().ok_or_else(|| EffectError::Conflict {
+                key,
+                detail: format!(
+                    "the effect `{effect}` modifies the dashpot c3, and a `{}` chain has none",
+                    rheology.model_name()
+                ),
+            })
+        };
+        Ok(Some(match effect {
+            EffectId::PlasticSlider => InelasticLaw::Slider { yield_mpa: v[0], hardening_mpa: v[1] },
+            EffectId::BinghamDashpot => InelasticLaw::Bingham { threshold_mpa: v[0], c3_mpa_s: c3()? },
+            EffectId::StressThinning => {
+                InelasticLaw::Thinning { inverse_stress_per_mpa: v[0], exponent: v[1], c3_mpa_s: c3()? }
+            }
+            EffectId::DualViscosity => InelasticLaw::Dual { log_ratio: v[0], c3_mpa_s: c3()? },
+            other => {
+                return Err(EffectError::NotImplemented { effect: other, key: other.params()[0].key });
+            }
+        }))
+    }
+
     /// Refuses a combination with forward sensitivities that they cannot carry
     /// (the first active effect without them, in registry order).
     pub fn check_sensitivities(&self) -> Result<(), EffectError> {
@@ -245,6 +296,17 @@ impl Effects {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(EffectError::BadCovariate { key: AGE_KEY, value: v });
             }
+        }
+        let point: Vec<EffectId> =
+            self.active().into_iter().filter(|e| e.hook() == super::HookPoint::MaterialPoint).collect();
+        if point.len() > 1 {
+            return Err(EffectError::Conflict {
+                key: point[1].params()[0].key,
+                detail: format!(
+                    "the material-point effects `{}` and `{}` cannot be combined yet (one inelastic law per run)",
+                    point[0], point[1]
+                ),
+            });
         }
         if self.is_active(EffectId::Ageing) && self.age_h.is_none() {
             return Err(EffectError::Conflict {

@@ -7,8 +7,10 @@
 //! the hereditary integral of the strain with the chain's relaxation function `G`
 //! (design.md 3.2). [`Material`] carries both halves.
 
+mod point;
 mod rheology;
 
+pub use point::{energy_norm, InelasticLaw, PointFailure, PointUpdate, MAX_DASHPOT_RATIO, TANGENT_HARDENING};
 pub use rheology::{phi1, phi1_derivative, ChainElement, MaterialError, RelaxationKernel, Rheology};
 
 /// A material: a rheological chain and a Poisson ratio.

@@ -109,6 +109,16 @@ impl Rheology {
         Ok(())
     }
 
+    /// The series dashpot's viscosity `c3` [MPa s], if the chain has one.
+    pub fn dashpot_c3(&self) -> Option<f64> {
+        match *self {
+            Rheology::Elastic { .. } => None,
+            Rheology::ThreeElement { c3_mpa_s, .. }
+            | Rheology::FourElement { c3_mpa_s, .. }
+            | Rheology::FiveElement { c3_mpa_s, .. } => Some(c3_mpa_s),
+        }
+    }
+
     /// The chain as series elements (the seed's Fig. 1).
     pub fn chain(&self) -> Vec<ChainElement> {
         use ChainElement::*;

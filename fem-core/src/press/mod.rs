@@ -19,6 +19,7 @@
 //! as a reference.
 
 mod contact;
+mod inelastic;
 mod model;
 mod problem;
 mod result;
@@ -41,7 +42,9 @@ pub use tools::{Keyframe, Tool, ToolContact, ToolShape};
 /// With effects ([`PressProblem::effects`], [`crate::effects`]): `ageing` and
 /// `plate-friction` change the problem before the run (aged materials; friction
 /// plates as contact tools), `gravity` and `machine-compliance` act inside the
-/// steps, and `force-offset` on the reported bottom force afterwards.
+/// steps, the material-point effects (`plastic-slider`, `bingham-dashpot`,
+/// `stress-thinning`, `dual-viscosity`) in each cell's update with a global
+/// iteration per step, and `force-offset` on the reported bottom force afterwards.
 pub fn simulate<const D: usize, const N: usize, const S: usize>(
     problem: &PressProblem<D, N, S>,
     settings: &Settings,
@@ -57,6 +60,9 @@ where
         Integrator::QuasiStatic | Integrator::Dynamic => stepper::run(problem, settings, &[], progress).map(|r| r.0),
         Integrator::Seed if !problem.tools.is_empty() => {
             Err(PressError::BadSettings("contact tools need the quasi-static integrator".into()))
+        }
+        Integrator::Seed if problem.effects.material_point().is_some() => {
+            Err(PressError::BadSettings("material-point effects need the quasi-static integrator".into()))
         }
         Integrator::Seed if problem.effects.machine_compliance_mm_per_n().is_some() => {
             Err(PressError::BadSettings("machine compliance needs the quasi-static integrator".into()))

@@ -17,7 +17,7 @@ use crate::element::{
     cell_geometry, cell_geometry_in, strain_block, unit_young_matrix, CellGeometry, Formulation, ReferenceSimplex,
     Simplex,
 };
-use crate::material::RelaxationKernel;
+use crate::material::{InelasticLaw, RelaxationKernel};
 use crate::mesh::MeshError;
 
 /// Standard gravity [mm/s^2].
@@ -82,6 +82,9 @@ pub(crate) struct Model<'p, const D: usize, const N: usize, const S: usize> {
     pub node_order: Vec<u32>,
     /// Position of each dof's diagonal entry in the pattern's values.
     pub diagonal_positions: Vec<usize>,
+    /// The inelastic law per region when a material-point effect runs
+    /// ([`crate::effects`]); `None`: the linear path.
+    pub point: Option<Vec<InelasticLaw>>,
 }
 
 impl<'p, const D: usize, const N: usize, const S: usize> Model<'p, D, N, S>
@@ -213,7 +216,15 @@ where
                 pattern.row_ptr[r] + row.iter().position(|&c| c as usize == r).expect("the diagonal is in the pattern")
             })
             .collect();
+        // The material-point effect's law per region (E1 to E4), if one runs.
+        let laws = problem
+            .materials
+            .iter()
+            .map(|m| problem.effects.inelastic_law(&m.rheology))
+            .collect::<Result<Vec<_>, _>>()?;
+        let point = laws.into_iter().collect::<Option<Vec<InelasticLaw>>>();
         Ok(Self {
+            point,
             diagonal_positions,
             node_order,
             problem,

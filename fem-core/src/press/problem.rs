@@ -288,6 +288,10 @@ pub enum PressError {
         list_nodes(nodes)
     )]
     ContactNotSettled { step: usize, time_s: f64, tool: String, nodes: Vec<u32> },
+    /// The material-point iteration of a step did not converge (or a local update
+    /// had no solution), even at a smaller step.
+    #[error("step {step} at t = {time_s:.6} s: the material-point iteration did not converge: {detail}")]
+    NotConverged { step: usize, time_s: f64, detail: String },
     /// Effect values refused, or an effect that does not fit the problem.
     #[error("effects: {0}")]
     Effect(#[from] EffectError),
@@ -428,6 +432,25 @@ where
                 EffectId::MachineCompliance,
                 "acts on the constrained plate only; with contact tools (or plate friction) it is not implemented yet",
             );
+        }
+        if let Some((effect, _)) = e.material_point() {
+            if !self.tools.is_empty() || e.is_active(EffectId::PlateFriction) {
+                return conflict(
+                    effect,
+                    "material-point effects run on the constrained plate only; with contact tools (or plate \
+                     friction) they are not implemented yet",
+                );
+            }
+            if e.is_active(EffectId::MachineCompliance) {
+                return conflict(
+                    effect,
+                    "material-point effects cannot be combined with machine compliance yet (its exact step \
+                     needs a step linear in the plate displacement)",
+                );
+            }
+            for m in &self.materials {
+                e.inelastic_law(&m.rheology)?;
+            }
         }
         Ok(())
     }

@@ -21,6 +21,12 @@
 //! plate exactly (their acceleration is zero between kinks), so reactions carry no
 //! spurious inertia.
 //!
+//! Material-point effects (E1 to E4, [`crate::effects`]): each cell carries an
+//! inelastic strain in series with the chain, the chain's strain and histories
+//! are those of `e - e_in`, and the step is solved by the iteration of
+//! `super::inelastic` (modified Newton on the same factorization, full Newton when
+//! it contracts slowly). Without such an effect none of it runs.
+//!
 //! Step control: the local error of the displacement is estimated against an
 //! extrapolation of the previous steps (quadratic for BDF2 steps, linear for BDF1
 //! ones), relative to `rtol` times the largest plate displacement; steps land on every
@@ -33,6 +39,7 @@ use crate::parallel::map_collect;
 use nalgebra::{SMatrix, SVector};
 
 use super::contact::{ContactModel, StepInput, ToolSample, ToolTrack};
+use super::inelastic::{self, PointInput};
 use super::model::{Constraints, Model};
 use super::result::{ForceSegment, RegionTerms};
 use super::sensitivity::{check_parameters, Sensitivities, SensitivityParameter, StepView, Tracker};
@@ -94,6 +101,12 @@ struct State<const S: usize> {
     history: Vec<[SVector<f64, S>; 2]>,
     /// Internal force at this time (dynamic runs only; empty otherwise) [N].
     f_int: Vec<f64>,
+    /// Material-point path only (empty otherwise): the inelastic strain per cell,
+    /// in series with the chain; `strain` and `history` are then the chain's, of
+    /// `e - e_in` ([`super::inelastic`]).
+    inelastic: Vec<SVector<f64, S>>,
+    /// The `dual-viscosity` effect's unloading flag per cell (empty otherwise).
+    unloading: Vec<bool>,
 }
 
 /// Per-region scalars of one step size.
@@ -153,6 +166,13 @@ where
             "machine compliance needs the quasi-static integrator and no sensitivities".into(),
         ));
     }
+    // The material-point path (crate::effects, E1 to E4; press::inelastic).
+    if model.point.is_some() && (settings.integrator != Integrator::QuasiStatic || tracker.is_some()) {
+        return Err(PressError::BadSettings(
+            "material-point effects need the quasi-static integrator and no sensitivities".into(),
+        ));
+    }
+    let mut point_retries = 0usize;
     let ndof = model.num_dofs();
     let ncell = problem.mesh.num_cells();
 
@@ -214,6 +234,11 @@ where
         strain_prev: vec![SVector::zeros(); ncell],
         history: vec![[SVector::zeros(); 2]; ncell],
         f_int: if dynamic { vec![0.0; ndof] } else { Vec::new() },
+        inelastic: if model.point.is_some() { vec![SVector::zeros(); ncell] } else { Vec::new() },
+        unloading: match model.point.as_ref() {
+            Some(laws) if laws.iter().any(|l| l.needs_direction()) => vec![false; ncell],
+            _ => Vec::new(),
+        },
     };
     let ga = if dynamic { GeneralizedAlpha::new(settings.rho_inf) } else { GeneralizedAlpha::QUASI_STATIC };
     // Displacements one and two steps back in this segment, with the step that left them.
@@ -413,9 +438,17 @@ where
                 dt = h / 4.0;
                 continue;
             }
+            Err(PressError::NotConverged { .. }) if point_retries < 3 && settings.step_ends_s.is_none() => {
+                // Retry from the old state at a quarter of the step.
+                point_retries += 1;
+                dt = h / 4.0;
+                continue;
+            }
             Err(e) => return Err(e),
         };
         contact_retries = 0;
+        point_retries = 0;
+        num_factorizations += outcome.factorizations;
         if let (Some(settled), Some(cm), Some(r)) = (settled.as_mut(), contact.as_ref(), outcome.imbalance.as_ref()) {
             cm.rebalance(settled, r);
         }
@@ -612,7 +645,7 @@ fn check_settings(s: &Settings) -> Result<(), PressError> {
 /// coupling already subtracted; valid on the free rows) and the displacement with
 /// its held values, writes the free values; returns the contact forces on the
 /// specimen per dof, if any.
-type FreeSolve<'a> = dyn FnMut(&[f64], &mut Vec<f64>) -> Result<Option<Vec<f64>>, PressError> + 'a;
+pub(crate) type FreeSolve<'a> = dyn FnMut(&[f64], &mut Vec<f64>) -> Result<Option<Vec<f64>>, PressError> + 'a;
 
 /// The plain solve: one triangular solve pair with the step's factorization.
 fn plain_solve<'a>(
@@ -638,6 +671,8 @@ struct StepOutcome<const S: usize> {
     /// With contact: what the free rows leave unbalanced, `A u - b - F_contact`
     /// (the multipliers' rounding), per dof; zero on held rows.
     imbalance: Option<Vec<f64>>,
+    /// Factorizations the step made itself (the material-point path's tangents).
+    factorizations: usize,
 }
 
 impl ForceSegment {
@@ -746,7 +781,35 @@ where
     let mut coupling = vec![0.0; ndof];
     apply(&u1, &mut coupling);
     let base: Vec<f64> = (0..ndof).map(|d| rhs[d] - coupling[d]).collect();
-    let external = solve(&base, &mut u1)?;
+    // The material-point path: the same step with an inelastic strain per cell,
+    // solved by the iteration of `super::inelastic`.
+    let point = match model.point.as_ref() {
+        None => None,
+        Some(_) => {
+            let q: Vec<SVector<f64, S>> = map_collect(mesh.num_cells(), history_part);
+            let g: Vec<f64> = factors.iter().map(|f| f.g).collect();
+            let scale = system
+                .dof_of_free
+                .iter()
+                .map(|&d| rhs[d as usize].powi(2) + coupling[d as usize].powi(2))
+                .sum::<f64>()
+                .sqrt();
+            let input = PointInput {
+                g: &g,
+                q: &q,
+                chain0: &s0.strain,
+                inelastic0: &s0.inelastic,
+                unloading0: &s0.unloading,
+                base: &base,
+                scale,
+                dt,
+                t1,
+                step: step_index,
+            };
+            Some(inelastic::solve_step(model, &input, system, solve, &mut u1)?)
+        }
+    };
+    let external = if point.is_some() { None } else { solve(&base, &mut u1)? };
     for &d in &system.dof_of_free {
         let d = d as usize;
         if !u1[d].is_finite() {
@@ -776,7 +839,11 @@ where
         rr += (y[d] - rhs[d]).powi(2);
         bb += rhs[d].powi(2) + coupling[d].powi(2);
     }
-    let residual = if bb > 0.0 { (rr / bb).sqrt() } else { 0.0 };
+    let residual = match point.as_ref() {
+        Some(p) => p.residual,
+        None if bb > 0.0 => (rr / bb).sqrt(),
+        None => 0.0,
+    };
     let imbalance = with_contact.then(|| {
         let mut r = vec![0.0; ndof];
         for &d in &system.dof_of_free {
@@ -791,6 +858,11 @@ where
         let (k, f) = (&model.region_kernel[r], &factors[r]);
         let ue = model.cell_displacements(e, &u1);
         let e1 = cell_strain::<D, N, S>(&model.geometry[e].gradients, &ue);
+        // The chain's strain on the material-point path.
+        let e1 = match point.as_ref() {
+            Some(p) => e1 - p.inelastic[e],
+            None => e1,
+        };
         let de = e1 - s0.strain[e];
         let mut h1 = [SVector::<f64, S>::zeros(); 2];
         for j in 0..k.num_terms {
@@ -872,12 +944,17 @@ where
         stress.push(s1);
     }
     let strain_prev = s0.strain.clone();
+    let (inelastic, unloading, factorizations) = match point {
+        Some(p) => (p.inelastic, p.unloading, p.factorizations),
+        None => (Vec::new(), Vec::new(), 0),
+    };
     Ok(StepOutcome {
-        state: State { t: t1, u: u1, v: v1, a: a1, strain, strain_prev, history, f_int },
+        state: State { t: t1, u: u1, v: v1, a: a1, strain, strain_prev, history, f_int, inelastic, unloading },
         stress,
         segment,
         residual,
         imbalance,
+        factorizations,
     })
 }
 

@@ -57,19 +57,31 @@
 //! ageing_c_rate_per_h = -0.02         # ageing gamma_c [1/h]: c_i -> c_i exp(gamma_c age_h)
 //! age_h = 5.0                         # trial covariate: hours since preparation (needed by ageing)
 //! plate_friction = 0.3                # Coulomb mu at a frictionless plate (and a frictionless floor)
+//! plastic_yield_stress_MPa = 0.002    # plastic-slider sigma_y [MPa] (absent: no slider)
+//! plastic_hardening_MPa = 0.01        # plastic-slider H [MPa], kinematic hardening (default 0.01)
+//! bingham_threshold_MPa = 0.001       # bingham-dashpot sigma_B [MPa]: c3 flows above it only
+//! thinning_inverse_stress_1_per_MPa = 200.0  # stress-thinning 1/sigma_c: c3 / (1 + (s/sigma_c)^m)
+//! thinning_exponent = 1.0             # stress-thinning m in [0.2, 4] (default 1)
+//! dual_viscosity_log_ratio = 1.0      # dual-viscosity psi in [-10, 10]: c3 exp(psi) in unloading
 //! ```
+//!
+//! The last six are the material-point effects (`fem_core::effects`): at most
+//! one of them per trial, on the constrained plate (not with contact tools,
+//! `plate_friction` or `machine_compliance_mm_per_N`); the dashpot ones need a
+//! chain with `c3` (not `elastic`).
 //!
 //! Unit suffixes read as the format's (`_N`, `_mm`, `_MPa`) with `_per_` for a
 //! quotient (`_N_per_s` is N/s, `_mm_per_N` mm/N, `_per_h` 1/h), since `_MPa_s`
 //! already means a product. The other effects' keys
-//! (`plastic_yield_stress_MPa`, `plastic_hardening_MPa`, `bingham_threshold_MPa`,
-//! `thinning_inverse_stress_1_per_MPa`, `thinning_exponent`,
-//! `dual_viscosity_log_ratio`, `strain_stiffening`, `finite_strain`,
-//! `adhesion_strength_MPa`, `adhesion_opening_mm`) are known and refused as
-//! "not implemented in the engine yet". Refused, naming the file, the line and
-//! the key: any other key; a value outside its parameter's bounds (`gravity` in
-//! [0, 1], `plate_friction` in [0, 10], `machine_compliance_mm_per_N` >= 0,
-//! ageing rates in [-1, 1] per hour); a negative `age_h`; ageing rates without
+//! (`strain_stiffening`, `finite_strain`, `adhesion_strength_MPa`,
+//! `adhesion_opening_mm`) are known and refused as "not implemented in the
+//! engine yet". Refused, naming the file, the line and the key: any other key; a
+//! value outside its parameter's bounds (`gravity` in [0, 1], `plate_friction` in
+//! [0, 10], `machine_compliance_mm_per_N` >= 0, ageing rates in [-1, 1] per hour,
+//! the slider's stresses and the Bingham threshold >= 0,
+//! `thinning_inverse_stress_1_per_MPa` >= 0, `thinning_exponent` in [0.2, 4],
+//! `dual_viscosity_log_ratio` in [-10, 10]); two material-point effects at once;
+//! a dashpot effect on an `elastic` material; a negative `age_h`; ageing rates without
 //! `age_h`; `gravity` together with `[protocol] gravity = true` (the factor 1
 //! already); `plate_friction` on a plate that is not frictionless or on a trial
 //! with contact tools (give the tool's `friction` there); `machine_compliance_mm_per_N`

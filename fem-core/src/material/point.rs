@@ -1,0 +1,332 @@
+//! Inelastic series strains at a material point: the local update of the
+//! material-point effects (`plastic-slider`, `bingham-dashpot`,
+//! `stress-thinning`, `dual-viscosity`; see [`crate::effects`] for the design).
+//!
+//! ## Formulation
+//!
+//! The linear chain acts on the *unit-Young stress image* `tau = C1^-1 s` (the
+//! stress is `s = C1 tau`, [`crate::element::unit_young_matrix`]): through the
+//! Lamé split every element of the chain deforms along `C1^-1 s`, so the chain is
+//! one scalar relaxation function applied to `tau` component by component. An
+//! effect adds an inelastic strain `e_in` in series with the linear chain, so the
+//! chain sees the strain `e - e_in` and the step's stress image is
+//!
+//! ```text
+//! tau1 = g (e1 - e_in1) - q = tau_trial - g (e_in1 - e_in0),   tau_trial = g (e1 - e_in0) - q
+//! ```
+//!
+//! with the stepper's step factor `g` and history part `q`. The inelastic flow
+//! keeps the Lamé split's shape too: it is directed along `tau` (for the slider,
+//! along `tau - H e_p`), and its size is governed by the *equivalent stress*
+//! `|tau|_C = sqrt(tau . C1 tau) = sqrt(s . C1^-1 s)`, the square root of twice the
+//! unit-Young elastic energy density of the stress (Beltrami's measure). In
+//! uniaxial stress `s = sigma e_y` it is `|sigma|` exactly, so the 1D laws of
+//! diagnosis-details.md §4.2 hold as written in homogeneous compression, in every
+//! formulation (plane stress and strain, axisymmetric, solid: `C1` is the
+//! formulation's, so the energy is the 3D one). The flow `tau / |tau|_C` is the
+//! normal to `|tau|_C = const` in stress space (`d|tau|_C / ds = C1^-1 s / |tau|_C`),
+//! so the flow is associative and the consistent tangent `C1 T` is symmetric: the
+//! step matrix stays a Cholesky candidate. For `nu -> 0.5` the measure tends to
+//! von Mises' and the flow to an isochoric one; at the seed's `nu` the flow has
+//! the chain's own Poisson ratio (as the baseline's dashpot `c3` has).
+//!
+//! Every update is *radial*: the new stress image is a positive multiple of the
+//! trial (relative to the back stress for the slider), which turns each law into
+//! one scalar equation, solved in closed form (slider, Bingham, dual) or by a
+//! safeguarded Newton iteration (Cross).
+//!
+//! The dashpot laws are corrections of the chain's own dashpot `c3`: with the flow
+//! `psi tau / c3` of the modified dashpot, the inelastic strain carries the
+//! difference `(psi - 1) tau / c3` (backward Euler over the step), so the linear
+//! chain (whose kernel integrates `c3` exactly for a strain linear in time) is
+//! never rebuilt. At the nulls the correction is exactly zero.
+
+use nalgebra::{SMatrix, SVector};
+
+/// An inelastic strain law in series with a region's chain.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum InelasticLaw {
+    /// E1: a slider with uniaxial yield stress `sigma_y` [MPa] (`inf`: never yields)
+    /// and linear kinematic hardening `H` [MPa]: `|tau - H e_p|_C <= sigma_y`.
+    Slider { yield_mpa: f64, hardening_mpa: f64 },
+    /// E2: the dashpot `c3` [MPa s] flows at `<|tau|_C - sigma_B> / |tau|_C tau / c3`.
+    Bingham { threshold_mpa: f64, c3_mpa_s: f64 },
+    /// E3: the dashpot's viscosity is `c3 / (1 + (|tau|_C / sigma_c)^m)` (Cross).
+    Thinning { inverse_stress_per_mpa: f64, exponent: f64, c3_mpa_s: f64 },
+    /// E4: the dashpot's viscosity is `c3` while loading, `c3 exp(psi)` while unloading.
+    Dual { log_ratio: f64, c3_mpa_s: f64 },
+}
+
+/// The result of a local update.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PointUpdate<const S: usize> {
+    /// The inelastic strain at the step's end.
+    pub inelastic: SVector<f64, S>,
+    /// The stress image `tau1` at the step's end (the stress is `C1 tau1`).
+    pub tau: SVector<f64, S>,
+    /// `d tau1 / d tau_trial` (so `d s1 / d e1 = g C1 T`, symmetric); for a
+    /// slider with `H < TANGENT_HARDENING g` the tangent of `H = TANGENT_HARDENING g`.
+    pub tangent: SMatrix<f64, S, S>,
+}
+
+/// Why a local update has no solution for this step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PointFailure {
+    /// The step is too long for the dashpot correction: `g dt / c3` is not below 1
+    /// (`g dt` tends to the chain's total viscosity `c3` as `dt` grows, and can
+    /// exceed it with the BDF2 factor), so the backward-Euler correction of a
+    /// slower dashpot has no positive solution. A shorter step cures it.
+    StepTooLong { ratio: f64 },
+}
+
+/// `|x|_C = sqrt(x . C1 x)`.
+pub fn energy_norm<const S: usize>(c1: &SMatrix<f64, S, S>, x: &SVector<f64, S>) -> f64 {
+    x.dot(&(c1 * x)).max(0.0).sqrt()
+}
+
+/// The largest `g dt / c3` a dashpot correction accepts (a step with a larger
+/// ratio is refused and retried shorter: near 1 the correction amplifies the trial
+/// by `1 / (1 - ratio)`).
+pub const MAX_DASHPOT_RATIO: f64 = 0.95;
+
+/// The least hardening, relative to the step factor `g`, the slider's tangent is
+/// taken with (the update itself uses the true `H`, 0 included).
+pub const TANGENT_HARDENING: f64 = 1e-2;
+
+impl InelasticLaw {
+    /// Whether the law is at its null (gives back the linear chain exactly).
+    pub fn is_null(&self) -> bool {
+        match *self {
+            InelasticLaw::Slider { yield_mpa, .. } => yield_mpa == f64::INFINITY,
+            InelasticLaw::Bingham { threshold_mpa, .. } => threshold_mpa == 0.0,
+            InelasticLaw::Thinning { inverse_stress_per_mpa, .. } => inverse_stress_per_mpa == 0.0,
+            InelasticLaw::Dual { log_ratio, .. } => log_ratio == 0.0,
+        }
+    }
+
+    /// Whether the law needs the per-cell loading flag (E4).
+    pub fn needs_direction(&self) -> bool {
+        matches!(self, InelasticLaw::Dual { .. })
+    }
+
+    /// The local update of one cell over a step: `c1` the region's unit-Young
+    /// matrix, `tau_trial = g (e1 - e_in0) - q`, `inelastic0 = e_in0`, `g` the
+    /// step factor, `dt` the step, `unloading` the cell's direction flag (E4 only).
+    pub fn update<const S: usize>(
+        &self,
+        c1: &SMatrix<f64, S, S>,
+        tau_trial: &SVector<f64, S>,
+        inelastic0: &SVector<f64, S>,
+        g: f64,
+        dt: f64,
+        unloading: bool,
+    ) -> Result<PointUpdate<S>, PointFailure> {
+        let identity = SMatrix::<f64, S, S>::identity();
+        let unchanged = PointUpdate { inelastic: *inelastic0, tau: *tau_trial, tangent: identity };
+        // `n (C1 n)^T` for a unit direction n: the radial part of a tangent.
+        let radial = |n: &SVector<f64, S>| n * (c1 * n).transpose();
+        match *self {
+            InelasticLaw::Slider { yield_mpa, hardening_mpa: h } => {
+                // Trial relative stress x = tau_trial - H e_p0; radial return:
+                // x1 = x (1 - (g + H) dl / |x|), |x1| = sigma_y, dl = (|x| - sigma_y)/(g + H).
+                let x = tau_trial - inelastic0 * h;
+                let sigma = energy_norm(c1, &x);
+                if sigma <= yield_mpa {
+                    return Ok(unchanged);
+                }
+                let n = x / sigma;
+                let dl = (sigma - yield_mpa) / (g + h);
+                let de = n * dl;
+                // d(dl n)/dx = n (C1 n)^T / (g + H) + (dl / |x|) (I - n (C1 n)^T). With
+                // little hardening the radial part g H/(g + H) vanishes and a cell makes
+                // the tangent singular: it is taken with H at least TANGENT_HARDENING g
+                // (the Newton iteration then contracts by about that factor).
+                let nn = radial(&n);
+                let ht = h.max(TANGENT_HARDENING * g);
+                let d = nn / (g + ht) + (identity - nn) * (dl / sigma);
+                Ok(PointUpdate { inelastic: inelastic0 + de, tau: tau_trial - de * g, tangent: identity - d * g })
+            }
+            InelasticLaw::Bingham { threshold_mpa: sb, c3_mpa_s } => {
+                if sb == 0.0 {
+                    return Ok(unchanged);
+                }
+                // tau1 = tau_trial + k min(1, sB/|tau1|) tau1 with k = g dt / c3 (the
+                // frozen share of c3's flow undone), radial. Above the threshold
+                // |tau1| = |tau_trial| + k sB; below it tau1 = tau_trial / (1 - k).
+                let k = g * dt / c3_mpa_s;
+                if k >= MAX_DASHPOT_RATIO {
+                    return Err(PointFailure::StepTooLong { ratio: k });
+                }
+                let sigma = energy_norm(c1, tau_trial);
+                let (tau, tangent) = if sigma > 0.0 && sigma >= sb * (1.0 - k) {
+                    let n = tau_trial / sigma;
+                    (tau_trial + n * (k * sb), identity + (identity - radial(&n)) * (k * sb / sigma))
+                } else {
+                    (tau_trial / (1.0 - k), identity / (1.0 - k))
+                };
+                Ok(PointUpdate { inelastic: inelastic0 + (tau_trial - tau) / g, tau, tangent })
+            }
+            InelasticLaw::Thinning { inverse_stress_per_mpa: w, exponent: m, c3_mpa_s } => {
+                if w == 0.0 {
+                    return Ok(unchanged);
+                }
+                // tau1 = tau_trial - k (w |tau1|)^m tau1: radial, |tau1| = r solves
+                // r (1 + k (w r)^m) = |tau_trial| (increasing in r: one root in (0, |tau_trial|]).
+                let k = g * dt / c3_mpa_s;
+                let sigma = energy_norm(c1, tau_trial);
+                if sigma == 0.0 {
+                    return Ok(unchanged);
+                }
+                let f = |r: f64| r * (1.0 + k * (w * r).powf(m)) - sigma;
+                let df = |r: f64| 1.0 + k * (1.0 + m) * (w * r).powf(m);
+                let (mut lo, mut hi) = (0.0, sigma);
+                let mut r = sigma / (1.0 + k * (w * sigma).powf(m)).min(1e300);
+                for _ in 0..200 {
+                    let v = f(r);
+                    if v > 0.0 {
+                        hi = r;
+                    } else {
+                        lo = r;
+                    }
+                    let mut next = r - v / df(r);
+                    if !(next > lo && next < hi) {
+                        next = 0.5 * (lo + hi);
+                    }
+                    if (next - r).abs() <= 1e-15 * sigma {
+                        r = next;
+                        break;
+                    }
+                    r = next;
+                }
+                let rho = r / sigma;
+                // d|tau1|/d|tau_trial| = 1 / f'(r); T = rho I + (p - rho) n (C1 n)^T.
+                let p = 1.0 / df(r);
+                let n = tau_trial / sigma;
+                let tau = tau_trial * rho;
+                let tangent = identity * rho + radial(&n) * (p - rho);
+                Ok(PointUpdate { inelastic: inelastic0 + (tau_trial - tau) / g, tau, tangent })
+            }
+            InelasticLaw::Dual { log_ratio, c3_mpa_s } => {
+                if log_ratio == 0.0 || !unloading {
+                    return Ok(unchanged);
+                }
+                // Unloading: c3 -> c3 exp(psi), flow (exp(-psi) - 1) tau1 / c3 added:
+                // tau1 = tau_trial / (1 + k (exp(-psi) - 1)).
+                let k = g * dt / c3_mpa_s;
+                let a = (-log_ratio).exp_m1();
+                let denom = 1.0 + k * a;
+                if denom < 1.0 - MAX_DASHPOT_RATIO {
+                    return Err(PointFailure::StepTooLong { ratio: k });
+                }
+                let tau = tau_trial / denom;
+                Ok(PointUpdate { inelastic: inelastic0 + (tau_trial - tau) / g, tau, tangent: identity / denom })
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::element::{unit_young_matrix, Formulation};
+
+    fn c1() -> SMatrix<f64, 4, 4> {
+        unit_young_matrix::<4>(Formulation::Axisymmetric, 0.37)
+    }
+
+    /// Uniaxial stress image: `tau = sigma C1^-1 e_y`, whose energy norm is |sigma|.
+    fn uniaxial(sigma: f64) -> SVector<f64, 4> {
+        c1().try_inverse().unwrap() * SVector::<f64, 4>::from([0.0, sigma, 0.0, 0.0])
+    }
+
+    #[test]
+    fn energy_norm_of_uniaxial_stress_is_its_size() {
+        for s in [-0.3, 1e-3, 2.0] {
+            assert!((energy_norm(&c1(), &uniaxial(s)) - s.abs()).abs() < 1e-15 * s.abs().max(1.0));
+        }
+        let c = unit_young_matrix::<3>(Formulation::PlaneStress { thickness_mm: 1.0 }, 0.3);
+        let tau = c.try_inverse().unwrap() * SVector::<f64, 3>::from([0.0, -0.7, 0.0]);
+        assert!((energy_norm(&c, &tau) - 0.7).abs() < 1e-15);
+    }
+
+    /// Every law's tangent against central differences of its own update, at
+    /// random-ish trial states on the active branch (relative step 1e-6: the
+    /// differences agree to about 1e-8 relative), and `C1 T` symmetric.
+    #[test]
+    fn tangents_match_finite_differences() {
+        let c = c1();
+        let trial = uniaxial(-0.02) + SVector::<f64, 4>::from([0.003, -0.001, 0.002, 0.004]);
+        let e0 = SVector::<f64, 4>::from([0.01, -0.02, 0.01, 0.003]);
+        let laws = [
+            InelasticLaw::Slider { yield_mpa: 0.005, hardening_mpa: 0.01 },
+            InelasticLaw::Bingham { threshold_mpa: 0.004, c3_mpa_s: 3.0 },
+            InelasticLaw::Thinning { inverse_stress_per_mpa: 150.0, exponent: 1.3, c3_mpa_s: 3.0 },
+            InelasticLaw::Dual { log_ratio: 1.2, c3_mpa_s: 3.0 },
+        ];
+        let (g, dt) = (0.05, 2.0);
+        for law in laws {
+            let at = |t: &SVector<f64, 4>| law.update(&c, t, &e0, g, dt, true).unwrap();
+            let u = at(&trial);
+            for j in 0..4 {
+                let h = 1e-6 * trial.norm();
+                let mut up = trial;
+                up[j] += h;
+                let mut down = trial;
+                down[j] -= h;
+                let fd = (at(&up).tau - at(&down).tau) / (2.0 * h);
+                for i in 0..4 {
+                    assert!(
+                        (u.tangent[(i, j)] - fd[i]).abs() < 1e-7,
+                        "{law:?} ({i}, {j}): {} vs {}",
+                        u.tangent[(i, j)],
+                        fd[i]
+                    );
+                }
+            }
+            let ct = c * u.tangent;
+            assert!((ct - ct.transpose()).norm() < 1e-14 * ct.norm(), "{law:?}: C1 T not symmetric");
+            // tau1 = tau_trial - g (e_in1 - e_in0).
+            assert!((u.tau - (trial - (u.inelastic - e0) * g)).norm() < 1e-15 * trial.norm());
+        }
+    }
+
+    /// The slider's return lands on the yield surface; Bingham's update stops the
+    /// flow below the threshold and leaves `sigma_B / c3` of it above; at the nulls
+    /// every law returns the trial unchanged, bit for bit.
+    #[test]
+    fn updates_satisfy_their_laws() {
+        let c = c1();
+        let e0 = SVector::<f64, 4>::zeros();
+        let trial = uniaxial(-0.02);
+        let (g, dt, c3) = (0.05, 2.0, 3.0);
+        let k = g * dt / c3;
+        let s = InelasticLaw::Slider { yield_mpa: 0.005, hardening_mpa: 0.01 }.update(&c, &trial, &e0, g, dt, false);
+        let s = s.unwrap();
+        assert!((energy_norm(&c, &(s.tau - s.inelastic * 0.01)) - 0.005).abs() < 1e-15);
+        let b = InelasticLaw::Bingham { threshold_mpa: 0.004, c3_mpa_s: c3 }.update(&c, &trial, &e0, g, dt, false);
+        let b = b.unwrap();
+        // Net dashpot flow over the step: the chain's tau1/c3 dt plus the correction.
+        let net = b.tau * (dt / c3) + b.inelastic;
+        let expected = b.tau * ((1.0 - 0.004 / energy_norm(&c, &b.tau)) * dt / c3);
+        assert!((net - expected).norm() < 1e-15, "{net} vs {expected}");
+        let small = uniaxial(-0.001);
+        let b = InelasticLaw::Bingham { threshold_mpa: 0.004, c3_mpa_s: c3 }.update(&c, &small, &e0, g, dt, false);
+        let b = b.unwrap();
+        assert!((b.tau * (dt / c3) + b.inelastic).norm() < 1e-18);
+        assert!((b.tau - small / (1.0 - k)).norm() < 1e-18);
+        let nulls = [
+            InelasticLaw::Slider { yield_mpa: f64::INFINITY, hardening_mpa: 0.01 },
+            InelasticLaw::Bingham { threshold_mpa: 0.0, c3_mpa_s: c3 },
+            InelasticLaw::Thinning { inverse_stress_per_mpa: 0.0, exponent: 1.0, c3_mpa_s: c3 },
+            InelasticLaw::Dual { log_ratio: 0.0, c3_mpa_s: c3 },
+        ];
+        for law in nulls {
+            assert!(law.is_null());
+            let u = law.update(&c, &trial, &e0, g, dt, true).unwrap();
+            assert_eq!(u.tau, trial, "{law:?}");
+            assert_eq!(u.inelastic, e0, "{law:?}");
+        }
+        let long = InelasticLaw::Bingham { threshold_mpa: 0.004, c3_mpa_s: c3 }.update(&c, &trial, &e0, g, 60.0, false);
+        assert!(matches!(long, Err(PointFailure::StepTooLong { .. })));
+    }
+}

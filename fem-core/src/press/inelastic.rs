@@ -1,0 +1,264 @@
+//! The global iteration of a quasi-static step on the material-point path
+//! (effects E1 to E4, [`crate::effects`]; the local laws in
+//! [`crate::material::InelasticLaw`]).
+//!
+//! With an inelastic strain `e_in` in series, the step's stress image per cell is
+//! `tau1 = g (e1 - e_in1) - q`, so equilibrium reads `g K u1 = f_body + f_hist +
+//! f_in(e_in1)` with `f_in = sum_e w B^T C1 g e_in`: the linear step with one more
+//! right-hand side. The iteration:
+//!
+//! 1. *Modified Newton* with the step's own linear factorization `g K`: solve with
+//!    `f_in` of the current inelastic strains, update every cell locally (radial
+//!    return from `e_in0`, the step's start), recompute `f_in`. This is Newton's
+//!    method with the chain's linear tangent; it needs no new factorization.
+//! 2. When the residual falls by less than [`SLOW_CONTRACTION`] in an iteration
+//!    (a strong effect: a slider with little hardening, a Bingham threshold at a
+//!    large step), *full Newton*: assemble the consistent tangent
+//!    `sum_e w B^T g C1 T_e B` (symmetric, [`crate::material`]'s laws are
+//!    associative in the energy norm), factor it, and keep it while it reduces
+//!    the residual tenfold an iteration ([`TANGENT_REUSE`]; refactored at the
+//!    current state otherwise). If that factorization fails the modified
+//!    iteration goes on.
+//!
+//! Converged when the free rows' residual `|f_int(u1) - f_body|` is at most
+//! [`TOLERANCE`] of the step's force scale (the same scale as the linear step's
+//! residual). Not converged after [`MAX_ITERATIONS`], or a local update without a
+//! solution: [`PressError::NotConverged`], and the stepper retries the step from
+//! its old state with a quarter of the step.
+//!
+//! E4's per-cell direction flag (unloading when `s1 . (e1 - e0) < 0`) is frozen
+//! during the iteration and re-checked at convergence; if a flag flipped the step
+//! is solved again with the new flags, at most [`DIRECTION_PASSES`] times, so that
+//! it cannot chatter.
+
+use nalgebra::{SMatrix, SVector};
+
+use super::model::Model;
+use super::PressError;
+use crate::assembly::{assemble_stiffness, assemble_vector};
+use crate::element::{cell_strain, nodal_force, ReferenceSimplex, Simplex};
+use crate::material::{energy_norm, PointFailure, PointUpdate};
+use crate::parallel::map_collect;
+use crate::solve::ReducedSystem;
+
+/// Converged at this residual, relative to the step's force scale.
+pub(crate) const TOLERANCE: f64 = 1e-12;
+/// The most iterations of one pass.
+pub(crate) const MAX_ITERATIONS: usize = 60;
+/// Switch to the consistent tangent when a modified iteration reduces the
+/// residual by less than this factor.
+pub(crate) const SLOW_CONTRACTION: f64 = 0.5;
+/// Keep a factored tangent while it reduces the residual by at least this factor
+/// an iteration; refactor at the current state otherwise.
+pub(crate) const TANGENT_REUSE: f64 = 0.1;
+/// The most passes of one step for E4's direction flags.
+pub(crate) const DIRECTION_PASSES: usize = 3;
+
+/// A cell's total strain and local update.
+type CellPoint<const S: usize> = (SVector<f64, S>, PointUpdate<S>);
+
+/// The material-point state of the cells at a step's end.
+pub(crate) struct PointStep<const S: usize> {
+    /// Inelastic strain per cell.
+    pub inelastic: Vec<SVector<f64, S>>,
+    /// E4's unloading flag per cell (empty for the other laws).
+    pub unloading: Vec<bool>,
+    /// The residual of the free rows over the force scale.
+    pub residual: f64,
+    /// Numeric factorizations of the consistent tangent.
+    pub factorizations: usize,
+}
+
+/// Inputs of the step's iteration that the linear step already computed.
+pub(crate) struct PointInput<'a, const S: usize> {
+    /// Step factor per region.
+    pub g: &'a [f64],
+    /// History part of the stress image per cell.
+    pub q: &'a [SVector<f64, S>],
+    /// The chain's strain at the step's start, per cell.
+    pub chain0: &'a [SVector<f64, S>],
+    /// The inelastic strain at the step's start, per cell.
+    pub inelastic0: &'a [SVector<f64, S>],
+    /// E4's flags at the step's start (empty for the other laws).
+    pub unloading0: &'a [bool],
+    /// The linear step's right-hand side with the held dofs' coupling removed.
+    pub base: &'a [f64],
+    /// The step's force scale (that of the linear residual).
+    pub scale: f64,
+    pub dt: f64,
+    pub t1: f64,
+    pub step: usize,
+}
+
+/// Solves a step on the material-point path: `u1` holds the held values (and any
+/// start for the free ones) on entry and the solution on exit. `solve(b, u)` is
+/// the step's linear solve.
+pub(crate) fn solve_step<const D: usize, const N: usize, const S: usize>(
+    model: &Model<'_, D, N, S>,
+    input: &PointInput<'_, S>,
+    system: &ReducedSystem,
+    solve: &mut super::stepper::FreeSolve<'_>,
+    u1: &mut Vec<f64>,
+) -> Result<PointStep<S>, PressError>
+where
+    Simplex<D, N>: ReferenceSimplex<D, N>,
+{
+    let laws = model.point.as_ref().expect("the material-point path has laws");
+    let mesh = &model.problem.mesh;
+    let ncell = mesh.num_cells();
+    let ndof = model.num_dofs();
+    let directional = laws.iter().any(|l| l.needs_direction());
+    let mut unloading: Vec<bool> = if directional { input.unloading0.to_vec() } else { Vec::new() };
+    let not_converged = |detail: String| PressError::NotConverged { step: input.step, time_s: input.t1, detail };
+    let mut factorizations = 0usize;
+
+    // f_in = sum_e w B^T C1 g e_in.
+    let inelastic_force = |e_in: &(dyn Fn(usize) -> SVector<f64, S> + Sync)| -> Vec<f64> {
+        let forces: Vec<[SVector<f64, D>; N]> = map_collect(ncell, |e| {
+            let r = mesh.cell_regions[e] as usize;
+            let s = model.region_c1[r] * (e_in(e) * input.g[r]);
+            std::array::from_fn(|a| nodal_force::<D, N, S>(&model.geometry[e], &s, a))
+        });
+        let mut f = vec![0.0; ndof];
+        assemble_vector::<D, N>(&model.topology, &forces, &mut f);
+        f
+    };
+
+    for pass in 0..DIRECTION_PASSES {
+        let flags = &unloading;
+        // Local updates of every cell for a displacement.
+        let local = |u: &[f64]| -> Result<Vec<CellPoint<S>>, (usize, PointFailure)> {
+            let updates: Vec<Result<CellPoint<S>, PointFailure>> = map_collect(ncell, |e| {
+                let r = mesh.cell_regions[e] as usize;
+                let e1 = cell_strain::<D, N, S>(&model.geometry[e].gradients, &model.cell_displacements(e, u));
+                let trial = (e1 - input.inelastic0[e]) * input.g[r] - input.q[e];
+                let unload = directional && flags[e];
+                laws[r]
+                    .update(&model.region_c1[r], &trial, &input.inelastic0[e], input.g[r], input.dt, unload)
+                    .map(|p| (e1, p))
+            });
+            updates.into_iter().enumerate().map(|(e, x)| x.map_err(|f| (e, f))).collect()
+        };
+        let failure = |(e, f): (usize, PointFailure)| match f {
+            PointFailure::StepTooLong { ratio } => not_converged(format!(
+                "element {e}: the dashpot correction needs g dt / c3 < {} (it is {ratio:.3}); a shorter step",
+                crate::material::MAX_DASHPOT_RATIO
+            )),
+        };
+
+        let mut f_in = inelastic_force(&|e| input.inelastic0[e]);
+        // The force scale: the linear step's, and the inelastic strains' own share.
+        let scale =
+            (input.scale.powi(2) + system.dof_of_free.iter().map(|&d| f_in[d as usize].powi(2)).sum::<f64>()).sqrt();
+        let mut previous = f64::INFINITY;
+        let mut tangent_mode = false;
+        let mut tangent: Option<crate::solve::Factor<'_>> = None;
+        let mut newton_step: Option<Vec<f64>> = None;
+        let mut converged = None;
+        for iteration in 0..MAX_ITERATIONS {
+            match newton_step.take() {
+                Some(du) => u1.iter_mut().zip(&du).for_each(|(u, d)| *u += d),
+                None => {
+                    let b: Vec<f64> = input.base.iter().zip(&f_in).map(|(b, f)| b + f).collect();
+                    solve(&b, u1)?;
+                }
+            }
+            for &d in &system.dof_of_free {
+                if !u1[d as usize].is_finite() {
+                    return Err(not_converged(format!("non-finite displacement at dof {d}")));
+                }
+            }
+            let updates = local(u1).map_err(failure)?;
+            // Residual: f_int(u1) - f_body on the free rows.
+            let forces: Vec<[SVector<f64, D>; N]> = map_collect(ncell, |e| {
+                let r = mesh.cell_regions[e] as usize;
+                let s = model.region_c1[r] * updates[e].1.tau;
+                std::array::from_fn(|a| nodal_force::<D, N, S>(&model.geometry[e], &s, a))
+            });
+            let mut residual = vec![0.0; ndof];
+            assemble_vector::<D, N>(&model.topology, &forces, &mut residual);
+            let mut norm2 = 0.0;
+            for (d, r) in residual.iter_mut().enumerate() {
+                *r -= model.body_force[d];
+            }
+            for &d in &system.dof_of_free {
+                norm2 += residual[d as usize].powi(2);
+            }
+            let norm = norm2.sqrt();
+            if norm <= TOLERANCE * scale {
+                converged = Some((updates, norm));
+                break;
+            }
+            if iteration + 1 == MAX_ITERATIONS {
+                return Err(not_converged(format!(
+                    "the residual is {:.3e} of the force scale after {MAX_ITERATIONS} iterations",
+                    norm / scale
+                )));
+            }
+            if !tangent_mode && iteration >= 1 && norm > SLOW_CONTRACTION * previous {
+                tangent_mode = true;
+            }
+            let contraction = norm / previous;
+            previous = norm;
+            if tangent_mode {
+                // Consistent tangent sum_e w B^T g C1 T_e B: factored when first
+                // needed, and again whenever the last one contracts slowly.
+                if tangent.is_none() || contraction > TANGENT_REUSE {
+                    let cell_matrix = |e: usize| {
+                        let r = mesh.cell_regions[e] as usize;
+                        let ct = model.region_c1[r] * updates[e].1.tangent * input.g[r];
+                        Some((ct + ct.transpose()) * 0.5)
+                    };
+                    let values = assemble_stiffness::<D, N, S>(
+                        &model.topology,
+                        &model.pattern,
+                        &mesh.cells,
+                        &model.geometry,
+                        &cell_matrix,
+                    );
+                    tangent = system.factor(&[(1.0, values.as_slice())], None).ok();
+                    factorizations += usize::from(tangent.is_some());
+                }
+                match tangent.as_ref() {
+                    Some(factor) => {
+                        let mut x: Vec<f64> = system.dof_of_free.iter().map(|&d| -residual[d as usize]).collect();
+                        factor.solve_in_place(&mut x);
+                        let mut du = vec![0.0; ndof];
+                        for (i, &d) in system.dof_of_free.iter().enumerate() {
+                            du[d as usize] = x[i];
+                        }
+                        newton_step = Some(du);
+                        continue;
+                    }
+                    // Not positive definite: go on with the linear matrix.
+                    None => tangent_mode = false,
+                }
+            }
+            f_in = inelastic_force(&|e| updates[e].1.inelastic);
+        }
+        let (updates, norm) = converged.expect("the loop returns or converges");
+        // E4: re-check the direction flags at the converged state.
+        if directional {
+            let flipped: Vec<bool> = map_collect(ncell, |e| {
+                let r = mesh.cell_regions[e] as usize;
+                let (e1, p) = &updates[e];
+                let de = e1 - (input.chain0[e] + input.inelastic0[e]);
+                let c1: &SMatrix<f64, S, S> = &model.region_c1[r];
+                let work = p.tau.dot(&(c1 * de));
+                let size = energy_norm(c1, &p.tau) * energy_norm(c1, e1);
+                (work < -1e-10 * size) != unloading[e]
+            });
+            if flipped.iter().any(|&f| f) && pass + 1 < DIRECTION_PASSES {
+                unloading.iter_mut().zip(&flipped).for_each(|(u, &f)| *u ^= f);
+                continue;
+            }
+        }
+        return Ok(PointStep {
+            inelastic: updates.into_iter().map(|(_, p)| p.inelastic).collect(),
+            unloading,
+            residual: if scale > 0.0 { norm / scale } else { 0.0 },
+            factorizations,
+        });
+    }
+    unreachable!("the last pass returns")
+}
