@@ -104,6 +104,7 @@
 //! # }
 //! ```
 
+pub mod diagnosis;
 pub mod lsq;
 pub mod multistart;
 pub mod procedure;
