@@ -18,13 +18,21 @@
 //! from forward differences on a *frozen* discretisation: the run at the point
 //! is replayed on its own step ends (`Settings::step_ends_s`), and so are the
 //! perturbed runs, so the adaptive step choice does not enter the difference
-//! (diagnosis-details.md §5.1.3). Relative steps: 1e-6 for the unknowns, 1e-4 of
-//! the coordinate's scale for an effect parameter.
+//! (diagnosis-details.md §5.1.3). Relative steps: 1e-6 for the unknowns, 1e-3 of
+//! the coordinate's scale for an effect parameter. Contact effects are not
+//! replayed (a contact step that does not settle may not be subdivided on a
+//! replay); their differences come from adaptive runs, whose step choice moves
+//! the force by about the step tolerance, so the steps are larger there (2e-2
+//! relative for the unknowns, 5e-2 of the scale for the effect).
 //!
 //! **Effect coordinates.** An effect parameter with a finite null is fitted as
 //! itself; one with an infinite null (a yield stress never reached) as its
 //! inverse `u = 1/phi` (null `u = 0`), so that the null is a bound the secant
-//! score and the refit can start from.
+//! score and the refit can start from. A one-sided coordinate within 1e-4 of
+//! its reference distance from the null ([`DEADBAND`]) runs as the null: the
+//! engine's friction contact does not settle (and does not return) at
+//! coefficients of order 1e-7 that a refit creeping toward the null would
+//! otherwise ask for; the effect of such values is far below any noise.
 
 use std::collections::BTreeMap;
 
@@ -137,6 +145,10 @@ pub struct Observation {
     pub series: usize,
 }
 
+/// The dead band of one-sided coordinates, relative to the distance from the
+/// null to the reference (module docs).
+pub const DEADBAND: f64 = 1e-4;
+
 /// One strength parameter of a candidate, as the solver sees it (module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Coord {
@@ -233,11 +245,14 @@ impl Candidate {
         self.coords.iter().map(Coord::null).collect()
     }
 
-    /// Every parameter's value (registry order) at coordinates `u`.
+    /// Every parameter's value (registry order) at coordinates `u`. A one-sided
+    /// coordinate closer to its null than [`DEADBAND`] of its reference distance
+    /// is the null itself (module docs).
     pub fn values(&self, u: &[f64]) -> Vec<f64> {
         let mut v = self.effect.null_values();
         for (c, &ui) in self.coords.iter().zip(u) {
-            v[c.index] = c.value(ui);
+            let dead = c.one_sided() && (ui - c.null()).abs() < DEADBAND * (c.reference() - c.null()).abs();
+            v[c.index] = c.value(if dead { c.null() } else { ui });
         }
         v
     }
@@ -628,7 +643,7 @@ impl Model {
             let acting_all = self.sensitivity_parameters(k, &problem);
             // Frozen steps; when a replayed run fails (contact that does not settle
             // on a step it may not subdivide), adaptive runs with larger steps.
-            let fd = |frozen: Option<&[f64]>, rel: f64| -> Result<Vec<Vec<f64>>, EvalError> {
+            let fd = |frozen: Option<&[f64]>, rel: f64, rel_u: f64| -> Result<Vec<Vec<f64>>, EvalError> {
                 let mut out = Vec::new();
                 let base = match frozen {
                     Some(st) => self.residuals_of(k, &self.run(k, &problem, Some(st))?),
@@ -658,7 +673,7 @@ impl Model {
                 if let Some((c, u)) = candidate {
                     for (j, coord) in c.coords.iter().enumerate() {
                         let [lo, hi] = coord.bounds();
-                        let mut h = 100.0 * rel * coord.scale(u[j]);
+                        let mut h = rel_u * coord.scale(u[j]);
                         if u[j] + h > hi {
                             h = -h;
                         }
@@ -677,10 +692,10 @@ impl Model {
             // Contact steps cannot be replayed reliably (a step that does not
             // settle may not be subdivided): adaptive runs straight away.
             let contact = candidate.is_some_and(|(c, _)| c.effect.hook() == fem_core::effects::HookPoint::Contact);
-            let frozen = if contact { Err(EvalError::new("contact")) } else { fd(Some(&steps), 1e-6) };
+            let frozen = if contact { Err(EvalError::new("contact")) } else { fd(Some(&steps), 1e-6, 1e-3) };
             let cols = match frozen {
                 Ok(c) => c,
-                Err(_) => fd(None, 1e-4)?,
+                Err(_) => fd(None, 2e-2, 5e-2)?,
             };
             let mut it = cols.into_iter();
             if need_fd_theta {

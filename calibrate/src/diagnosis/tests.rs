@@ -136,3 +136,33 @@ fn a_null_campaign_gives_none() {
     assert_eq!(d.verdict.label, "none", "{:#?}\n{:#?}", d.verdict, d.where_cells);
     assert!(d.numerical_error.chi2.is_finite());
 }
+
+/// A withheld machine compliance (0.2 mm/N: the plate gives way by about 13 %
+/// of its stroke at the peak force) is named.
+#[test]
+fn a_withheld_machine_compliance_is_named() {
+    let bundles = campaign("[effects]\nmachine_compliance_mm_per_N = 0.2\n", 3e-3, 13);
+    let d = diagnose(&bundles, &[], &BTreeMap::new(), &options(&EffectId::ALL), &|_, _, _| {}).unwrap();
+    for c in &d.candidates {
+        eprintln!(
+            "{} LM {:.1} LR {:.1} p {:.2e} C {:.1} ho {:?} params {:?} rem {:?}",
+            c.effect, c.score_statistic, c.lr, c.p_value, c.combined, c.heldout, c.parameters, c.remaining_flagged
+        );
+    }
+    assert_eq!(d.verdict.label, "machine-compliance", "{:#?}", d.verdict);
+}
+
+/// The whole diagnosis (fits, bootstrap intervals, verdict) is the same bit for
+/// bit on one thread and on three.
+#[test]
+fn results_do_not_depend_on_the_number_of_threads() {
+    let bundles = campaign("[effects]\nforce_offset_N = 0.01\n", 3e-3, 14);
+    let opts = options(&[EffectId::ForceOffset, EffectId::Gravity, EffectId::MachineCompliance]);
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| diagnose(&bundles, &[], &BTreeMap::new(), &opts, &|_, _, _| {}).unwrap())
+    };
+    let (one, three) = (run(1), run(3));
+    assert_eq!(one, three);
+    assert!(one.candidate(EffectId::ForceOffset).unwrap().heldout.is_some());
+}

@@ -12,16 +12,19 @@
 //! it (with none left, `LM = 0`); the p-value is the chi-bar-square tail with
 //! the remaining one-sided count.
 //!
-//! **Refit.** `(theta, u)` by Levenberg-Marquardt from `(theta0, clip(EPC))`,
-//! and for non-smooth effects (contact, thresholds) also from `{0.3, 1, 3}` times
-//! the reference; the best start is kept. The extension is nested, so a refit
+//! **Refit.** `(theta, u)` by Levenberg-Marquardt from `(theta0, clip(EPC))`
+//! (clipped to the bounds and to the registry's plausible range), and for
+//! non-smooth effects (contact, thresholds) also from `{0.3, 1, 3}` times the
+//! reference, for other boundary nulls also from the reference; the best start
+//! is kept. The extra starts of non-smooth effects are screens of at most 15
+//! iterations. The extension is nested, so a refit
 //! that ends above the baseline's objective falls back to the null (`LR = 0`).
 
 use fem_core::effects::{EffectId, HookPoint};
 use nalgebra::{DMatrix, DVector};
 
 use super::heldout::range_basis;
-use super::model::{Candidate, Fitting, Model};
+use super::model::{Candidate, Coord, Fitting, Model};
 use super::stats::chibar2_sf;
 use crate::lsq::{levenberg_marquardt, Fit, Options};
 
@@ -203,12 +206,35 @@ pub fn refit(
         }
         x
     };
-    let mut starts = vec![start_of(
-        candidate.coords.iter().zip(epc).map(|(c, &e)| if e.is_finite() { c.null() + e } else { c.null() }).collect(),
-    )];
+    // The EPC extrapolates a secant or a derivative at the null: clipped to the
+    // bounds and to the plausible range (with the null) before it is a start.
+    let epc_start: Vec<f64> = candidate
+        .coords
+        .iter()
+        .zip(epc)
+        .map(|(c, &e)| {
+            let u = if e.is_finite() { c.null() + e } else { c.null() };
+            if c.inverse {
+                return u;
+            }
+            let [p_lo, p_hi] = c.spec.plausible;
+            u.clamp(p_lo.min(c.null()), p_hi.max(c.null()))
+        })
+        .collect();
+    let mut starts = vec![start_of(epc_start.clone())];
     if non_smooth(candidate.effect) {
         for f in [0.3, 1.0, 3.0] {
             starts.push(start_of(candidate.coords.iter().map(|c| c.null() + f * (c.reference() - c.null())).collect()));
+        }
+    } else if candidate.coords.iter().any(|c| c.one_sided()) {
+        // A boundary null: the reference as a second start, unless the EPC is near it.
+        let reference: Vec<f64> = candidate.coords.iter().map(Coord::reference).collect();
+        let near = candidate.coords.iter().zip(&epc_start).zip(&reference).all(|((c, &a), &b)| {
+            let s = (c.reference() - c.null()).abs();
+            (a - b).abs() <= s
+        });
+        if !near {
+            starts.push(start_of(reference));
         }
     }
     let mut best: Option<Fit> = None;
