@@ -359,11 +359,12 @@ fn force_svg(c: &calibrate::diagnosis::ForceCurves, named: bool) -> String {
     };
     let mut svg = format!(r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}">"#);
     // Phase bands.
-    let mut start = 0usize;
+    let (mut start, mut band) = (0usize, 0usize);
     for i in 1..=c.times.len() {
         if i == c.times.len() || c.times[i].1 != c.times[start].1 {
             let (t0, t1) = (c.times[start].0, c.times[i - 1].0);
-            let shade = if start % 2 == 0 { "#f4f4f4" } else { "#e9eef5" };
+            let shade = if band.is_multiple_of(2) { "#f4f4f4" } else { "#e9eef5" };
+            band += 1;
             svg.push_str(&format!(
                 r#"<rect x="{:.1}" y="{pad}" width="{:.1}" height="{:.1}" fill="{shade}"/><text x="{:.1}" y="{:.1}" font-size="10" fill="gray">{}</text>"#,
                 x(t0),

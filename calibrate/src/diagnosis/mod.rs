@@ -467,22 +467,23 @@ pub fn diagnose(
             None => to_evaluate.push(effect),
         }
     }
+    let at = AtBaseline {
+        theta: &theta,
+        r0: &r0,
+        j0: &j0,
+        phi0,
+        steps: &steps,
+        r_frozen: &r_frozen,
+        r_adaptive: &r_adaptive,
+        e_num: &e_num,
+    };
     let done = AtomicUsize::new(0);
     let total = to_evaluate.len();
     progress(Stage::Candidates, 0, total);
     let results: Vec<Result<Evaluated, String>> = to_evaluate
         .par_iter()
         .map(|&effect| {
-            let out = evaluate(
-                &model,
-                vmodel.as_ref(),
-                effect,
-                &theta,
-                (&r0, &j0, phi0),
-                (&steps, &r_frozen, &r_adaptive, &e_num),
-                &segments,
-                options,
-            );
+            let out = evaluate(&model, vmodel.as_ref(), effect, &at, &segments, options);
             progress(Stage::Candidates, done.fetch_add(1, Ordering::Relaxed) + 1, total);
             out.map_err(|e| error_chain(&e))
         })
@@ -567,17 +568,28 @@ fn error_chain(e: &dyn std::error::Error) -> String {
 }
 
 /// Steps 3 and 4 of one candidate (module docs).
-#[allow(clippy::too_many_arguments)]
+/// What every candidate starts from: the baseline fit and its runs.
+#[derive(Clone, Copy)]
+struct AtBaseline<'a> {
+    theta: &'a [f64],
+    r0: &'a [f64],
+    j0: &'a DMatrix<f64>,
+    phi0: f64,
+    steps: &'a [Vec<f64>],
+    r_frozen: &'a [f64],
+    r_adaptive: &'a [f64],
+    e_num: &'a [f64],
+}
+
 fn evaluate(
     model: &Model,
     vmodel: Option<&Model>,
     effect: EffectId,
-    theta: &[f64],
-    (r0, j0, phi0): (&[f64], &DMatrix<f64>, f64),
-    (steps, r_frozen, r_adaptive, e_num): (&[Vec<f64>], &[f64], &[f64], &[f64]),
+    at: &AtBaseline<'_>,
     segments: &[cells::Segment],
     options: &DiagnosisOptions,
 ) -> Result<Evaluated, EvalError> {
+    let AtBaseline { theta, r0, j0, phi0, steps, r_frozen, r_adaptive, e_num } = *at;
     let candidate = Candidate::new(effect);
     let columns = which::effect_columns(model, theta, &candidate, steps, r_frozen, r_adaptive)?;
     let score = which::score(&candidate, &columns, r0, j0);
