@@ -1,7 +1,7 @@
 //! `wagashi diagnose` end to end: three 2D trials at different speeds and holds
 //! are simulated by `wagashi press` with a machine compliance the diagnosis is
-//! not told about, given deterministic force noise, and diagnosed; bad input is
-//! refused in one line.
+//! not told about, given deterministic force noise, and diagnosed (also with one
+//! trial held out by `--validate`); bad input is refused in one line.
 
 mod common;
 
@@ -134,6 +134,33 @@ fn a_withheld_machine_compliance_is_named() {
     );
     assert!(!html.contains("<script") && !html.contains("src=\"http"), "no network");
     roxmltree::Document::parse(html.trim_start_matches("<!DOCTYPE html>")).expect("report.html is well-formed");
+
+    // Calibrated on two trials and validated on the third: the same verdict, the
+    // gap closure measured on the held-out trial, the validation trial named.
+    let o = wagashi_in(
+        cwd,
+        [
+            "diagnose",
+            "--calibrate",
+            "meas0",
+            "meas1",
+            "--validate",
+            "meas2",
+            "--size-mm",
+            "5",
+            "--starts",
+            "1",
+            "-o",
+            "diag-v",
+        ],
+    );
+    assert_success(&o);
+    let v: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(cwd.join("diag-v/diagnosis.json")).unwrap()).unwrap();
+    assert_eq!(v["verdict"]["label"], "machine-compliance", "{:#}", v["verdict"]);
+    assert_eq!(v["validation_trials"], serde_json::json!(["trial2"]));
+    let g = v["candidates"]["machine-compliance"]["gap_closure"]["value"].as_f64().unwrap();
+    assert!(g > 0.8, "G on the validation trial = {g}");
 }
 
 /// Bad input: an unknown effect id, a bundle without data, an existing output;
