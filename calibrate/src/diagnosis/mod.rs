@@ -539,7 +539,7 @@ pub fn diagnose(
 
     let verdict = decide(&where_cells, &evaluated, &r0, h0.as_deref(), &segments, &ho_segments, options);
     let named = verdict.effects.first().and_then(|id| evaluated.iter().find(|e| e.report.effect == *id));
-    let curves = force_curves(&model, calibration, &r0, named.map_or(&r0, |e| &e.residuals));
+    let curves = force_curves(&model, &r0, named.map_or(&r0, |e| &e.residuals));
     Ok(Diagnosis {
         trials: model.trial_names(),
         validation_trials: vmodel.as_ref().map(Model::trial_names).unwrap_or_default(),
@@ -818,8 +818,7 @@ pub fn separating_experiment(a: EffectId, b: EffectId) -> String {
 }
 
 /// Measured and simulated force curves from the residuals (no extra simulation).
-fn force_curves(model: &Model, bundles: &[Bundle], r0: &[f64], r1: &[f64]) -> Vec<ForceCurves> {
-    let _ = bundles;
+fn force_curves(model: &Model, r0: &[f64], r1: &[f64]) -> Vec<ForceCurves> {
     model
         .trials
         .iter()

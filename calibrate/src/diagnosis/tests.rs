@@ -96,23 +96,7 @@ pub(super) fn options(effects: &[EffectId]) -> DiagnosisOptions {
 fn a_withheld_force_drift_is_named() {
     let bundles = campaign("[effects]\nforce_offset_N = -0.02\nforce_drift_N_per_s = 0.002\n", 3e-3, 11);
     let d = diagnose(&bundles, &[], &BTreeMap::new(), &options(&EffectId::ALL), &|_, _, _| {}).unwrap();
-    eprintln!("{:#?}\n{:?}\n{:?}", d.verdict, d.not_evaluated, d.baseline);
-    for c in &d.candidates {
-        eprintln!(
-            "{} LM {:.1} LR {:.1} p {:.2e} C {:.1} ho {:?} params {:?} theta {:?} starts {} errors {:?}",
-            c.effect,
-            c.score_statistic,
-            c.lr,
-            c.p_value,
-            c.combined,
-            c.heldout,
-            c.parameters,
-            c.theta,
-            c.refit_starts,
-            c.refit_errors
-        );
-    }
-    assert_eq!(d.verdict.label, "force-offset", "{:#?}", d.verdict);
+    assert_eq!(d.verdict.label, "force-offset", "{:#?}\n{:#?}", d.verdict, d.candidates);
     let c = d.candidate(EffectId::ForceOffset).unwrap();
     assert!((c.parameters[0].value + 0.02).abs() < 0.004, "{:?}", c.parameters);
     assert!((c.parameters[1].value - 0.002).abs() < 0.0004, "{:?}", c.parameters);
@@ -130,10 +114,9 @@ fn a_withheld_force_drift_is_named() {
 fn a_null_campaign_gives_none() {
     let bundles = campaign("", 3e-3, 12);
     let d = diagnose(&bundles, &[], &BTreeMap::new(), &options(&EffectId::ALL), &|_, _, _| {}).unwrap();
-    for c in &d.candidates {
-        eprintln!("{} LM {:.1} LR {:.1} p {:.2e} C {:.1}", c.effect, c.score_statistic, c.lr, c.p_value, c.combined);
-    }
-    assert_eq!(d.verdict.label, "none", "{:#?}\n{:#?}", d.verdict, d.where_cells);
+    assert_eq!(d.verdict.label, "none", "{:#?}\n{:#?}\n{:#?}", d.verdict, d.where_cells, d.candidates);
+    assert!(d.where_cells.iter().all(|c| !c.flagged));
+    assert!(d.candidates.iter().all(|c| !c.significant));
     assert!(d.numerical_error.chi2.is_finite());
 }
 
@@ -143,13 +126,9 @@ fn a_null_campaign_gives_none() {
 fn a_withheld_machine_compliance_is_named() {
     let bundles = campaign("[effects]\nmachine_compliance_mm_per_N = 0.2\n", 3e-3, 13);
     let d = diagnose(&bundles, &[], &BTreeMap::new(), &options(&EffectId::ALL), &|_, _, _| {}).unwrap();
-    for c in &d.candidates {
-        eprintln!(
-            "{} LM {:.1} LR {:.1} p {:.2e} C {:.1} ho {:?} params {:?} rem {:?}",
-            c.effect, c.score_statistic, c.lr, c.p_value, c.combined, c.heldout, c.parameters, c.remaining_flagged
-        );
-    }
-    assert_eq!(d.verdict.label, "machine-compliance", "{:#?}", d.verdict);
+    assert_eq!(d.verdict.label, "machine-compliance", "{:#?}\n{:#?}", d.verdict, d.candidates);
+    let k = d.candidate(EffectId::MachineCompliance).unwrap().parameters[0].value;
+    assert!((k - 0.2).abs() < 0.02, "1/k_m = {k}");
 }
 
 /// The whole diagnosis (fits, bootstrap intervals, verdict) is the same bit for
