@@ -11,7 +11,10 @@
 //!   Jacobians (the engine's forward sensitivities: at most one extra solve per
 //!   parameter and step, batched), [`procedure`] runs the seed paper's three steps (two parameter
 //!   sets) or a joint fit over them. `wagashi fit` is a thin shell around
-//!   [`procedure::run`].
+//!   [`procedure::run`];
+//! - [`diagnosis`]: the sim-to-real gap diagnosis over the effect library
+//!   (baseline, numerical-error budget, WHERE, WHICH, HOW FAR); `wagashi
+//!   diagnose` is a thin shell around [`diagnosis::diagnose`].
 //!
 //! Each evaluation is a finite-element simulation (0.05 to 20 s), so the
 //! methods here are frugal with evaluations, use the exact Jacobians the engine's
@@ -104,6 +107,7 @@
 //! # }
 //! ```
 
+pub mod diagnosis;
 pub mod lsq;
 pub mod multistart;
 pub mod procedure;

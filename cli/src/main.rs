@@ -13,6 +13,9 @@
 //!   texture-analyser exports into experiment bundles, one folder per file.
 //! - `wagashi fit BUNDLE... -o OUT` ([`fit`]): identify material parameters
 //!   (`wagashi-calibrate`): the seed's three steps or a joint fit, with intervals.
+//! - `wagashi diagnose --calibrate BUNDLE... -o OUT` ([`diagnose`]): the sim-to-real
+//!   gap diagnosis (`wagashi-calibrate`): where the gap lies, which candidate
+//!   effect causes it, how far it shrinks.
 //! - `wagashi export OUT_DIR --gltf FILE.glb` ([`export`]): a press output as an
 //!   animated glTF 2.0 binary (also `wagashi press ... --gltf FILE.glb`).
 //! - `wagashi mesh SURFACE -o OUT --size-mm H` ([`mesh`]): tetrahedralize an OBJ,
@@ -22,6 +25,7 @@
 //! and exits with status 1; argument errors are clap's (status 2).
 
 mod demo;
+mod diagnose;
 mod export;
 mod fit;
 mod import;
@@ -54,6 +58,7 @@ enum Command {
     Demo(demo::DemoArgs),
     Import(import::ImportArgs),
     Fit(fit::FitArgs),
+    Diagnose(diagnose::DiagnoseArgs),
     Export(export::ExportArgs),
     Mesh(mesh::MeshArgs),
 }
@@ -64,6 +69,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Demo(args) => demo::run(&args),
         Command::Import(args) => import::run(&args),
         Command::Fit(args) => fit::run(&args),
+        Command::Diagnose(args) => diagnose::run(&args),
         Command::Export(args) => export::run(&args),
         Command::Mesh(args) => mesh::run(&args),
     }

@@ -1,0 +1,838 @@
+//! The diagnoser's model of a campaign: every trial as a press problem that runs
+//! with any values of the unknowns and any candidate effect, and the layout of
+//! its noise-weighted residuals (which trial, channel, phase, region and time each
+//! one belongs to).
+//!
+//! The observations are those of [`crate::trial`]: the force at the bundle's
+//! samples (`t > 0`, at most [`crate::trial::MAX_FORCE_SAMPLES`] per trial by a
+//! uniform stride, noise by the difference method) and the marker coordinates
+//! during the hold and after the release (noise `marker_sigma_mm`). Marker
+//! coordinates are split into two channels: `height` (the vertical coordinate y)
+//! and `width` (x, and z in 3D; r in the axisymmetric section), each in the
+//! region (top, middle, bottom third of the specimen) of the marker's initial
+//! height.
+//!
+//! **Jacobians.** The columns of the unknowns come from the engine's forward
+//! sensitivities when the trial's effects allow them
+//! (`Effects::check_sensitivities`), otherwise, and for every effect parameter,
+//! from forward differences on a *frozen* discretisation: the run at the point
+//! is replayed on its own step ends (`Settings::step_ends_s`), and so are the
+//! perturbed runs, so the adaptive step choice does not enter the difference
+//! (diagnosis-details.md §5.1.3). Relative steps: 1e-6 for the unknowns, 1e-3 of
+//! the coordinate's scale for an effect parameter. Contact effects are not
+//! replayed (a contact step that does not settle may not be subdivided on a
+//! replay); their differences come from adaptive runs, whose step choice moves
+//! the force by about the step tolerance, so the steps are larger there (2e-2
+//! relative for the unknowns, 5e-2 of the scale for the effect).
+//!
+//! **Effect coordinates.** An effect parameter with a finite null is fitted as
+//! itself; one with an infinite null (a yield stress never reached) as its
+//! inverse `u = 1/phi` (null `u = 0`), so that the null is a bound the secant
+//! score and the refit can start from. A one-sided coordinate within 1e-4 of
+//! its reference distance from the null ([`DEADBAND`]) runs as the null: the
+//! engine's friction contact does not settle (and does not return) at
+//! coefficients of order 1e-7 that a refit creeping toward the null would
+//! otherwise ask for; the effect of such values is far below any noise.
+
+use std::collections::BTreeMap;
+
+use fem_core::effects::{EffectId, Effects, ParamSpec};
+use fem_core::material::Material;
+use fem_core::press::{
+    simulate_any, simulate_any_with_sensitivities, AnyPress, ParameterKind, PressResult, SensitivityParameter, Settings,
+};
+use nalgebra::DMatrix;
+use rayon::prelude::*;
+use wagashi_io::{Bundle, MaterialSpec};
+
+use crate::lsq::{EvalError, Evaluation, LeastSquares, ParameterSpec};
+use crate::trial::{force_noise, set_parameter, Unknown, MAX_FORCE_SAMPLES};
+
+use super::DiagnosisError;
+
+/// A phase of a trial (diagnosis.md, step 2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Phase {
+    /// Before the tool first pushes.
+    PreContact,
+    /// The tool moves down.
+    Push,
+    /// The tool stands still in contact.
+    Hold,
+    /// The tool moves up before it lets go.
+    Release,
+    /// After the release time: the specimen recovers.
+    Recovery,
+}
+
+impl Phase {
+    /// Every phase in time order.
+    pub const ALL: [Phase; 5] = [Phase::PreContact, Phase::Push, Phase::Hold, Phase::Release, Phase::Recovery];
+
+    /// The name in reports.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Phase::PreContact => "pre-contact",
+            Phase::Push => "push",
+            Phase::Hold => "hold",
+            Phase::Release => "release",
+            Phase::Recovery => "recovery",
+        }
+    }
+}
+
+/// A measured channel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum ObsChannel {
+    /// The bottom force.
+    Force,
+    /// Vertical marker coordinates.
+    Height,
+    /// Lateral marker coordinates.
+    Width,
+}
+
+impl ObsChannel {
+    /// The name in reports.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ObsChannel::Force => "force",
+            ObsChannel::Height => "height",
+            ObsChannel::Width => "width",
+        }
+    }
+}
+
+/// A region of the specimen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Region {
+    /// The whole specimen (the force).
+    All,
+    /// Upper third (by the marker's initial height).
+    Top,
+    /// Middle third.
+    Middle,
+    /// Lower third.
+    Bottom,
+}
+
+impl Region {
+    /// The name in reports.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Region::All => "all",
+            Region::Top => "top",
+            Region::Middle => "middle",
+            Region::Bottom => "bottom",
+        }
+    }
+}
+
+/// What one residual is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Observation {
+    /// The trial's index.
+    pub trial: usize,
+    /// Time [s].
+    pub t_s: f64,
+    /// Its phase.
+    pub phase: Phase,
+    /// Its channel.
+    pub channel: ObsChannel,
+    /// Its region.
+    pub region: Region,
+    /// A series key within the trial: 0 for the force, `1 + marker * 3 + component` for a marker coordinate.
+    pub series: usize,
+}
+
+/// The dead band of one-sided coordinates, relative to the distance from the
+/// null to the reference (module docs).
+pub const DEADBAND: f64 = 1e-4;
+
+/// One strength parameter of a candidate, as the solver sees it (module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Coord {
+    /// The registry's specification.
+    pub spec: ParamSpec,
+    /// The parameter's index in [`EffectId::params`].
+    pub index: usize,
+    /// Fitted as `1/phi` (infinite null).
+    pub inverse: bool,
+}
+
+impl Coord {
+    /// The coordinate of the null.
+    pub fn null(&self) -> f64 {
+        if self.inverse {
+            0.0
+        } else {
+            self.spec.null
+        }
+    }
+
+    /// The coordinate of the secant reference.
+    pub fn reference(&self) -> f64 {
+        if self.inverse {
+            1.0 / self.spec.reference
+        } else {
+            self.spec.reference
+        }
+    }
+
+    /// Bounds of the coordinate.
+    pub fn bounds(&self) -> [f64; 2] {
+        if self.inverse {
+            let [lo, hi] = self.spec.bounds;
+            [1.0 / hi, if lo > 0.0 { 1.0 / lo } else { f64::INFINITY }]
+        } else {
+            self.spec.bounds
+        }
+    }
+
+    /// The parameter's value at coordinate `u`.
+    pub fn value(&self, u: f64) -> f64 {
+        if self.inverse {
+            if u == 0.0 {
+                f64::INFINITY
+            } else {
+                1.0 / u
+            }
+        } else {
+            u
+        }
+    }
+
+    /// The scale of a finite-difference step.
+    pub fn scale(&self, u: f64) -> f64 {
+        u.abs().max((self.reference() - self.null()).abs()).max(1e-300)
+    }
+
+    /// Whether the test of this coordinate is one-sided (the null on a bound).
+    pub fn one_sided(&self) -> bool {
+        self.spec.one_sided
+    }
+}
+
+/// A candidate effect with its fitted coordinates.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Candidate {
+    /// The effect.
+    pub effect: EffectId,
+    /// Its strength parameters (nuisance parameters stay at their defaults).
+    pub coords: Vec<Coord>,
+}
+
+impl Candidate {
+    /// The candidate of `effect`.
+    pub fn new(effect: EffectId) -> Self {
+        let coords = effect
+            .params()
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| !p.nuisance)
+            .map(|(index, &spec)| Coord { spec, index, inverse: spec.null.is_infinite() })
+            .collect();
+        Self { effect, coords }
+    }
+
+    /// The number of fitted effect parameters `d_j`.
+    pub fn dim(&self) -> usize {
+        self.coords.len()
+    }
+
+    /// The null coordinates.
+    pub fn null(&self) -> Vec<f64> {
+        self.coords.iter().map(Coord::null).collect()
+    }
+
+    /// Every parameter's value (registry order) at coordinates `u`. A one-sided
+    /// coordinate closer to its null than [`DEADBAND`] of its reference distance
+    /// is the null itself (module docs).
+    pub fn values(&self, u: &[f64]) -> Vec<f64> {
+        let mut v = self.effect.null_values();
+        for (c, &ui) in self.coords.iter().zip(u) {
+            let dead = c.one_sided() && (ui - c.null()).abs() < DEADBAND * (c.reference() - c.null()).abs();
+            v[c.index] = c.value(if dead { c.null() } else { ui });
+        }
+        v
+    }
+}
+
+/// One trial as the diagnoser runs it.
+#[derive(Debug, Clone)]
+pub(crate) struct TrialModel {
+    pub name: String,
+    problem: AnyPress,
+    region_material: Vec<String>,
+    pub force: Vec<(f64, f64)>,
+    pub force_sigma_n: f64,
+    /// (marker, sample, measured position).
+    markers: Vec<(usize, usize, Vec<f64>)>,
+}
+
+/// A campaign as the diagnoser runs it (module docs).
+#[derive(Debug, Clone)]
+pub struct Model {
+    pub(crate) trials: Vec<TrialModel>,
+    /// The unknowns (their values are the `theta` of every call).
+    pub unknowns: Vec<Unknown>,
+    /// Every material (fixed parameters and the unknowns' start values).
+    pub table: BTreeMap<String, MaterialSpec>,
+    /// Settings of every simulation.
+    pub settings: Settings,
+    /// Marker noise [mm].
+    pub marker_sigma_mm: f64,
+    /// What each residual is, in residual order.
+    pub observations: Vec<Observation>,
+    /// First residual of each trial, and the total at the end.
+    pub offsets: Vec<usize>,
+}
+
+/// Phase of a time inside the protocol (`t` within the segment `(t_i, t_i+1]`).
+fn phase_at(waypoints: &[[f64; 2]], release_s: f64, t: f64) -> Phase {
+    if t > release_s {
+        return Phase::Recovery;
+    }
+    let mut pushed = false;
+    for w in waypoints.windows(2) {
+        let ([t0, d0], [t1, d1]) = (w[0], w[1]);
+        if d1 > d0 {
+            pushed = true;
+        }
+        if t > t0 && t <= t1 {
+            return if d1 > d0 {
+                Phase::Push
+            } else if d1 < d0 {
+                Phase::Release
+            } else if d0 > 0.0 {
+                Phase::Hold
+            } else if pushed {
+                Phase::Release
+            } else {
+                Phase::PreContact
+            };
+        }
+    }
+    // After the last waypoint: the tool stands where it is.
+    match waypoints.last() {
+        Some(&[_, d]) if d > 0.0 => Phase::Hold,
+        _ if waypoints.windows(2).any(|w| w[1][1] > w[0][1]) => Phase::Release,
+        _ => Phase::PreContact,
+    }
+}
+
+impl Model {
+    /// The model of `bundles` with the materials of `table` (every material the
+    /// bundles name), elements of `size_mm` (default: each bundle's own), the
+    /// axisymmetric section for cylinders when `axisymmetric`.
+    pub fn new(
+        bundles: &[Bundle],
+        table: &BTreeMap<String, MaterialSpec>,
+        unknowns: Vec<Unknown>,
+        size_mm: Option<f64>,
+        axisymmetric: bool,
+        marker_sigma_mm: f64,
+    ) -> Result<Self, DiagnosisError> {
+        let mut trials = Vec::new();
+        let mut observations = Vec::new();
+        let mut offsets = vec![0];
+        for (k, b) in bundles.iter().enumerate() {
+            let file = b.experiment_file().display().to_string();
+            let mut filled = b.clone();
+            for name in b.experiment.specimen.material_names() {
+                let Some(spec) = table.get(name) else {
+                    return Err(DiagnosisError::Input(format!(
+                        "{file}: material {name} is not among the calibrated materials"
+                    )));
+                };
+                filled.experiment.materials.insert(name.to_string(), spec.clone());
+            }
+            let size = size_mm.or_else(|| b.default_size_mm()).ok_or_else(|| {
+                DiagnosisError::Input(format!("{file}: give an element size (--size-mm) for this specimen"))
+            })?;
+            let problem = if axisymmetric { filled.to_press_axisymmetric(size)? } else { filled.to_press(size)? };
+            let region_material = match &problem {
+                AnyPress::Plane(p) => p.mesh.region_names.clone(),
+                AnyPress::Solid(p) => p.mesh.region_names.clone(),
+                AnyPress::Axisymmetric(p) => p.mesh.region_names.clone(),
+            };
+            let protocol = &b.experiment.protocol;
+            let (release_s, end_s, last_push_s) = (protocol.release_s, protocol.end_s, protocol.last_push_s());
+            let mut force: Vec<(f64, f64)> = b
+                .force
+                .as_ref()
+                .map(|f| {
+                    f.samples.iter().filter(|s| s.t_s > 0.0 && s.t_s <= end_s).map(|s| (s.t_s, s.force_n)).collect()
+                })
+                .unwrap_or_default();
+            let force_sigma_n = force_noise(&force);
+            if force.len() > MAX_FORCE_SAMPLES {
+                let stride = force.len().div_ceil(MAX_FORCE_SAMPLES);
+                force = force.into_iter().step_by(stride).collect();
+            }
+            for &(t, _) in &force {
+                observations.push(Observation {
+                    trial: k,
+                    t_s: t,
+                    phase: phase_at(&protocol.waypoints, release_s, t),
+                    channel: ObsChannel::Force,
+                    region: Region::All,
+                    series: 0,
+                });
+            }
+            // Marker observations, as crate::trial selects them.
+            let height = match b.experiment.specimen.block_size() {
+                Some([_, h, _]) => h,
+                None => b.experiment.specimen.height_mm.unwrap_or(1.0),
+            };
+            let mut markers = Vec::new();
+            for (m, series) in b.markers.iter().enumerate() {
+                let y0 = series.initial_position().map(|p| p[1]).unwrap_or(0.5 * height);
+                let region = if y0 > 2.0 * height / 3.0 {
+                    Region::Top
+                } else if y0 < height / 3.0 {
+                    Region::Bottom
+                } else {
+                    Region::Middle
+                };
+                for (i, s) in series.samples.iter().enumerate() {
+                    if s.t_s <= 0.0 || s.t_s > end_s || (s.t_s <= release_s && s.t_s < last_push_s) {
+                        continue;
+                    }
+                    let position = match (&problem, s.position_mm.as_slice()) {
+                        (AnyPress::Axisymmetric(_), &[x, y, z]) => vec![x.hypot(z), y],
+                        _ => s.position_mm.clone(),
+                    };
+                    let phase = if s.t_s > release_s { Phase::Recovery } else { Phase::Hold };
+                    for c in 0..position.len() {
+                        observations.push(Observation {
+                            trial: k,
+                            t_s: s.t_s,
+                            phase,
+                            channel: if c == 1 { ObsChannel::Height } else { ObsChannel::Width },
+                            region,
+                            series: 1 + m * 3 + c,
+                        });
+                    }
+                    markers.push((m, i, position));
+                }
+            }
+            offsets.push(observations.len());
+            trials.push(TrialModel {
+                name: b.experiment.name.clone(),
+                problem,
+                region_material,
+                force,
+                force_sigma_n,
+                markers,
+            });
+        }
+        Ok(Self {
+            trials,
+            unknowns,
+            table: table.clone(),
+            settings: Settings::default(),
+            marker_sigma_mm,
+            observations,
+            offsets,
+        })
+    }
+
+    /// The number of trials.
+    pub fn num_trials(&self) -> usize {
+        self.trials.len()
+    }
+
+    /// The trials' names.
+    pub fn trial_names(&self) -> Vec<String> {
+        self.trials.iter().map(|t| t.name.clone()).collect()
+    }
+
+    /// The number of residuals.
+    pub fn num_residuals(&self) -> usize {
+        self.observations.len()
+    }
+
+    /// Whether any trial's bundle sets `effect` itself (it is then part of the
+    /// baseline, not a candidate).
+    pub fn bundles_set(&self, effect: EffectId) -> bool {
+        self.trials.iter().any(|t| t.problem.effects().is_set(effect))
+    }
+
+    /// Whether any trial gives the covariate `age_h` (what `ageing` acts through).
+    pub fn has_age(&self) -> bool {
+        self.trials.iter().any(|t| t.problem.effects().age_h().is_some_and(|a| a > 0.0))
+    }
+
+    fn table_with(&self, theta: &[f64]) -> BTreeMap<String, MaterialSpec> {
+        let mut t = self.table.clone();
+        for (u, &v) in self.unknowns.iter().zip(theta) {
+            if let Some(spec) = t.get_mut(&u.material) {
+                set_parameter(spec, u.key, v);
+            }
+        }
+        t
+    }
+
+    /// Trial `k`'s problem at `theta` with the candidate effect `effect` (values in
+    /// registry order) on top of the bundle's own effects.
+    fn problem(&self, k: usize, theta: &[f64], effect: Option<(EffectId, &[f64])>) -> Result<AnyPress, EvalError> {
+        let trial = &self.trials[k];
+        let table = self.table_with(theta);
+        let materials: Vec<Material> = trial
+            .region_material
+            .iter()
+            .map(|name| {
+                let m = table[name]
+                    .to_material()
+                    .map_err(|m| EvalError::new(format!("material {name} lacks {}", m.key)))?;
+                m.rheology.validate().map_err(|e| EvalError::new(format!("material {name}: {e}")))?;
+                Ok(m)
+            })
+            .collect::<Result<_, EvalError>>()?;
+        let mut p = trial.problem.clone();
+        let set = |effects: &mut Effects| -> Result<(), EvalError> {
+            if let Some((e, values)) = effect {
+                effects.set(e, values).map_err(|err| EvalError::new(format!("trial {}: {err}", trial.name)))?;
+            }
+            Ok(())
+        };
+        match &mut p {
+            AnyPress::Plane(q) => {
+                q.materials = materials;
+                set(&mut q.effects)?;
+            }
+            AnyPress::Solid(q) => {
+                q.materials = materials;
+                set(&mut q.effects)?;
+            }
+            AnyPress::Axisymmetric(q) => {
+                q.materials = materials;
+                set(&mut q.effects)?;
+            }
+        }
+        Ok(p)
+    }
+
+    fn run(&self, k: usize, problem: &AnyPress, steps: Option<&[f64]>) -> Result<PressResult, EvalError> {
+        let mut settings = self.settings.clone();
+        if let Some(s) = steps {
+            settings.step_ends_s = Some(s.to_vec());
+        }
+        simulate_any(problem, &settings, &mut |_| {})
+            .map_err(|e| EvalError::with_source(format!("trial {}", self.trials[k].name), e))
+    }
+
+    /// Trial `k`'s residuals in a run's result.
+    fn residuals_of(&self, k: usize, result: &PressResult) -> Vec<f64> {
+        let trial = &self.trials[k];
+        let mut r: Vec<f64> =
+            trial.force.iter().map(|&(t, f)| (result.bottom_force_at(t) - f) / trial.force_sigma_n).collect();
+        for (m, i, position) in &trial.markers {
+            let sim = &result.markers[*m].samples[*i].1;
+            r.extend(sim.iter().zip(position).map(|(s, p)| (s - p) / self.marker_sigma_mm));
+        }
+        r
+    }
+
+    /// Trial `k`'s residuals at `theta` and `effect`, and the run's step ends; on
+    /// the given step ends (replayed) when `steps` is given.
+    pub(crate) fn trial_residuals(
+        &self,
+        k: usize,
+        theta: &[f64],
+        effect: Option<(EffectId, &[f64])>,
+        steps: Option<&[f64]>,
+    ) -> Result<(Vec<f64>, Vec<f64>), EvalError> {
+        let p = self.problem(k, theta, effect)?;
+        let result = self.run(k, &p, steps)?;
+        let ends = result.steps.iter().map(|s| s.t_s).collect();
+        Ok((self.residuals_of(k, &result), ends))
+    }
+
+    /// Every residual at `theta` and `effect` (trials in parallel), with each
+    /// trial's step ends.
+    pub fn residuals(
+        &self,
+        theta: &[f64],
+        effect: Option<(EffectId, &[f64])>,
+        steps: Option<&[Vec<f64>]>,
+    ) -> Result<(Vec<f64>, Vec<Vec<f64>>), EvalError> {
+        let parts: Vec<(Vec<f64>, Vec<f64>)> = (0..self.trials.len())
+            .into_par_iter()
+            .map(|k| self.trial_residuals(k, theta, effect, steps.map(|s| s[k].as_slice())))
+            .collect::<Result<_, _>>()?;
+        let mut r = Vec::with_capacity(self.num_residuals());
+        let mut ends = Vec::new();
+        for (rk, e) in parts {
+            r.extend(rk);
+            ends.push(e);
+        }
+        Ok((r, ends))
+    }
+
+    /// The engine's sensitivity parameters of the unknowns acting on trial `k`.
+    fn sensitivity_parameters(&self, k: usize, problem: &AnyPress) -> Vec<(usize, SensitivityParameter)> {
+        let trial = &self.trials[k];
+        let materials = match problem {
+            AnyPress::Plane(p) => &p.materials,
+            AnyPress::Solid(p) => &p.materials,
+            AnyPress::Axisymmetric(p) => &p.materials,
+        };
+        let mut acting = Vec::new();
+        for (col, u) in self.unknowns.iter().enumerate() {
+            let regions: Vec<usize> =
+                (0..trial.region_material.len()).filter(|&r| trial.region_material[r] == u.material).collect();
+            if regions.is_empty() {
+                continue;
+            }
+            let kind = if u.key == "poisson" {
+                ParameterKind::Poisson
+            } else {
+                let names = materials[regions[0]].rheology.parameters();
+                let Some(idx) = names.iter().position(|(n, _)| bundle_key(n) == u.key) else { continue };
+                ParameterKind::Rheology(idx)
+            };
+            acting.push((col, SensitivityParameter { regions, kind }));
+        }
+        acting
+    }
+
+    /// Trial `k`'s residuals and Jacobian at `(theta, u)` of `candidate`: columns
+    /// of the unknowns then of the candidate's coordinates (module docs).
+    pub(crate) fn trial_jacobian(
+        &self,
+        k: usize,
+        theta: &[f64],
+        candidate: Option<(&Candidate, &[f64])>,
+        theta_columns: bool,
+    ) -> Result<(Vec<f64>, Vec<Vec<f64>>), EvalError> {
+        let values = candidate.map(|(c, u)| (c.effect, c.values(u)));
+        let effect = values.as_ref().map(|(e, v)| (*e, v.as_slice()));
+        let problem = self.problem(k, theta, effect)?;
+        let p = self.unknowns.len();
+        let d = candidate.map_or(0, |(c, _)| c.dim());
+        let sens_ok = problem.effects().check_sensitivities().is_ok();
+        let acting = if theta_columns { self.sensitivity_parameters(k, &problem) } else { Vec::new() };
+        let (r, mut columns, steps) = if sens_ok && !acting.is_empty() {
+            let params: Vec<SensitivityParameter> = acting.iter().map(|a| a.1.clone()).collect();
+            let (result, sens) = simulate_any_with_sensitivities(&problem, &self.settings, &params, &mut |_| {})
+                .map_err(|e| EvalError::with_source(format!("trial {}", self.trials[k].name), e))?;
+            let trial = &self.trials[k];
+            let mut cols = vec![vec![0.0; 0]; p];
+            for (q, (col, _)) in acting.iter().enumerate() {
+                let mut c: Vec<f64> =
+                    trial.force.iter().map(|&(t, _)| sens.bottom_force_at(t)[q] / trial.force_sigma_n).collect();
+                for (m, i, position) in &trial.markers {
+                    for comp in 0..position.len() {
+                        c.push(sens.markers[*m][*i][q][comp] / self.marker_sigma_mm);
+                    }
+                }
+                cols[*col] = c;
+            }
+            let steps: Vec<f64> = result.steps.iter().map(|s| s.t_s).collect();
+            (self.residuals_of(k, &result), cols, steps)
+        } else {
+            let result = self.run(k, &problem, None)?;
+            let steps: Vec<f64> = result.steps.iter().map(|s| s.t_s).collect();
+            (self.residuals_of(k, &result), vec![Vec::new(); p], steps)
+        };
+        let n = r.len();
+        let need_fd_theta = theta_columns && (!sens_ok || acting.is_empty());
+        if need_fd_theta || d > 0 {
+            let acting_all = self.sensitivity_parameters(k, &problem);
+            // Frozen steps; when a replayed run fails (contact that does not settle
+            // on a step it may not subdivide), adaptive runs with larger steps.
+            let fd = |frozen: Option<&[f64]>, rel: f64, rel_u: f64| -> Result<Vec<Vec<f64>>, EvalError> {
+                let mut out = Vec::new();
+                let base = match frozen {
+                    Some(st) => self.residuals_of(k, &self.run(k, &problem, Some(st))?),
+                    None => r.clone(),
+                };
+                let diff =
+                    |plus: &[f64], h: f64| -> Vec<f64> { plus.iter().zip(&base).map(|(a, b)| (a - b) / h).collect() };
+                if need_fd_theta {
+                    let acting_cols: Vec<usize> = acting_all.iter().map(|a| a.0).collect();
+                    for (i, u) in self.unknowns.iter().enumerate() {
+                        if !acting_cols.contains(&i) {
+                            out.push(Vec::new());
+                            continue;
+                        }
+                        let spec = u.spec();
+                        let mut t2 = theta.to_vec();
+                        let h = match spec.scale {
+                            crate::lsq::Scale::Log => rel * theta[i],
+                            crate::lsq::Scale::Linear => rel * (spec.upper - spec.lower),
+                        };
+                        let h = if t2[i] + h > spec.upper { -h } else { h };
+                        t2[i] += h;
+                        let pr = self.problem(k, &t2, effect)?;
+                        out.push(diff(&self.residuals_of(k, &self.run(k, &pr, frozen)?), h));
+                    }
+                }
+                if let Some((c, u)) = candidate {
+                    for (j, coord) in c.coords.iter().enumerate() {
+                        let [lo, hi] = coord.bounds();
+                        let mut h = rel_u * coord.scale(u[j]);
+                        if u[j] + h > hi {
+                            h = -h;
+                        }
+                        if u[j] + h < lo {
+                            h = 0.5 * (hi - u[j]);
+                        }
+                        let mut u2 = u.to_vec();
+                        u2[j] += h;
+                        let v2 = c.values(&u2);
+                        let pr = self.problem(k, theta, Some((c.effect, &v2)))?;
+                        out.push(diff(&self.residuals_of(k, &self.run(k, &pr, frozen)?), h));
+                    }
+                }
+                Ok(out)
+            };
+            // Contact steps cannot be replayed reliably (a step that does not
+            // settle may not be subdivided): adaptive runs straight away.
+            let contact = candidate.is_some_and(|(c, _)| c.effect.hook() == fem_core::effects::HookPoint::Contact);
+            let frozen = if contact { Err(EvalError::new("contact")) } else { fd(Some(&steps), 1e-6, 1e-3) };
+            let cols = match frozen {
+                Ok(c) => c,
+                Err(_) => fd(None, 2e-2, 5e-2)?,
+            };
+            let mut it = cols.into_iter();
+            if need_fd_theta {
+                for c in columns.iter_mut().take(p) {
+                    *c = it.next().unwrap_or_default();
+                }
+            }
+            columns.extend(it);
+        }
+        for c in columns.iter_mut().take(p) {
+            if c.is_empty() {
+                *c = vec![0.0; n];
+            }
+        }
+        Ok((r, columns))
+    }
+
+    /// Parameter specs of the unknowns.
+    pub fn theta_specs(&self) -> Vec<ParameterSpec> {
+        self.unknowns.iter().map(Unknown::spec).collect()
+    }
+
+    /// Which unknowns are moduli (`true`) or viscosities (`false`), `None` for others.
+    pub fn scale_kind(&self) -> Vec<Option<bool>> {
+        self.unknowns
+            .iter()
+            .map(|u| {
+                if u.key.ends_with("_MPa_s") {
+                    Some(false)
+                } else if u.key.ends_with("_MPa") {
+                    Some(true)
+                } else {
+                    None
+                }
+            })
+            .collect()
+    }
+}
+
+/// The bundle key of an engine rheology parameter name (`E1` -> `E1_MPa`).
+fn bundle_key(name: &str) -> &'static str {
+    match name {
+        "E" => "E_MPa",
+        "E1" => "E1_MPa",
+        "E2" => "E2_MPa",
+        "c1" => "c1_MPa_s",
+        "c2" => "c2_MPa_s",
+        _ => "c3_MPa_s",
+    }
+}
+
+/// A least-squares problem over the unknowns and, with a candidate, its
+/// coordinates: `x = (theta, u)`.
+pub struct Fitting<'m> {
+    /// The model.
+    pub model: &'m Model,
+    /// The candidate, if any.
+    pub candidate: Option<&'m Candidate>,
+}
+
+impl Fitting<'_> {
+    /// Specs of `x`: the unknowns' then the coordinates' (linear, in their bounds).
+    pub fn specs(&self) -> Vec<ParameterSpec> {
+        let mut s = self.model.theta_specs();
+        if let Some(c) = self.candidate {
+            for coord in &c.coords {
+                let [lo, hi] = coord.bounds();
+                s.push(ParameterSpec::linear(coord.spec.key, lo, hi));
+            }
+        }
+        s
+    }
+}
+
+impl LeastSquares for Fitting<'_> {
+    fn num_parameters(&self) -> usize {
+        self.model.unknowns.len() + self.candidate.map_or(0, Candidate::dim)
+    }
+
+    fn evaluate(&self, x: &[f64], want_jacobian: bool) -> Result<Evaluation, EvalError> {
+        let p = self.model.unknowns.len();
+        let (theta, u) = x.split_at(p);
+        let model = self.model;
+        if !want_jacobian {
+            let values = self.candidate.map(|c| (c.effect, c.values(u)));
+            let (r, _) = model.residuals(theta, values.as_ref().map(|(e, v)| (*e, v.as_slice())), None)?;
+            return Ok(Evaluation { residuals: r, jacobian: None });
+        }
+        let parts: Vec<(Vec<f64>, Vec<Vec<f64>>)> = (0..model.trials.len())
+            .into_par_iter()
+            .map(|k| model.trial_jacobian(k, theta, self.candidate.map(|c| (c, u)), true))
+            .collect::<Result<_, _>>()?;
+        let n = model.num_residuals();
+        let cols = self.num_parameters();
+        let mut residuals = Vec::with_capacity(n);
+        let mut jac = DMatrix::zeros(n, cols);
+        let mut row = 0;
+        for (r, c) in parts {
+            for (j, col) in c.iter().enumerate() {
+                for (i, v) in col.iter().enumerate() {
+                    jac[(row + i, j)] = *v;
+                }
+            }
+            row += r.len();
+            residuals.extend(r);
+        }
+        Ok(Evaluation { residuals, jacobian: Some(jac) })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn phases_follow_the_waypoints() {
+        let w = [[0.0, 0.0], [2.0, 0.0], [10.0, 1.5], [20.0, 1.5], [25.0, 0.5]];
+        assert_eq!(phase_at(&w, 30.0, 1.0), Phase::PreContact);
+        assert_eq!(phase_at(&w, 30.0, 5.0), Phase::Push);
+        assert_eq!(phase_at(&w, 30.0, 10.0), Phase::Push);
+        assert_eq!(phase_at(&w, 30.0, 15.0), Phase::Hold);
+        assert_eq!(phase_at(&w, 30.0, 22.0), Phase::Release);
+        assert_eq!(phase_at(&w, 30.0, 28.0), Phase::Hold);
+        assert_eq!(phase_at(&w, 30.0, 31.0), Phase::Recovery);
+    }
+
+    #[test]
+    fn infinite_nulls_are_fitted_by_their_inverse() {
+        let c = Candidate::new(EffectId::PlasticSlider);
+        assert_eq!(c.dim(), 1);
+        assert!(c.coords[0].inverse);
+        assert_eq!(c.null(), vec![0.0]);
+        assert_eq!(c.values(&[0.0])[0], f64::INFINITY);
+        assert!((c.values(&[c.coords[0].reference()])[0] - 0.01).abs() < 1e-15);
+        assert_eq!(c.coords[0].bounds(), [0.0, f64::INFINITY]);
+        let f = Candidate::new(EffectId::ForceOffset);
+        assert_eq!(f.dim(), 2);
+        assert!(!f.coords[0].inverse && !f.coords[0].one_sided());
+    }
+}

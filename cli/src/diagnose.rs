@@ -1,0 +1,471 @@
+//! `wagashi diagnose`: the sim-to-real gap diagnosis (`calibrate::diagnosis`).
+//!
+//! Reads the calibration (and validation) bundles, runs the diagnosis with
+//! progress bars for the baseline calibration and the candidates, and writes
+//! the output folder atomically:
+//!
+//! | file             | what                                                                 |
+//! |------------------|----------------------------------------------------------------------|
+//! | `diagnosis.json` | `verdict` (label, effects, sentence, separating experiment), `where` (one entry per cell), `candidates` (per effect id: score, LR, p-value, held-out gain, gap closure with its 90 % interval, fitted effect parameters), `numerical_error` (noise units), the baseline, the candidates not evaluated and why, warnings |
+//! | `report.html`    | one self-contained page (inline SVG, no network): the verdict, measured against simulated force per trial and phase before and after the named effect, the WHERE heat table, the candidates as a bar chart, the recommended next experiment |
+//! | `summary.json`   | a short summary (and the mark of a wagashi output folder for `--force`) |
+
+use std::collections::BTreeMap;
+use std::io::{IsTerminal, Write};
+use std::path::PathBuf;
+use std::sync::Mutex;
+use std::time::Duration;
+
+use anyhow::bail;
+use calibrate::diagnosis::{diagnose, Diagnosis, DiagnosisOptions, Stage};
+use clap::Args;
+use fem_core::effects::EffectId;
+use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
+use serde_json::{json, Map, Value};
+use wagashi_io::{read_bundle_with, read_materials_file, write_atomic, MaterialSpec};
+
+use crate::press::positive_number;
+
+const DIAGNOSE_AFTER_HELP: &str = "\
+Examples:
+  # Three trials at different speeds and holds, every implemented candidate:
+  wagashi diagnose --calibrate trials/slow trials/fast trials/long-hold -o out/diagnosis
+
+  # Calibrate on two trials, check on a third, only two candidates:
+  wagashi diagnose --calibrate trials/a trials/b --validate trials/c --effects force-offset,gravity -o out/d
+
+  # Start values (and freed parameters) from a materials file, cylinders by their section:
+  wagashi diagnose --calibrate bundles/s1 bundles/s2 --materials start.toml --axisymmetric -o out/d
+
+Effect ids: plastic-slider, bingham-dashpot, stress-thinning, dual-viscosity, strain-stiffening,
+finite-strain, plate-friction, adhesion, machine-compliance, gravity, force-offset, ageing
+(those the engine does not simulate yet are listed in diagnosis.json as not evaluated).";
+
+/// `wagashi diagnose --calibrate BUNDLE... -o OUT`.
+#[derive(Debug, Args)]
+#[command(
+    about = "Diagnose the sim-to-real gap: where it lies, which unmodelled effect causes it, how far it shrinks",
+    long_about = "Diagnose the sim-to-real gap of measured trials: calibrate the baseline material model, \
+estimate the numerical error, localise the misfit by phase, channel and region, test every candidate effect of \
+the library (score test, refit, likelihood ratio with multiplicity control, held-out check) and measure how far \
+the named effect closes the gap on held-out data. Writes OUT/diagnosis.json atomically.",
+    after_help = DIAGNOSE_AFTER_HELP
+)]
+pub struct DiagnoseArgs {
+    /// Measured trials to calibrate on: bundle folders.
+    #[arg(long, value_name = "BUNDLE", num_args = 1.., required = true)]
+    pub calibrate: Vec<PathBuf>,
+
+    /// Measured trials held out for validation (default: leave each calibration trial out in turn).
+    #[arg(long, value_name = "BUNDLE", num_args = 1..)]
+    pub validate: Vec<PathBuf>,
+
+    /// A TOML file of [materials.NAME] tables (start values; their parameters are calibrated).
+    #[arg(long, value_name = "FILE")]
+    pub materials: Option<PathBuf>,
+
+    /// The output folder; refused if it exists and is not a previous wagashi output.
+    #[arg(short = 'o', long = "output", value_name = "OUT")]
+    pub output: PathBuf,
+
+    /// Candidate effects: `all`, or effect ids separated by commas.
+    #[arg(long, value_name = "all|ID,ID", default_value = "all")]
+    pub effects: String,
+
+    /// Latin hypercube starts of the baseline calibration besides the start values.
+    #[arg(long, value_name = "N", default_value_t = 4, value_parser = clap::value_parser!(u32).range(0..=256))]
+    pub starts: u32,
+
+    /// Seed of the starts and of the bootstrap.
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    pub seed: u64,
+
+    /// Target element size [mm]; default: a quarter of each specimen's smallest dimension.
+    #[arg(long = "size-mm", value_name = "H", value_parser = positive_number, allow_negative_numbers = true)]
+    pub size_mm: Option<f64>,
+
+    /// Model cylinders by their axisymmetric r-y section.
+    #[arg(long)]
+    pub axisymmetric: bool,
+
+    /// Marker noise [mm].
+    #[arg(long = "marker-sigma-mm", value_name = "MM", default_value_t = 0.05, value_parser = positive_number, allow_negative_numbers = true)]
+    pub marker_sigma_mm: f64,
+
+    /// Replace OUT when it holds a previous wagashi output.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// `--effects`: `all` or ids.
+fn parse_effects(text: &str) -> anyhow::Result<Option<Vec<EffectId>>> {
+    if text.trim() == "all" {
+        return Ok(None);
+    }
+    let mut out = Vec::new();
+    for id in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        match EffectId::from_id(id) {
+            Some(e) if !out.contains(&e) => out.push(e),
+            Some(_) => {}
+            None => bail!(
+                "--effects: unknown effect id `{id}` (known: all, {})",
+                EffectId::ALL.iter().map(|e| e.id()).collect::<Vec<_>>().join(", ")
+            ),
+        }
+    }
+    if out.is_empty() {
+        bail!("--effects: no effect id given (use `all` or ids separated by commas)");
+    }
+    Ok(Some(out))
+}
+
+/// `wagashi diagnose`.
+pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
+    let effects = parse_effects(&args.effects)?;
+    let start: BTreeMap<String, MaterialSpec> = match &args.materials {
+        Some(path) => read_materials_file(path)?,
+        None => Default::default(),
+    };
+    let read = |dirs: &[PathBuf]| -> anyhow::Result<Vec<wagashi_io::Bundle>> {
+        dirs.iter().map(|d| Ok(read_bundle_with(d, &start)?)).collect()
+    };
+    let calibration = read(&args.calibrate)?;
+    let validation = read(&args.validate)?;
+    let all: Vec<&wagashi_io::Bundle> = calibration.iter().chain(&validation).collect();
+    let output = crate::press::prepare_output(&all, &args.output, args.force)?;
+    let options = DiagnosisOptions {
+        starts: args.starts as usize,
+        seed: args.seed,
+        effects,
+        size_mm: args.size_mm,
+        axisymmetric: args.axisymmetric,
+        marker_sigma_mm: args.marker_sigma_mm,
+        ..DiagnosisOptions::default()
+    };
+    let bars = StageBars::new();
+    let result =
+        diagnose(&calibration, &validation, &start, &options, &|stage, done, total| bars.update(stage, done, total));
+    bars.finish();
+    let d = result?;
+    let doc = diagnosis_json(&d);
+    let dir = output.path().to_path_buf();
+    write_atomic(dir.join("diagnosis.json"), serde_json::to_string_pretty(&doc)?.as_bytes())?;
+    write_atomic(dir.join("report.html"), report_html(&d).as_bytes())?;
+    let summary = json!({
+        "command": "diagnose",
+        "verdict": d.verdict.label,
+        "calibration": args.calibrate.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+        "validation": args.validate.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+    });
+    write_atomic(dir.join(wagashi_io::atomic::OUTPUT_MARKER_FILE), serde_json::to_string_pretty(&summary)?.as_bytes())?;
+    output.commit()?;
+    print_report(&d, &args.output)?;
+    Ok(())
+}
+
+/// Two bars (calibration starts, candidates) on stderr; hidden when stderr is not a terminal.
+struct StageBars {
+    multi: MultiProgress,
+    bars: Mutex<BTreeMap<&'static str, ProgressBar>>,
+}
+
+impl StageBars {
+    fn new() -> Self {
+        let target =
+            if std::io::stderr().is_terminal() { ProgressDrawTarget::stderr() } else { ProgressDrawTarget::hidden() };
+        Self { multi: MultiProgress::with_draw_target(target), bars: Mutex::new(BTreeMap::new()) }
+    }
+
+    fn update(&self, stage: Stage, done: usize, total: usize) {
+        let name = match stage {
+            Stage::Calibration => "baseline calibration (starts)",
+            Stage::Candidates => "candidate effects",
+        };
+        let Ok(mut bars) = self.bars.lock() else { return };
+        let bar = bars.entry(name).or_insert_with(|| {
+            let b = self.multi.add(ProgressBar::new(total as u64));
+            let style = ProgressStyle::with_template("{spinner} {elapsed_precise} [{bar:24}] {pos}/{len} {msg}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar())
+                .progress_chars("=> ");
+            b.set_style(style);
+            b.set_message(name);
+            b.enable_steady_tick(Duration::from_millis(200));
+            b
+        });
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    }
+
+    fn finish(&self) {
+        if let Ok(bars) = self.bars.lock() {
+            for bar in bars.values() {
+                bar.finish_and_clear();
+            }
+        }
+    }
+}
+
+/// `diagnosis.json` (module docs).
+pub fn diagnosis_json(d: &Diagnosis) -> Value {
+    let cells: Vec<Value> = d
+        .where_cells
+        .iter()
+        .map(|c| {
+            json!({
+                "phase": c.phase.as_str(),
+                "channel": c.channel.as_str(),
+                "region": c.region.as_str(),
+                "n": c.n,
+                "dof": c.dof,
+                "statistic": c.statistic,
+                "p_value": c.p_value,
+                "flagged": c.flagged,
+                "rms_noise_units": c.rms_noise_units,
+                "mean_noise_units": c.mean_noise_units,
+                "systematic_fraction": c.systematic_fraction,
+            })
+        })
+        .collect();
+    let mut candidates = Map::new();
+    for c in &d.candidates {
+        let params: Map<String, Value> = c
+            .parameters
+            .iter()
+            .map(|p| (p.key.to_string(), json!({"value": p.value, "null": p.null, "unit": p.unit, "symbol": p.name})))
+            .collect();
+        let theta: Map<String, Value> =
+            d.baseline.labels.iter().zip(&c.theta).map(|(l, v)| (l.clone(), json!(v))).collect();
+        let closure = c.heldout.as_ref().map(|h| {
+            json!({
+                "value": h.closure,
+                "ci90": [h.closure_ci90[0], h.closure_ci90[1]],
+                "heldout_gap": h.gap,
+                "reportable": h.reportable,
+            })
+        });
+        candidates.insert(
+            c.effect.id().to_string(),
+            json!({
+                "score_statistic": c.score_statistic,
+                "score_p_value": c.score_p_value,
+                "epc": c.epc,
+                "lr": c.lr,
+                "p_value": c.p_value,
+                "lr_critical": c.lr_critical,
+                "significant": c.significant,
+                "heldout_gain": c.heldout.as_ref().map(|h| h.gain),
+                "heldout_gain_se": c.heldout.as_ref().map(|h| h.gain_se),
+                "eligible": c.eligible,
+                "combined": c.combined,
+                "gap_closure": closure,
+                "parameters": params,
+                "theta": theta,
+                "remaining_flagged": c.remaining_flagged,
+                "lm_num": c.lm_num,
+                "refit_starts": c.refit_starts,
+                "fell_back_to_null": c.fell_back,
+                "refit_errors": c.refit_errors,
+            }),
+        );
+    }
+    let not_evaluated: Map<String, Value> =
+        d.not_evaluated.iter().map(|(e, why)| (e.id().to_string(), json!(why))).collect();
+    let baseline: Map<String, Value> =
+        d.baseline.labels.iter().zip(&d.baseline.values).map(|(l, v)| (l.clone(), json!(v))).collect();
+    let lm_num: Map<String, Value> =
+        d.numerical_error.per_candidate.iter().map(|(e, v)| (e.id().to_string(), json!(v))).collect();
+    json!({
+        "verdict": {
+            "label": d.verdict.label,
+            "effects": d.verdict.effects.iter().map(|e| e.id()).collect::<Vec<_>>(),
+            "sentence": d.verdict.sentence,
+            "separating_experiment": d.verdict.separating_experiment,
+            "remaining_cells": d.verdict.remaining_cells,
+        },
+        "where": cells,
+        "candidates": candidates,
+        "not_evaluated": not_evaluated,
+        "numerical_error": {
+            "refinement": d.numerical_error.refinement,
+            "chi2_noise_units": d.numerical_error.chi2,
+            "rms_noise_units": d.numerical_error.rms_noise_units,
+            "max_abs_noise_units": d.numerical_error.max_abs_noise_units,
+            "lm_num": lm_num,
+        },
+        "baseline": {
+            "parameters": baseline,
+            "objective": d.baseline.objective,
+            "rms_noise_units": d.baseline.rms_noise_units,
+            "residuals": d.baseline.num_residuals,
+            "stop": d.baseline.stop,
+        },
+        "trials": d.trials,
+        "validation_trials": d.validation_trials,
+        "heldout_method": d.heldout_method,
+        "warnings": d.warnings,
+    })
+}
+
+fn print_report(d: &Diagnosis, output: &std::path::Path) -> anyhow::Result<()> {
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "verdict: {}", d.verdict.label)?;
+    writeln!(out, "  {}", d.verdict.sentence)?;
+    if let Some(e) = &d.verdict.separating_experiment {
+        writeln!(out, "  next experiment: {e}")?;
+    }
+    let flagged: Vec<String> = d.where_cells.iter().filter(|c| c.flagged).map(|c| c.label()).collect();
+    writeln!(out, "where: {}", if flagged.is_empty() { "no cell flagged".to_string() } else { flagged.join(", ") })?;
+    writeln!(out, "{:<20} {:>10} {:>10} {:>10} {:>12} {:>8}", "candidate", "score", "LR", "p", "held-out", "G")?;
+    for c in &d.candidates {
+        writeln!(
+            out,
+            "{:<20} {:>10.1} {:>10.1} {:>10.2e} {:>12} {:>8}",
+            c.effect.id(),
+            c.score_statistic,
+            c.lr,
+            c.p_value,
+            c.heldout.as_ref().map_or("-".into(), |h| format!("{:.1}", h.gain)),
+            c.heldout.as_ref().map_or("-".into(), |h| format!("{:.2}", h.closure)),
+        )?;
+    }
+    for (e, why) in &d.not_evaluated {
+        writeln!(out, "{:<20} not evaluated: {why}", e.id())?;
+    }
+    for w in &d.warnings {
+        writeln!(out, "warning: {w}")?;
+    }
+    writeln!(out, "results in {}", output.display())?;
+    Ok(())
+}
+
+/// Escapes text for HTML.
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+}
+
+/// One trial's measured and simulated force as an inline SVG (before: baseline,
+/// after: with the named effect), phases shaded.
+fn force_svg(c: &calibrate::diagnosis::ForceCurves, named: bool) -> String {
+    let (w, h, pad) = (520.0, 220.0, 36.0);
+    let t_max = c.times.last().map_or(1.0, |t| t.0).max(1e-9);
+    let all = c.measured.iter().chain(&c.baseline).chain(&c.with_effect);
+    let (f_min, f_max) = all.fold((0.0f64, 0.0f64), |(a, b), &f| (a.min(f), b.max(f)));
+    let span = (f_max - f_min).max(1e-12);
+    let x = |t: f64| pad + (w - 2.0 * pad) * t / t_max;
+    let y = |f: f64| h - pad - (h - 2.0 * pad) * (f - f_min) / span;
+    let line = |v: &[f64], colour: &str, width: f64| {
+        let pts: Vec<String> = c.times.iter().zip(v).map(|((t, _), f)| format!("{:.1},{:.1}", x(*t), y(*f))).collect();
+        format!(r#"<polyline fill="none" stroke="{colour}" stroke-width="{width}" points="{}"/>"#, pts.join(" "))
+    };
+    let mut svg = format!(r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}">"#);
+    // Phase bands.
+    let (mut start, mut band) = (0usize, 0usize);
+    for i in 1..=c.times.len() {
+        if i == c.times.len() || c.times[i].1 != c.times[start].1 {
+            let (t0, t1) = (c.times[start].0, c.times[i - 1].0);
+            let shade = if band.is_multiple_of(2) { "#f4f4f4" } else { "#e9eef5" };
+            band += 1;
+            svg.push_str(&format!(
+                r#"<rect x="{:.1}" y="{pad}" width="{:.1}" height="{:.1}" fill="{shade}"/><text x="{:.1}" y="{:.1}" font-size="10" fill="gray">{}</text>"#,
+                x(t0),
+                (x(t1) - x(t0)).max(0.5),
+                h - 2.0 * pad,
+                x(t0) + 2.0,
+                pad - 4.0,
+                c.times[start].1.as_str()
+            ));
+            start = i;
+        }
+    }
+    svg.push_str(&line(&c.measured, "#999", 1.0));
+    svg.push_str(&line(&c.baseline, "#c0392b", 1.5));
+    if named {
+        svg.push_str(&line(&c.with_effect, "#2471a3", 1.5));
+    }
+    svg.push_str(&format!(
+        r#"<text x="{pad}" y="{:.1}" font-size="11">time [s] (0 to {t_max:.1})</text><text x="4" y="{:.1}" font-size="11">force [N] ({f_min:.3} to {f_max:.3})</text></svg>"#,
+        h - 8.0,
+        pad - 18.0
+    ));
+    svg
+}
+
+/// `report.html`: one self-contained page (inline SVG, no network).
+pub fn report_html(d: &Diagnosis) -> String {
+    let named = !d.verdict.effects.is_empty() && d.verdict.label != "tie";
+    let mut html = String::from(
+        "<!DOCTYPE html><html><head><meta charset=\"utf-8\"/><title>wagashi diagnosis</title><style>body{font-family:sans-serif;max-width:1100px;margin:2em auto;color:#222}table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 6px;font-size:13px}</style></head><body>",
+    );
+    html.push_str(&format!(
+        "<h1>Sim-to-real gap: {}</h1><p><b>{}</b></p>",
+        esc(&d.verdict.label),
+        esc(&d.verdict.sentence)
+    ));
+    html.push_str("<h2>Measured and simulated force, per phase</h2><p>grey: measured; red: baseline");
+    if named {
+        html.push_str(&format!("; blue: with {}", esc(&d.verdict.label)));
+    }
+    html.push_str("</p>");
+    for c in &d.curves {
+        html.push_str(&format!("<h3>{}</h3>{}", esc(&c.trial), force_svg(c, named)));
+    }
+    html.push_str("<h2>Where: smooth test per cell</h2><table><tr><th>phase</th><th>channel</th><th>region</th><th>RMS [noise units]</th><th>-log10 p</th><th>flagged</th></tr>");
+    for c in &d.where_cells {
+        let lp = -c.p_value.max(1e-300).log10();
+        let heat = (lp / 20.0).clamp(0.0, 1.0);
+        let colour = format!("rgb(255,{0},{0})", (255.0 * (1.0 - heat)).round());
+        html.push_str(&format!(
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{:.2}</td><td style=\"background:{colour}\">{lp:.1}</td><td>{}</td></tr>",
+            c.phase.as_str(),
+            c.channel.as_str(),
+            c.region.as_str(),
+            c.rms_noise_units,
+            if c.flagged { "yes" } else { "" }
+        ));
+    }
+    html.push_str("</table><h2>Which: candidates (likelihood ratio)</h2>");
+    let lr_max = d.candidates.iter().map(|c| c.lr).fold(1.0, f64::max);
+    let bar_h = 22.0;
+    let total_h = bar_h * d.candidates.len() as f64 + 10.0;
+    html.push_str(&format!(r#"<svg xmlns="http://www.w3.org/2000/svg" width="620" height="{total_h}">"#));
+    for (i, c) in d.candidates.iter().enumerate() {
+        let wbar = 400.0 * (c.lr / lr_max).max(0.0);
+        let y = 5.0 + i as f64 * bar_h;
+        let colour = if d.verdict.effects.contains(&c.effect) { "#2471a3" } else { "#aab7c4" };
+        html.push_str(&format!(
+            r#"<text x="0" y="{:.1}" font-size="12">{}</text><rect x="150" y="{y:.1}" width="{wbar:.1}" height="{:.1}" fill="{colour}"/><text x="{:.1}" y="{:.1}" font-size="11">LR {:.1}{}</text>"#,
+            y + 14.0,
+            c.effect.id(),
+            bar_h - 6.0,
+            155.0 + wbar,
+            y + 14.0,
+            c.lr,
+            if c.significant { " *" } else { "" }
+        ));
+    }
+    html.push_str("</svg><p>* significant after Holm's correction.</p>");
+    if !d.not_evaluated.is_empty() {
+        html.push_str("<p>Not evaluated: ");
+        let list: Vec<String> = d.not_evaluated.iter().map(|(e, why)| format!("{} ({})", e.id(), esc(why))).collect();
+        html.push_str(&list.join("; "));
+        html.push_str("</p>");
+    }
+    html.push_str("<h2>Recommended next experiment</h2><p>");
+    let next = match (&d.verdict.separating_experiment, d.verdict.effects.first()) {
+        (Some(e), _) => e.clone(),
+        (None, Some(e)) => format!("To confirm {}: {}.", e.id(), calibrate::diagnosis::discriminator(*e)),
+        (None, None) => "The design of diagnosis-details.md §5.7: speed, hold, strain level and aspect ratio varied, \
+                         a long hold, force recorded before contact and after separation, the shape tracked after release."
+            .to_string(),
+    };
+    html.push_str(&esc(&next));
+    html.push_str(&format!(
+        "</p><h2>Numerical error</h2><p>Halved time steps change the residuals by chi2 = {:.3e} (RMS {:.3e} noise units).</p>",
+        d.numerical_error.chi2, d.numerical_error.rms_noise_units
+    ));
+    for w in &d.warnings {
+        html.push_str(&format!("<p>warning: {}</p>", esc(w)));
+    }
+    html.push_str("</body></html>\n");
+    html
+}

@@ -1,0 +1,188 @@
+//! `wagashi diagnose` end to end: three 2D trials at different speeds and holds
+//! are simulated by `wagashi press` with a machine compliance the diagnosis is
+//! not told about, given deterministic force noise, and diagnosed (also with one
+//! trial held out by `--validate`); bad input is refused in one line.
+
+mod common;
+
+use std::path::Path;
+
+use common::*;
+
+/// (push [s], hold [s]) of the three trials; push depth 1.5 mm, 15 s of recovery.
+const DESIGN: [(f64, f64); 3] = [(5.0, 10.0), (10.0, 20.0), (2.5, 5.0)];
+
+fn experiment(name: &str, push: f64, hold: f64, material: &str, tail: &str) -> String {
+    let release = push + hold;
+    let end = release + 15.0;
+    format!(
+        r#"format = "wagashi-experiment/1"
+name = "{name}"
+dimension = 2
+
+[specimen]
+shape = "block"
+size_mm = [20.0, 15.0, 10.0]
+density_g_cm3 = 1.1
+material = "gel"
+
+[materials.gel]
+model = "three-element"
+poisson = 0.3
+{material}
+[protocol]
+tool = "plate"
+tool_contact = "frictionless"
+support = "glued"
+waypoints = [[0.0, 0.0], [{push}, 1.5], [{release}, 1.5]]
+release_s = {release}
+end_s = {end}
+{tail}"#
+    )
+}
+
+/// A standard normal deviate stream (xorshift64* and Box-Muller): the test's own
+/// deterministic noise.
+struct Noise(u64);
+
+impl Noise {
+    fn uniform(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        ((self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+
+    fn gaussian(&mut self) -> f64 {
+        let (u1, u2) = (self.uniform(), self.uniform());
+        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+    }
+}
+
+/// Simulates the three trials with `effects` and writes the measured bundles
+/// `meas0..2` (material by model and Poisson's ratio only, no effect, force
+/// with noise of 3 mN).
+fn campaign(cwd: &Path, effects: &str) {
+    let mut noise = Noise(0x5eed_1234_abcd);
+    for (k, &(push, hold)) in DESIGN.iter().enumerate() {
+        let truth = cwd.join(format!("truth{k}"));
+        std::fs::create_dir_all(&truth).unwrap();
+        let material = "E1_MPa = 0.05\nc1_MPa_s = 0.05\nc3_MPa_s = 5.0\n";
+        std::fs::write(truth.join("experiment.toml"), experiment("t", push, hold, material, effects)).unwrap();
+        let sim = format!("sim{k}");
+        assert_success(&wagashi_in(
+            cwd,
+            ["press", &format!("truth{k}"), "-o", &sim, "--size-mm", "5", "--output-dt", "0.1"],
+        ));
+        let force = read_force_csv(&cwd.join(&sim).join("force.csv"));
+        let meas = cwd.join(format!("meas{k}"));
+        std::fs::create_dir_all(&meas).unwrap();
+        let mut csv = String::from("t_s,force_N\n");
+        for (t, f) in force {
+            csv.push_str(&format!("{t},{}\n", f + 3e-3 * noise.gaussian()));
+        }
+        std::fs::write(meas.join("force.csv"), csv).unwrap();
+        let text = experiment(&format!("trial{k}"), push, hold, "", "\n[data]\nforce = \"force.csv\"\n");
+        std::fs::write(meas.join("experiment.toml"), text).unwrap();
+    }
+}
+
+/// The withheld compliance (0.2 mm/N) is named with label = its id and fitted
+/// back within 10 %; every required field of diagnosis.json is there; the
+/// inputs are not modified.
+#[test]
+fn a_withheld_machine_compliance_is_named() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cwd = tmp.path();
+    campaign(cwd, "\n[effects]\nmachine_compliance_mm_per_N = 0.2\n");
+    let before = contents(&cwd.join("meas0"));
+    let o = wagashi_in(
+        cwd,
+        ["diagnose", "--calibrate", "meas0", "meas1", "meas2", "--size-mm", "5", "--starts", "1", "-o", "diag"],
+    );
+    assert_success(&o);
+    assert_eq!(contents(&cwd.join("meas0")), before, "the input bundle was modified");
+    let d: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(cwd.join("diag/diagnosis.json")).unwrap()).unwrap();
+    assert_eq!(d["verdict"]["label"], "machine-compliance", "{:#}", d["verdict"]);
+    assert_eq!(d["verdict"]["effects"], serde_json::json!(["machine-compliance"]));
+    let c = &d["candidates"]["machine-compliance"];
+    let k = c["parameters"]["machine_compliance_mm_per_N"]["value"].as_f64().unwrap();
+    assert!((k - 0.2).abs() < 0.02, "1/k_m = {k}");
+    for key in ["score_statistic", "lr", "p_value", "heldout_gain"] {
+        assert!(c[key].is_number(), "candidates.machine-compliance.{key}: {c:#}");
+    }
+    let g = &c["gap_closure"];
+    let (lo, v, hi) = (g["ci90"][0].as_f64().unwrap(), g["value"].as_f64().unwrap(), g["ci90"][1].as_f64().unwrap());
+    assert!(lo <= v && v <= hi && v > 0.8, "{g:#}");
+    let cells = d["where"].as_array().unwrap();
+    assert!(!cells.is_empty());
+    for cell in cells {
+        for key in ["phase", "channel", "region", "rms_noise_units", "p_value", "flagged"] {
+            assert!(!cell[key].is_null(), "where entry lacks {key}: {cell}");
+        }
+    }
+    assert!(cells.iter().any(|c| c["flagged"] == true), "a gap this size flags a cell");
+    assert!(d["numerical_error"]["chi2_noise_units"].is_number());
+    // Effects the engine does not simulate are listed, not evaluated.
+    assert!(d["not_evaluated"]["plastic-slider"].is_string() || d["candidates"]["plastic-slider"].is_object());
+    assert!(stdout(&o).contains("verdict: machine-compliance"), "{}", stdout(&o));
+    // The report: one self-contained, well-formed page naming the verdict.
+    let html = std::fs::read_to_string(cwd.join("diag/report.html")).unwrap();
+    assert!(
+        html.contains("machine-compliance") && html.contains("<svg") && !html.contains("http://www.w3.org/1999/xlink")
+    );
+    assert!(!html.contains("<script") && !html.contains("src=\"http"), "no network");
+    roxmltree::Document::parse(html.trim_start_matches("<!DOCTYPE html>")).expect("report.html is well-formed");
+
+    // Calibrated on two trials and validated on the third: the same verdict, the
+    // gap closure measured on the held-out trial, the validation trial named.
+    let o = wagashi_in(
+        cwd,
+        [
+            "diagnose",
+            "--calibrate",
+            "meas0",
+            "meas1",
+            "--validate",
+            "meas2",
+            "--size-mm",
+            "5",
+            "--starts",
+            "1",
+            "-o",
+            "diag-v",
+        ],
+    );
+    assert_success(&o);
+    let v: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(cwd.join("diag-v/diagnosis.json")).unwrap()).unwrap();
+    assert_eq!(v["verdict"]["label"], "machine-compliance", "{:#}", v["verdict"]);
+    assert_eq!(v["validation_trials"], serde_json::json!(["trial2"]));
+    let g = v["candidates"]["machine-compliance"]["gap_closure"]["value"].as_f64().unwrap();
+    assert!(g > 0.8, "G on the validation trial = {g}");
+}
+
+/// Bad input: an unknown effect id, a bundle without data, an existing output;
+/// each refused in one line, with no output folder left behind.
+#[test]
+fn bad_input_is_refused_in_one_line() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cwd = tmp.path();
+    std::fs::create_dir_all(cwd.join("nodata")).unwrap();
+    std::fs::write(
+        cwd.join("nodata/experiment.toml"),
+        experiment("n", 5.0, 10.0, "E1_MPa = 0.05\nc1_MPa_s = 0.05\nc3_MPa_s = 5.0\n", ""),
+    )
+    .unwrap();
+    let line = assert_one_line_error(&wagashi_in(
+        cwd,
+        ["diagnose", "--calibrate", "nodata", "--effects", "gravity,warp-drive", "-o", "out"],
+    ));
+    assert!(line.contains("warp-drive") && line.contains("--effects"), "{line}");
+    let line = assert_one_line_error(&wagashi_in(cwd, ["diagnose", "--calibrate", "nodata", "-o", "out"]));
+    assert!(line.contains("nodata") && line.contains("no measured data"), "{line}");
+    let line = assert_one_line_error(&wagashi_in(cwd, ["diagnose", "--calibrate", "missing", "-o", "out"]));
+    assert!(line.contains("missing"), "{line}");
+    assert!(!cwd.join("out").exists());
+}
