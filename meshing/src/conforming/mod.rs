@@ -70,6 +70,7 @@ mod order;
 mod perturb;
 mod recover;
 mod refine;
+mod smooth;
 
 use std::collections::{BTreeMap, HashMap};
 use std::time::Instant;
@@ -81,6 +82,10 @@ use thiserror::Error;
 pub use delaunay::{Delaunay, DelaunayError, FACE, GHOST};
 pub use perturb::insphere;
 pub use refine::RefineStats;
+pub use smooth::SmoothStats;
+
+/// Passes of sliver smoothing.
+pub const SMOOTHING_PASSES: usize = 4;
 
 use crate::validate::InvalidSurface;
 use crate::{Surface, WindingNumber};
@@ -94,11 +99,27 @@ pub struct ConformingOptions {
     /// The most Steiner points boundary recovery may add, as a multiple of the
     /// input vertices (plus 10 000); default 50.
     pub max_steiner_per_vertex: usize,
+    /// Radius-edge bound of quality refinement (TetGen's `-q`); default
+    /// [`DEFAULT_RADIUS_EDGE`]. Infinite: none.
+    pub radius_edge: f64,
+    /// Sliver bound: tets whose smallest dihedral angle is under it [deg] are
+    /// refined or improved; default [`DEFAULT_SLIVER_DEG`]. 0: none.
+    pub sliver_deg: f64,
 }
+
+/// The default radius-edge bound.
+pub const DEFAULT_RADIUS_EDGE: f64 = 2.0;
+/// The default sliver bound [deg].
+pub const DEFAULT_SLIVER_DEG: f64 = 10.0;
 
 impl Default for ConformingOptions {
     fn default() -> Self {
-        Self { size_mm: None, max_steiner_per_vertex: 50 }
+        Self {
+            size_mm: None,
+            max_steiner_per_vertex: 50,
+            radius_edge: DEFAULT_RADIUS_EDGE,
+            sliver_deg: DEFAULT_SLIVER_DEG,
+        }
     }
 }
 
@@ -165,6 +186,8 @@ pub struct ConformingStats {
     pub delaunay_tets: usize,
     /// Quality refinement.
     pub refinement: RefineStats,
+    /// Sliver smoothing.
+    pub smoothing: SmoothStats,
     /// Wall time [s].
     pub time_s: f64,
 }
@@ -216,14 +239,16 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
     rec.run()?;
     let mut refinement = RefineStats::default();
     if options.size_mm.is_some() {
-        // Radius-edge refinement (TetGen's -q) does not converge yet (see the
-        // module docs): the bound stays off.
-        let bound = f64::INFINITY;
         let max_volume = options.size_mm.map_or(f64::INFINITY, |h| h.powi(3) / (6.0 * 2f64.sqrt()));
         let enclosed = surface.signed_volume(None).abs();
         let expected = if max_volume.is_finite() { enclosed / max_volume } else { 0.0 };
         let budget = (10.0 * expected).min(5e7) as usize + max_steiner;
-        refinement = rec.refine(bound, max_volume, budget)?;
+        let bounds = refine::Bounds {
+            radius_edge: options.radius_edge,
+            max_volume,
+            min_dihedral_deg: options.sliver_deg,
+        };
+        refinement = rec.refine(bounds, budget)?;
     }
     let delaunay_tets = rec.dt.finite_tets().count();
     let (tets, num_components) = recover::interior_components(&rec.dt, &rec.face_owner);
@@ -261,8 +286,17 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
             component_region[c] = best.unwrap_or(0) as u16;
         }
     }
+    // Flat caps on coplanar input triangles go (see `drop_flat_caps`).
+    let tets = drop_flat_caps(points, tets);
     let cell_tets: Vec<[u32; 4]> = tets.iter().map(|(_, t, _)| *t).collect();
-    let (nodes, cells) = recover::compact(points, &cell_tets);
+    let (mut nodes, cells) = recover::compact(points, &cell_tets);
+    let mut smoothing = SmoothStats::default();
+    if options.sliver_deg > 0.0 {
+        // `compact` numbers the used vertices in increasing order.
+        let used: std::collections::BTreeSet<u32> = cell_tets.iter().flatten().copied().collect();
+        let fixed: Vec<bool> = used.iter().map(|&v| !rec.is_free(v)).collect();
+        smoothing = smooth::smooth(&mut nodes, &cells, &fixed, options.sliver_deg, SMOOTHING_PASSES);
+    }
     let region_names = if nreg > 1 {
         regions_surface.region_names.clone()
     } else {
@@ -291,7 +325,60 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
         subfacets: rec.face_owner.len(),
         delaunay_tets,
         refinement,
+        smoothing,
         time_s: start.elapsed().as_secs_f64(),
     };
     Ok(ConformingMesh { mesh, stats })
+}
+
+/// Below this smallest dihedral angle [deg] a tet is flat (its corners coplanar
+/// within the rounding of Steiner points).
+const FLAT_DEG: f64 = 1e-3;
+
+/// Removes the *flat caps*: tets whose corners are coplanar within rounding
+/// (smallest dihedral angle under [`FLAT_DEG`]) with at least two faces on the
+/// region's boundary. Such a tet lies on two coplanar input triangles that meet
+/// at an input edge (the symbolic perturbation of the Delaunay stage makes
+/// zero-volume tets legal there); without it the boundary is its other faces,
+/// which cover the same piece of the plane: the boundary is geometrically the
+/// same (coplanar input triangles merged, as the issue allows), the volume
+/// changes by the cap's (about 1e-17 of a cubic mm). Repeats until none is left.
+fn drop_flat_caps(points: &[crate::predicates::Point], mut tets: Vec<(u32, [u32; 4], u32)>) -> Vec<(u32, [u32; 4], u32)> {
+    loop {
+        // Faces by sorted corners -> (count, component).
+        let mut faces: HashMap<[u32; 3], (u32, u32)> = HashMap::new();
+        for (_, t, c) in &tets {
+            for f in FACE {
+                let mut k = f.map(|j| t[j]);
+                k.sort_unstable();
+                let e = faces.entry(k).or_insert((0, *c));
+                e.0 += 1;
+                if e.1 != *c {
+                    e.0 += 1; // an interface between regions is a boundary too
+                }
+            }
+        }
+        let before = tets.len();
+        let mut removed: std::collections::HashSet<[u32; 4]> = std::collections::HashSet::new();
+        for (_, t, _) in &tets {
+            let on_boundary = FACE
+                .iter()
+                .filter(|f| {
+                    let mut k = f.map(|j| t[j]);
+                    k.sort_unstable();
+                    faces.get(&k).is_some_and(|&(n, _)| n != 2)
+                })
+                .count();
+            if on_boundary >= 2 {
+                let q = t.map(|v| points[v as usize]);
+                if crate::quality::tet_quality(&q).min_dihedral_deg < FLAT_DEG {
+                    removed.insert(*t);
+                }
+            }
+        }
+        tets.retain(|(_, t, _)| !removed.contains(t));
+        if tets.len() == before {
+            return tets;
+        }
+    }
 }

@@ -38,6 +38,9 @@ pub(crate) struct Recovery {
     kinds: Vec<&'static str>,
     /// The kind of the next point added.
     pub next_kind: &'static str,
+    /// Whether the last point refused was a duplicate of a vertex (the
+    /// tetrahedralization is then unchanged).
+    pub last_duplicate: bool,
 }
 
 impl Recovery {
@@ -81,6 +84,7 @@ impl Recovery {
             pending: BTreeSet::new(),
             destroyed: Vec::new(),
             kinds: Vec::new(),
+            last_duplicate: false,
             next_kind: "edge",
         })
         .map(|mut r| {
@@ -130,6 +134,7 @@ impl Recovery {
             }
         }
         self.destroyed = destroyed;
+        self.last_duplicate = v != n;
         if v != n {
             let what =
                 (v as usize).checked_sub(self.dt.points().len() - self.kinds.len()).map_or("input", |k| self.kinds[k]);
@@ -187,6 +192,16 @@ impl Recovery {
             self.pending.insert(f);
         }
         Ok(())
+    }
+
+    /// Splits the subsegment with ends `a` and `b` (either order), if there is
+    /// one; whether there was.
+    pub fn split_subsegment_between(&mut self, a: u32, b: u32) -> Result<bool, ConformingError> {
+        let Some(k) = self.subsegs.iter().position(|&(x, y, _)| (x == a && y == b) || (x == b && y == a)) else {
+            return Ok(false);
+        };
+        self.split_subsegment(k)?;
+        Ok(true)
     }
 
     /// Indices of the subsegments on facet `f`'s sides.
@@ -276,6 +291,13 @@ impl Recovery {
         false
     }
 
+    /// Whether vertex `v` is a Steiner point inside a region (on no input edge
+    /// or triangle): one that smoothing may move.
+    pub fn is_free(&self, v: u32) -> bool {
+        let first = self.dt.points().len() - self.kinds.len();
+        (v as usize).checked_sub(first).is_some_and(|k| self.kinds[k] == "interior")
+    }
+
     /// Inserts a point that removes no subfacet (checked by the caller).
     pub fn insert_free(&mut self, p: Point) -> Result<u32, ConformingError> {
         self.next_kind = "interior";
@@ -310,15 +332,25 @@ impl Recovery {
         if let Some((k, _)) = worst {
             return self.split_subsegment(k);
         }
-        let inside = self.facets[f].contains(c, pts);
-        let p = if inside {
-            c
-        } else {
-            let q = t.map(|v| pts[v as usize]);
-            [0, 1, 2].map(|k| (q[0][k] + q[1][k] + q[2][k]) / 3.0)
-        };
+        let q = t.map(|v| pts[v as usize]);
+        // The circumcentre when it lies strictly inside the subfacet itself, so
+        // that its insertion splits this subfacet whatever the rest of the
+        // facet's triangulation (an obtuse subfacet's circumcentre lies in a
+        // neighbour, whose split need not remove this one); else the centroid.
+        let inside = crate::predicates::projection_for(q[0], q[1], q[2]).is_some_and(|drop| {
+            let s = crate::predicates::orient2d(q[0], q[1], q[2], drop);
+            (0..3).all(|i| crate::predicates::orient2d(q[i], q[(i + 1) % 3], c, drop) == s)
+        }) && self.facets[f].contains(c, pts);
+        let centroid = [0, 1, 2].map(|k| (q[0][k] + q[1][k] + q[2][k]) / 3.0);
+        let p = if inside { c } else { centroid };
         self.next_kind = "triangle";
-        let v = self.add_point(p)?;
+        // A circumcentre that is a vertex already (one placed on a neighbouring,
+        // nearly coplanar facet): the centroid, inside the subfacet, instead.
+        let v = match self.add_point(p) {
+            Err(_) if self.last_duplicate && p != centroid => self.add_point(centroid)?,
+            r => r?,
+        };
+
         self.steiner_on_facets += 1;
         let boundary = self.facet_boundary(f);
         let pts = self.dt.points();
