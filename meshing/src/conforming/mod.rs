@@ -295,7 +295,8 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
         // `compact` numbers the used vertices in increasing order.
         let used: std::collections::BTreeSet<u32> = cell_tets.iter().flatten().copied().collect();
         let fixed: Vec<bool> = used.iter().map(|&v| !rec.is_free(v)).collect();
-        smoothing = smooth::smooth(&mut nodes, &cells, &fixed, options.sliver_deg, SMOOTHING_PASSES);
+        let max_volume = options.size_mm.map_or(f64::INFINITY, |h| h.powi(3) / (6.0 * 2f64.sqrt()));
+        smoothing = smooth::smooth(&mut nodes, &cells, &fixed, options.sliver_deg, max_volume, SMOOTHING_PASSES);
     }
     let region_names = if nreg > 1 {
         regions_surface.region_names.clone()
@@ -336,10 +337,11 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
 const FLAT_DEG: f64 = 1e-3;
 
 /// Removes the *flat caps*: tets whose corners are coplanar within rounding
-/// (smallest dihedral angle under [`FLAT_DEG`]) with at least two faces on the
-/// region's boundary. Such a tet lies on two coplanar input triangles that meet
-/// at an input edge (the symbolic perturbation of the Delaunay stage makes
-/// zero-volume tets legal there); without it the boundary is its other faces,
+/// (smallest dihedral angle under [`FLAT_DEG`]) with a face on the region's
+/// boundary. Such a tet lies on coplanar input triangles (the symbolic
+/// perturbation of the Delaunay stage makes zero-volume tets legal there, and
+/// Steiner points on them are coplanar within rounding); without it the
+/// boundary is its other faces,
 /// which cover the same piece of the plane: the boundary is geometrically the
 /// same (coplanar input triangles merged, as the issue allows), the volume
 /// changes by the cap's (about 1e-17 of a cubic mm). Repeats until none is left.
@@ -369,7 +371,7 @@ fn drop_flat_caps(points: &[crate::predicates::Point], mut tets: Vec<(u32, [u32;
                     faces.get(&k).is_some_and(|&(n, _)| n != 2)
                 })
                 .count();
-            if on_boundary >= 2 {
+            if on_boundary >= 1 {
                 let q = t.map(|v| points[v as usize]);
                 if crate::quality::tet_quality(&q).min_dihedral_deg < FLAT_DEG {
                     removed.insert(*t);

@@ -194,6 +194,12 @@ impl Recovery {
         Ok(())
     }
 
+    /// Whether quality refinement may still add boundary points: a tenth of the
+    /// Steiner budget stays for the recovery their insertion triggers.
+    pub fn boundary_room(&self) -> bool {
+        self.steiner() < self.max_steiner - self.max_steiner / 10
+    }
+
     /// Splits the subsegment with ends `a` and `b` (either order), if there is
     /// one; whether there was.
     pub fn split_subsegment_between(&mut self, a: u32, b: u32) -> Result<bool, ConformingError> {

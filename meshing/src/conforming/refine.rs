@@ -7,7 +7,8 @@
 //!
 //! For a bad tet with circumcentre `c` and circumradius `r`, candidate points
 //! are `c` and [`CANDIDATES`] - 1 points drawn in the ball of radius
-//! [`OFF_CENTRE`] `r` about it (a generator seeded by the tet's corners: the run
+//! [`OFF_CENTRE`] `r` about it (for a flat tet, whose circumcentre is at
+//! infinity or far off, `c` is its centroid and `r` half its longest edge) (a generator seeded by the tet's corners: the run
 //! is deterministic). The star each candidate would create is computed without
 //! inserting it (`Delaunay::star_of`), and a candidate is *blocked* when its
 //! insertion would remove a subfacet (it lies beyond the boundary or too near
@@ -37,6 +38,10 @@ pub const CANDIDATES: usize = 8;
 /// The radius of the ball about the circumcentre that candidates are drawn from,
 /// as a fraction of the circumradius.
 pub const OFF_CENTRE: f64 = 0.3;
+
+/// A sliver with two faces on the boundary whose dihedral angle at their shared
+/// edge exceeds this [deg] is a *cap* over a nearly flat hinge of the input.
+pub const CAP_HINGE_DEG: f64 = 150.0;
 
 /// What makes a tet bad.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -140,10 +145,18 @@ impl Recovery {
                 let pts = self.dt.points();
                 let q = v.map(|i| pts[i as usize]);
                 let (c, _, _) = circumsphere(q);
-                if !c.iter().all(|x| x.is_finite()) {
-                    continue;
-                }
+                let longest = (0..4)
+                    .flat_map(|i| (i + 1..4).map(move |j| (i, j)))
+                    .map(|(i, j)| dot(sub(q[j], q[i]), sub(q[j], q[i])).sqrt())
+                    .fold(0.0, f64::max);
                 let r = dot(sub(q[0], c), sub(q[0], c)).sqrt();
+                // A flat tet (coplanar corners: its circumcentre is at infinity
+                // or far off): candidates about its centroid instead.
+                let (c, r) = if c.iter().all(|x| x.is_finite()) && r <= 1e3 * longest {
+                    (c, r)
+                } else {
+                    ([0, 1, 2].map(|k| (q[0][k] + q[1][k] + q[2][k] + q[3][k]) / 4.0), 0.5 * longest)
+                };
                 let own = tet_quality(&q).min_dihedral_deg;
                 let mut rng = SplitMix(v.iter().fold(0x9E37_79B9u64, |h, &x| h.rotate_left(17) ^ u64::from(x)));
                 let mut best: Option<(f64, Point)> = None;
@@ -176,7 +189,7 @@ impl Recovery {
                     // A cap: two of its faces are subfacets (on two input
                     // triangles meeting at a flat angle); split the
                     // subsegment they share.
-                    (None, Some(_)) if !too_big && self.cap_edge(v).is_some() => {
+                    (None, Some(_)) if !too_big && self.boundary_room() && self.cap_edge(v).is_some() => {
                         let (a, b) = self.cap_edge(v).unwrap_or_default();
                         if !self.split_subsegment_between(a, b)? {
                             skipped.insert(v);
@@ -226,7 +239,8 @@ impl Recovery {
         Ok(stats)
     }
 
-    /// The edge shared by two subfacet faces of tet `v`, if it has two.
+    /// The edge shared by two subfacet faces of tet `v`, if it has two and is
+    /// not flat.
     fn cap_edge(&self, v: [u32; 4]) -> Option<(u32, u32)> {
         let faces: Vec<[u32; 3]> = super::delaunay::FACE
             .iter()
@@ -238,11 +252,33 @@ impl Recovery {
             .filter(|k| self.face_owner.contains_key(k))
             .collect();
         let [f, g] = faces.as_slice() else { return None };
-        let shared: Vec<u32> = f.iter().copied().filter(|x| g.contains(x)).collect();
-        match shared.as_slice() {
-            &[a, b] => Some((a, b)),
-            _ => None,
+        // A flat cap (on coplanar input triangles) is removed after refinement
+        // (`drop_flat_caps`); splitting its edge would make more flat caps.
+        let pts = self.dt.points();
+        if tet_quality(&v.map(|i| pts[i as usize])).min_dihedral_deg < super::FLAT_DEG {
+            return None;
         }
+        let shared: Vec<u32> = f.iter().copied().filter(|x| g.contains(x)).collect();
+        let &[a, b] = shared.as_slice() else { return None };
+        // Only over a hinge that is nearly flat (the tet's dihedral angle at the
+        // shared edge, the domain's angle there, over CAP_HINGE_DEG): at a
+        // sharper edge of the input (a box's) the tet is no cap, and splitting
+        // the edge would only make more tets like it.
+        let [c, d] = {
+            let mut o = v.iter().copied().filter(|&x| x != a && x != b);
+            [o.next()?, o.next()?]
+        };
+        let p = |x: u32| pts[x as usize];
+        let e = sub(p(b), p(a));
+        let ee = dot(e, e);
+        let perp = |x: u32| {
+            let u = sub(p(x), p(a));
+            let t = dot(u, e) / ee;
+            [0, 1, 2].map(|k| u[k] - t * e[k])
+        };
+        let (u, w) = (perp(c), perp(d));
+        let angle = (dot(u, w) / (dot(u, u) * dot(w, w)).sqrt()).clamp(-1.0, 1.0).acos().to_degrees();
+        (angle > CAP_HINGE_DEG).then_some((a, b))
     }
 
     /// Whether `p` may be inserted (module docs): its star's smallest dihedral

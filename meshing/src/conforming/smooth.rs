@@ -8,7 +8,8 @@
 //! part-way towards it, and points drawn in a small ball about the vertex (a
 //! generator seeded by the vertex: deterministic) — and moves to the one that
 //! most raises the smallest dihedral angle of its star, provided every tet of
-//! the star stays positively oriented (exact `orient3d`). A move never lowers
+//! the star stays positively oriented (exact `orient3d`) and under the volume
+//! bound of refinement. A move never lowers
 //! the star's smallest angle, so the mesh's smallest angle never drops; the
 //! connectivity is unchanged (the mesh is no longer Delaunay afterwards, which
 //! nothing downstream needs).
@@ -29,25 +30,33 @@ pub struct SmoothStats {
 /// Candidate positions tried per vertex.
 const TRIES: usize = 12;
 
-fn star_min(nodes: &[Point], cells: &[[u32; 4]], star: &[u32], v: u32, at: Point) -> Option<f64> {
+/// The smallest dihedral angle of `star` with `v` at `at`; `None` when a tet of
+/// it would not be positively oriented or would be larger than `max_volume`.
+fn star_min(nodes: &[Point], cells: &[[u32; 4]], star: &[u32], v: u32, at: Point, max_volume: f64) -> Option<f64> {
     let mut worst = f64::INFINITY;
     for &c in star {
         let q = cells[c as usize].map(|u| if u == v { at } else { nodes[u as usize] });
         if orient3d(q[0], q[1], q[2], q[3]) != 1 {
             return None;
         }
-        worst = worst.min(tet_quality(&q).min_dihedral_deg);
+        let t = tet_quality(&q);
+        if t.volume_mm3 > max_volume {
+            return None;
+        }
+        worst = worst.min(t.min_dihedral_deg);
     }
     Some(worst)
 }
 
 /// Smooths the free vertices (`fixed[v]` false) of slivers (smallest dihedral
-/// angle under `bound_deg`) in `passes` passes (module docs).
+/// angle under `bound_deg`) in `passes` passes (module docs), keeping every tet
+/// under `max_volume` [mm^3].
 pub(crate) fn smooth(
     nodes: &mut [Point],
     cells: &[[u32; 4]],
     fixed: &[bool],
     bound_deg: f64,
+    max_volume: f64,
     passes: usize,
 ) -> SmoothStats {
     let mut stats = SmoothStats::default();
@@ -72,7 +81,7 @@ pub(crate) fn smooth(
         for v in todo {
             let star = &stars[v as usize];
             let here = nodes[v as usize];
-            let Some(now) = star_min(nodes, cells, star, v, here) else { continue };
+            let Some(now) = star_min(nodes, cells, star, v, here, f64::INFINITY) else { continue };
             let mut sum = [0.0; 3];
             let mut n = 0.0;
             let mut reach: f64 = 0.0;
@@ -103,7 +112,7 @@ pub(crate) fn smooth(
                         [0, 1, 2].map(|i| best.1[i] + r * u[i])
                     }
                 };
-                if let Some(q) = star_min(nodes, cells, star, v, at) {
+                if let Some(q) = star_min(nodes, cells, star, v, at, max_volume) {
                     if q > best.0 {
                         best = (q, at);
                     }
