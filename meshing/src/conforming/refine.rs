@@ -17,12 +17,15 @@
 //! away from the boundary so that refinement near it does not cascade. Of the
 //! free candidates the one whose star has the largest smallest dihedral angle is
 //! inserted (Li and Teng's idea of choosing, near the circumcentre, a point that
-//! creates no sliver). When every candidate is blocked, the subfacet that `c`
-//! encroaches most deeply is refined instead (its circumcentre on the facet, or
-//! a split of the subsegment that one encroaches), and the facets whose
-//! subfacets went missing are recovered before going on. A tet that is bad only
-//! as a sliver is left alone when no free candidate's star is better than it
-//! (the sliver then waits for the post-pass of `smooth.rs`).
+//! creates no sliver). When every candidate is blocked: a tet over the volume
+//! bound refines the subfacet that `c` encroaches most deeply (see
+//! `Recovery::refine_subfacet`); a *cap* (two faces on input triangles meeting
+//! at a hinge flatter than [`CAP_HINGE_DEG`]) gets the hinge's subsegment
+//! split; any other tet is left (module docs of `conforming`, "What is not
+//! done"). The facets whose subfacets went missing are recovered before going
+//! on. A tet that is bad only as a sliver is also left when no free
+//! candidate's star is better than it (it then waits for `smooth.rs`); a tet
+//! left is not tried again.
 //!
 //! The tetrahedralization stays Delaunay and conforming throughout; a budget of
 //! points ends the passes (the mesh is valid whenever they stop).
