@@ -60,9 +60,9 @@ pub enum BundleError {
         source: Box<PressError>,
     },
     /// The surface of a `shape = "surface"` specimen could not be meshed (a defect
-    /// in conforming mode, or a mesher failure): the surface file, the mode and
-    /// the mesher's reason, with what to try instead.
-    #[error("{}:{line}: {field}: {}: {mode} meshing failed: {source}{hint}", file.display(), surface.display())]
+    /// in conforming mode, or a mesher failure): the surface file and the
+    /// mesher's reason (naming the mode), with what to try instead.
+    #[error("{}:{line}: {field}: {}: {source}{hint}", file.display(), surface.display())]
     SurfaceMesh {
         /// The bundle's `experiment.toml`.
         file: PathBuf,
@@ -72,10 +72,9 @@ pub enum BundleError {
         field: String,
         /// The surface file.
         surface: PathBuf,
-        /// `"conforming"` or `"envelope"`.
-        mode: &'static str,
-        /// The mesher's reason (a defect names itself and where it is).
-        source: SurfaceMeshError,
+        /// The mesher's reason (a defect names itself and where it is; boxed:
+        /// the error is large).
+        source: Box<SurfaceMeshError>,
         /// What to try instead (empty, or `"; ..."`).
         hint: String,
     },
@@ -91,10 +90,10 @@ pub enum BundleError {
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum SurfaceMeshError {
     /// Conforming mode ([`meshing::conforming::conforming_mesh`]).
-    #[error(transparent)]
+    #[error("conforming meshing failed: {0}")]
     Conforming(meshing::conforming::ConformingError),
     /// Envelope mode ([`meshing::envelope::envelope_mesh`]).
-    #[error(transparent)]
+    #[error("envelope meshing failed: {0}")]
     Envelope(meshing::envelope::EnvelopeError),
 }
 

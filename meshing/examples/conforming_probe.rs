@@ -14,7 +14,8 @@ use meshing::Surface;
 fn read_obj(path: &str) -> Surface {
     let (models, _) = tobj::load_obj(path, &tobj::LoadOptions { triangulate: true, ..Default::default() })
         .unwrap_or_else(|e| panic!("{path}: {e}"));
-    let mut s = Surface { vertices: Vec::new(), triangles: Vec::new(), triangle_regions: Vec::new(), region_names: Vec::new() };
+    let mut s =
+        Surface { vertices: Vec::new(), triangles: Vec::new(), triangle_regions: Vec::new(), region_names: Vec::new() };
     for (r, m) in models.iter().enumerate() {
         let base = s.vertices.len() as u32;
         let p = &m.mesh.positions;

@@ -143,9 +143,7 @@ fn our_conforming_meshes_pass_the_gates_against_tetgens_golden_figures() {
         assert!(r.hausdorff_relative <= 1e-9, "{}: Hausdorff {:e}", m.name, r.hausdorff_relative);
         for gate in m.gates {
             let (ok, what) = match gate {
-                Gate::Count => {
-                    (r.num_cells as f64 <= 1.25 * g.num_cells as f64, format!("{} tets", r.num_cells))
-                }
+                Gate::Count => (r.num_cells as f64 <= 1.25 * g.num_cells as f64, format!("{} tets", r.num_cells)),
                 Gate::MinDihedral => (r.min_dihedral_deg >= g.min_dihedral_deg, format!("{}", r.min_dihedral_deg)),
                 Gate::MaxDihedral => (r.max_dihedral_deg <= g.max_dihedral_deg, format!("{}", r.max_dihedral_deg)),
                 Gate::Below10 => {
@@ -243,7 +241,8 @@ fn tetgen_run_again_gives_the_golden_figures() {
         std::fs::write(&input, smesh(&s)).unwrap();
         let out = Command::new("tetgen").arg(switches(m.size_mm)).arg("-Q").arg(&input).output().unwrap();
         assert!(out.status.success(), "{}: tetgen failed: {}", m.name, String::from_utf8_lossy(&out.stderr));
-        let mesh = read_tetgen(&dir.path().join(format!("{}.1.node", m.name)), &dir.path().join(format!("{}.1.ele", m.name)));
+        let mesh =
+            read_tetgen(&dir.path().join(format!("{}.1.node", m.name)), &dir.path().join(format!("{}.1.ele", m.name)));
         let got = figures(m, &report(&mesh, &s, 0.0));
         if bless {
             let text = serde_json::to_string_pretty(&got).unwrap() + "\n";

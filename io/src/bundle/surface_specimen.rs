@@ -73,8 +73,8 @@ impl Bundle {
         let path = self.surface_path().ok_or_else(|| {
             self.map.invalid("specimen.surface", "missing required key for shape = \"surface\"".to_string())
         })?;
-        let imported =
-            read_surface(&path, &SurfaceOptions::default()).map_err(|e| self.map.invalid("specimen.surface", e.to_string()))?;
+        let imported = read_surface(&path, &SurfaceOptions::default())
+            .map_err(|e| self.map.invalid("specimen.surface", e.to_string()))?;
         Ok(imported.surface)
     }
 
@@ -93,8 +93,7 @@ impl Bundle {
             line: self.line_of("specimen.surface"),
             field: "specimen.surface".into(),
             surface: path.clone(),
-            mode: mode.as_str(),
-            source,
+            source: Box::new(source),
             hint,
         };
         let mut mesh = match mode {

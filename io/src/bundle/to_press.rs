@@ -42,8 +42,8 @@ use fem_core::press::{
 
 use super::experiment::{Contact, Shape};
 use super::read::Bundle;
-use super::surface_specimen::SurfaceMeshing;
 use super::series::{MarkerSample, MarkerSeries};
+use super::surface_specimen::SurfaceMeshing;
 use super::validate::validate_experiment;
 use crate::error::BundleError;
 
@@ -374,10 +374,9 @@ impl Bundle {
                 solid(mesh::cylinder(r, h, size_mm, material).map_err(mesh_err)?)?
             }
             (Shape::Surface, 2) => {
-                return Err(self.unsupported(
-                    "dimension",
-                    "shape = \"surface\" is a 3D shape: it needs dimension = 3".into(),
-                ))
+                return Err(
+                    self.unsupported("dimension", "shape = \"surface\" is a 3D shape: it needs dimension = 3".into())
+                )
             }
             (Shape::Surface, _) => {
                 let mesh = self.mesh_specimen_surface(size_mm, mode)?;

@@ -271,11 +271,8 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
         let enclosed = surface.signed_volume(None).abs();
         let expected = if max_volume.is_finite() { enclosed / max_volume } else { 0.0 };
         let budget = (10.0 * expected).min(5e7) as usize + max_steiner;
-        let bounds = refine::Bounds {
-            radius_edge: options.radius_edge,
-            max_volume,
-            min_dihedral_deg: options.sliver_deg,
-        };
+        let bounds =
+            refine::Bounds { radius_edge: options.radius_edge, max_volume, min_dihedral_deg: options.sliver_deg };
         refinement = rec.refine(bounds, budget)?;
     }
     let delaunay_tets = rec.dt.finite_tets().count();
@@ -373,7 +370,10 @@ const FLAT_DEG: f64 = 1e-3;
 /// which cover the same piece of the plane: the boundary is geometrically the
 /// same (coplanar input triangles merged, as the issue allows), the volume
 /// changes by the cap's (about 1e-17 of a cubic mm). Repeats until none is left.
-fn drop_flat_caps(points: &[crate::predicates::Point], mut tets: Vec<(u32, [u32; 4], u32)>) -> Vec<(u32, [u32; 4], u32)> {
+fn drop_flat_caps(
+    points: &[crate::predicates::Point],
+    mut tets: Vec<(u32, [u32; 4], u32)>,
+) -> Vec<(u32, [u32; 4], u32)> {
     loop {
         // Faces by sorted corners -> (count, component).
         let mut faces: HashMap<[u32; 3], (u32, u32)> = HashMap::new();
