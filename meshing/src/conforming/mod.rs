@@ -273,7 +273,22 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
         let budget = (10.0 * expected).min(5e7) as usize + max_steiner;
         let bounds =
             refine::Bounds { radius_edge: options.radius_edge, max_volume, min_dihedral_deg: options.sliver_deg };
-        refinement = rec.refine(bounds, budget)?;
+        // Quality refinement on a copy, each recovery it triggers bounded: when
+        // it fails (module docs, "What is not done"), size refinement alone.
+        let mut trial = rec.clone();
+        trial.recover_limit = 2_000;
+        match trial.refine(bounds, budget) {
+            Ok(stats) => {
+                rec = trial;
+                rec.recover_limit = usize::MAX;
+                refinement = stats;
+            }
+            Err(_) => {
+                let size_only = refine::Bounds { radius_edge: f64::INFINITY, min_dihedral_deg: 0.0, ..bounds };
+                refinement = rec.refine(size_only, budget)?;
+                refinement.quality_failed = true;
+            }
+        }
     }
     let delaunay_tets = rec.dt.finite_tets().count();
     let (tets, num_components) = recover::interior_components(&rec.dt, &rec.face_owner);

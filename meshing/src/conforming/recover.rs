@@ -12,6 +12,7 @@ use crate::predicates::{cross, dot, sub, Point};
 
 /// The input as a piecewise-linear complex: vertices, the unique input edges
 /// (*segments*) and triangles (*facets*), each split as Steiner points arrive.
+#[derive(Clone)]
 pub(crate) struct Recovery {
     pub dt: Delaunay,
     /// Subsegments: `(a, b, segment id)`.
@@ -41,6 +42,10 @@ pub(crate) struct Recovery {
     /// Whether the last point refused was a duplicate of a vertex (the
     /// tetrahedralization is then unchanged).
     pub last_duplicate: bool,
+    /// The most Steiner points one `recover_pending` call may add (unbounded
+    /// but for the budget during boundary recovery; bounded during quality
+    /// refinement, whose failure falls back to size refinement alone).
+    pub recover_limit: usize,
 }
 
 impl Recovery {
@@ -85,6 +90,7 @@ impl Recovery {
             destroyed: Vec::new(),
             kinds: Vec::new(),
             last_duplicate: false,
+            recover_limit: usize::MAX,
             next_kind: "edge",
         })
         .map(|mut r| {
@@ -253,7 +259,18 @@ impl Recovery {
     /// missing subfacets refined, until every one is present (each Steiner point
     /// marks the facets whose subfacets its insertion removed as pending).
     pub fn recover_pending(&mut self) -> Result<(), ConformingError> {
+        // Flips add no point, so nothing else bounds them: past this many in
+        // one call (cocircular subfacets flipping back and forth), missing
+        // subfacets are refined instead, which the Steiner budget bounds.
+        let mut flips_left = 16 * self.pending.len() + 1024;
+        let start = self.steiner();
         while let Some(f) = self.pending.pop_first() {
+            if self.steiner() - start > self.recover_limit {
+                return Err(ConformingError::RecoveryFailed {
+                    steiner_points: self.steiner(),
+                    missing: format!("recovery after one refinement point needed over {} points", self.recover_limit),
+                });
+            }
             let subs: Vec<usize> = self.facet_subsegs(f as usize).collect();
             let missing_seg = subs.into_iter().find(|&k| {
                 let (a, b, _) = self.subsegs[k];
@@ -269,7 +286,8 @@ impl Recovery {
                 if !self.has_face(t[0], t[1], t[2]) {
                     // Cocircular points have two Delaunay triangulations: when the
                     // tetrahedralization took the other diagonal, flip to it.
-                    if self.match_by_flip(f as usize, t) {
+                    if flips_left > 0 && self.match_by_flip(f as usize, t) {
+                        flips_left -= 1;
                         self.pending.insert(f);
                         break;
                     }

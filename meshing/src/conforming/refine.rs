@@ -68,6 +68,9 @@ pub struct RefineStats {
     pub passes: usize,
     /// Slivers left alone (no candidate made a better star).
     pub slivers_skipped: usize,
+    /// Whether quality refinement failed (a recovery it triggered did not
+    /// converge) and size refinement ran alone instead.
+    pub quality_failed: bool,
     /// Bad tets left when the passes stopped (0 when refinement converged).
     pub bad_left: usize,
 }
@@ -104,6 +107,9 @@ impl Recovery {
         let mut star = Vec::new();
         let mut destroyed = Vec::new();
         let mut skipped = std::collections::HashSet::new();
+        // Cap splits at most a quarter of the points present when refinement
+        // starts: on some inputs they would otherwise cascade along the surface.
+        let mut caps_left = start_points / 4;
         for _pass in 0..64 {
             stats.passes += 1;
             let (inside, _) = interior_components(&self.dt, &self.face_owner);
@@ -192,7 +198,10 @@ impl Recovery {
                     // A cap: two of its faces are subfacets (on two input
                     // triangles meeting at a flat angle); split the
                     // subsegment they share.
-                    (None, Some(_)) if !too_big && self.boundary_room() && self.cap_edge(v).is_some() => {
+                    (None, Some(_))
+                        if !too_big && caps_left > 0 && self.boundary_room() && self.cap_edge(v).is_some() =>
+                    {
+                        caps_left -= 1;
                         let (a, b) = self.cap_edge(v).unwrap_or_default();
                         if !self.split_subsegment_between(a, b)? {
                             skipped.insert(v);
