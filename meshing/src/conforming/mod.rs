@@ -276,7 +276,7 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
         // Quality refinement on a copy, each recovery it triggers bounded: when
         // it fails (module docs, "What is not done"), size refinement alone.
         let mut trial = rec.clone();
-        trial.recover_limit = 2_000;
+        trial.recover_limit = 20_000;
         match trial.refine(bounds, budget) {
             Ok(stats) => {
                 rec = trial;

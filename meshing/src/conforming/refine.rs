@@ -107,9 +107,9 @@ impl Recovery {
         let mut star = Vec::new();
         let mut destroyed = Vec::new();
         let mut skipped = std::collections::HashSet::new();
-        // Cap splits at most a quarter of the points present when refinement
+        // Cap splits at most as many as the points present when refinement
         // starts: on some inputs they would otherwise cascade along the surface.
-        let mut caps_left = start_points / 4;
+        let mut caps_left = start_points;
         for _pass in 0..64 {
             stats.passes += 1;
             let (inside, _) = interior_components(&self.dt, &self.face_owner);
