@@ -88,6 +88,15 @@
 //! refinement keeps the tetrahedralization Delaunay, which boundary recovery
 //! relies on.
 //!
+//! Quality refinement runs on a copy of the state, each boundary recovery it
+//! triggers bounded (20 000 points) and its cap splits bounded (as many as the
+//! points present when it starts); when a recovery does not converge, size
+//! refinement runs alone on the original (`RefineStats::quality_failed`). At
+//! coarse sizes cap splitting can cascade up to its bound and leave more
+//! slivers than size refinement alone (measured: bunny at 0.8 mm, 5.6 % of tets
+//! under 10 deg, 7 s); at the size of the TetGen comparison (0.3 mm) it does
+//! not (0.012 %, 4.4 s).
+//!
 //! Termination is not proven for input with very sharp angles between input
 //! triangles (the theory needs protecting balls around such edges); a budget of
 //! Steiner points turns a run that does not converge into a typed error.
