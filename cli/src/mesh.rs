@@ -60,7 +60,7 @@ pub enum Mode {
     /// lattice's chord error of the input.
     Envelope,
     /// A boundary that reproduces the input exactly (clean, closed input only:
-    /// a defect is refused, named); no radius-edge quality refinement yet.
+    /// a defect is refused, named); radius-edge and sliver refinement.
     Conforming,
 }
 

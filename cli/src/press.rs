@@ -18,6 +18,7 @@
 //! | `frames.bin`       | with `--gltf`: the glTF's frames, for `wagashi export` ([`crate::export`]) |
 //! | `tools.csv`        | with contact tools: each tool's contact force, normal and tangential parts and contact area at every step |
 //! | `contact_nodes.json` | with contact tools: the nodes touching each tool at the kept times |
+//! | `specimen/FILE`    | with `shape = "surface"`: a copy of the specimen's surface file, which the output's `experiment.toml` names |
 //! | `tools/NAME.EXT`   | with surface tools: a copy of each tool's surface file, which the output's `experiment.toml` names |
 //!
 //! Trials other than the seed's press (a sphere, a punch, a surface tool,
@@ -43,6 +44,14 @@
 //! The output folder is itself a bundle: `wagashi press OUT -o OUT2` reads it back
 //! as if measured and reports the difference.
 //!
+//! A `shape = "surface"` specimen is meshed on the fly at `--size-mm` (default: a
+//! quarter of the smallest side of its bounding box) by `--mesh-mode conforming` (the default: the
+//! boundary is the surface exactly; a defective surface is refused naming the
+//! defect, with envelope mode suggested) or `--mesh-mode envelope`; the mode is
+//! printed with the mesh and recorded as `surface_mesh_mode` in `summary.json`.
+//! Such a specimen stands on the floor at its lowest y and always runs with
+//! contact tools (`wagashi_io::Bundle::mesh_specimen_surface`).
+//!
 //! `--axisymmetric` simulates a cylinder bundle by its axisymmetric `r-y` section
 //! (`Bundle::to_press_axisymmetric`): the same full-circle force, shapes written
 //! as the section (x = r) with the stress components `RR, YY, TT, RY`, and the
@@ -62,7 +71,7 @@ use fem_core::press::{
 use wagashi_io::vtu::{write_pvd, write_vtu, VtuFields};
 use wagashi_io::{
     read_bundle_with, read_materials_file, write_atomic, write_bundle, AtomicDir, Bundle, BundleWrite, ForceSeries,
-    MarkerSeries, WriteError,
+    MarkerSeries, SurfaceMeshing, WriteError,
 };
 
 use crate::plot::force_svg;
@@ -82,6 +91,9 @@ Examples:
 
   # The material 1 trial with the seed's shape parameters (x_shape) from a materials file:
   wagashi press examples/paper/mat1 --materials examples/paper/x-shape.toml -o out/mat1-shape
+
+  # A specimen given as a closed surface (shape = \"surface\"), meshed on the fly (conforming mode):
+  wagashi press bunny-trial -o out/bunny --size-mm 1.5
 
   # Run again into the same folder (replaces the previous output):
   wagashi press examples/paper/mat1 -o out/mat1 --force
@@ -117,7 +129,8 @@ pub struct PressArgs {
     pub output: PathBuf,
 
     /// Target element size [mm]; default: a quarter of the specimen's smallest
-    /// dimension (min(W, H, T) / 4 for a block, min(R, H) / 4 for a cylinder).
+    /// dimension (min(W, H, T) / 4 for a block, min(R, H) / 4 for a cylinder, the
+    /// smallest side of the bounding box / 4 for a surface).
     #[arg(long = "size-mm", value_name = "H", value_parser = positive_number, allow_negative_numbers = true)]
     pub size_mm: Option<f64>,
 
@@ -165,11 +178,36 @@ pub struct PressArgs {
     #[arg(long, value_name = "FILE.glb")]
     pub gltf: Option<PathBuf>,
 
+    /// How a shape = "surface" specimen is meshed: conforming (the default; the
+    /// boundary is the surface exactly, a defective surface is refused with the
+    /// defect named) or envelope (any surface, boundary within the lattice's
+    /// chord error). Ignored for blocks and cylinders.
+    #[arg(long = "mesh-mode", value_enum, default_value_t = MeshModeArg::Conforming)]
+    pub mesh_mode: MeshModeArg,
+
     /// Simulate a cylinder (shape = "cylinder") by its axisymmetric r-y section
     /// with 2D axisymmetric triangles instead of 3D tetrahedra: the same
     /// full-circle force at a small fraction of the cost. Refused for other shapes.
     #[arg(long)]
     pub axisymmetric: bool,
+}
+
+/// `--mesh-mode`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum MeshModeArg {
+    /// A boundary made of the input triangles exactly (clean, closed input).
+    Conforming,
+    /// Isosurface stuffing on the generalized winding number (any input).
+    Envelope,
+}
+
+impl MeshModeArg {
+    fn mode(self) -> SurfaceMeshing {
+        match self {
+            MeshModeArg::Conforming => SurfaceMeshing::Conforming,
+            MeshModeArg::Envelope => SurfaceMeshing::Envelope,
+        }
+    }
 }
 
 /// `--integrator`.
@@ -256,7 +294,8 @@ pub fn run(args: &PressArgs) -> anyhow::Result<()> {
         replace: args.force,
     };
     let mut out = std::io::stdout().lock();
-    let summary = press_bundle_as(&bundle, &options, args.axisymmetric, args.gltf.as_deref(), &mut out)?;
+    let how = How { axisymmetric: args.axisymmetric, surface_mesh: args.mesh_mode.mode() };
+    let summary = press_bundle_as(&bundle, &options, how, args.gltf.as_deref(), &mut out)?;
     print_results(&summary, &mut out)?;
     if let Some(gltf) = &args.gltf {
         writeln!(out, "glTF                  {}", gltf.display())?;
@@ -284,15 +323,25 @@ fn bundle_dir(path: &Path) -> anyhow::Result<PathBuf> {
 /// mesh and progress on the way (`out`: stdout; the bar: stderr). Both `press`
 /// and `demo` go through here.
 pub fn press_bundle(bundle: &Bundle, options: &PressOptions, out: &mut dyn Write) -> anyhow::Result<Summary> {
-    press_bundle_as(bundle, options, false, None, out)
+    press_bundle_as(bundle, options, How::default(), None, out)
+}
+
+/// How `press` models the specimen beyond its element size.
+#[derive(Debug, Clone, Copy, Default)]
+struct How {
+    /// A cylinder by its axisymmetric section (`--axisymmetric`).
+    axisymmetric: bool,
+    /// The mesher of a surface specimen (`--mesh-mode`).
+    surface_mesh: SurfaceMeshing,
 }
 
 /// [`press_bundle`], with the cylinder modelled by its axisymmetric section when
-/// `axisymmetric` (`--axisymmetric`), and the animated glTF written to `gltf` (`--gltf`).
+/// `how.axisymmetric` (`--axisymmetric`), a surface specimen meshed by
+/// `how.surface_mesh` (`--mesh-mode`), and the animated glTF written to `gltf` (`--gltf`).
 fn press_bundle_as(
     bundle: &Bundle,
     options: &PressOptions,
-    axisymmetric: bool,
+    how: How,
     gltf: Option<&Path>,
     out: &mut dyn Write,
 ) -> anyhow::Result<Summary> {
@@ -314,11 +363,16 @@ fn press_bundle_as(
     let (size_mm, size_origin) = match (options.size_mm, bundle.default_size_mm()) {
         (Some(h), _) => (h, options.size_origin),
         (None, Some(h)) => (h, "default: a quarter of the smallest dimension"),
-        // A surface specimen: `to_press` refuses it (not simulated yet) before
-        // meshing, naming the file and line; the size is never used.
+        // A surface that cannot be read: `to_press` refuses it, naming the file
+        // and line, before the size is used.
         (None, None) => (1.0, "default"),
     };
-    let mut problem = if axisymmetric { bundle.to_press_axisymmetric(size_mm)? } else { bundle.to_press(size_mm)? };
+    let surface_mesh_mode = bundle.surface_path().map(|_| how.surface_mesh.as_str());
+    let mut problem = if how.axisymmetric {
+        bundle.to_press_axisymmetric(size_mm)?
+    } else {
+        bundle.to_press_meshed(size_mm, how.surface_mesh)?
+    };
     let tool_names: Vec<String> = problem_tools(&problem).iter().map(|t| t.name.clone()).collect();
     if !tool_names.is_empty() && options.integrator != IntegratorArg::Implicit {
         bail!(
@@ -338,8 +392,9 @@ fn press_bundle_as(
     };
     set_snapshot_times(&mut problem, &snapshot_times);
     let mesh = MeshInfo::of(&problem)?;
-    let model = match &problem {
-        AnyPress::Axisymmetric(_) => "axisymmetric (r-y section)".to_string(),
+    let model = match (&problem, surface_mesh_mode) {
+        (AnyPress::Axisymmetric(_), _) => "axisymmetric (r-y section)".to_string(),
+        (_, Some(mode)) => format!("{}D, surface meshed in {mode} mode", mesh.dimension),
         _ => format!("{}D", mesh.dimension),
     };
     writeln!(
@@ -431,6 +486,7 @@ fn press_bundle_as(
         rtol: options.rtol,
         dt_s: options.dt_s,
         size_mm,
+        surface_mesh_mode,
         steps: result.steps.len(),
         factorizations: result.num_factorizations,
         factor_nonzeros: result.factor_nonzeros,
@@ -538,6 +594,9 @@ pub const TOOLS_FILE: &str = "tools.csv";
 pub const CONTACT_NODES_FILE: &str = "contact_nodes.json";
 /// The header of `tools.csv`.
 pub const TOOLS_HEADER: &str = "t_s,tool,force_x_N,force_y_N,force_z_N,normal_N,tangential_N,area_mm2";
+/// The folder of the copied specimen surface in an output.
+const SPECIMEN_SURFACE_DIR: &str = "specimen";
+
 /// The folder of the copied tool surfaces in an output.
 const TOOL_SURFACES_DIR: &str = "tools";
 
@@ -600,7 +659,8 @@ fn contact_nodes_json(result: &PressResult) -> anyhow::Result<String> {
     Ok(serde_json::to_string_pretty(&serde_json::json!({ "tools": tools }))? + "\n")
 }
 
-/// Copies the surface file of each surface tool into `dir/tools/NAME.EXT` (NAME:
+/// Copies the specimen's surface file (`shape = "surface"`) into
+/// `dir/specimen/FILE` and the surface file of each surface tool into `dir/tools/NAME.EXT` (NAME:
 /// the tool's, unique) and points `experiment` at the copies, so that the output
 /// reads back as a bundle (`press OUT`, `export OUT`). Returns the files written,
 /// relative to `dir`.
@@ -610,6 +670,18 @@ fn copy_tool_surfaces(
     dir: &Path,
 ) -> anyhow::Result<Vec<String>> {
     let mut written = Vec::new();
+    // The specimen's own surface, likewise (`specimen/NAME.EXT`).
+    if let Some(file) = experiment.specimen.surface.as_mut() {
+        let from = bundle.dir.join(file.as_str());
+        let name = Path::new(file.as_str()).file_name().map(|n| n.to_string_lossy().into_owned());
+        let relative = format!("{SPECIMEN_SURFACE_DIR}/{}", name.unwrap_or_else(|| "surface.obj".into()));
+        let bytes = std::fs::read(&from).with_context(|| format!("{}: cannot read", from.display()))?;
+        std::fs::create_dir_all(dir.join(SPECIMEN_SURFACE_DIR))
+            .with_context(|| format!("{}: cannot create", dir.join(SPECIMEN_SURFACE_DIR).display()))?;
+        write_atomic(dir.join(&relative), &bytes)?;
+        *file = relative.clone();
+        written.push(relative);
+    }
     let mut copy = |tool: &str, file: &mut String| -> anyhow::Result<()> {
         let from = bundle.dir.join(file.as_str());
         let ext = Path::new(file.as_str()).extension().map(|e| format!(".{}", e.to_string_lossy())).unwrap_or_default();

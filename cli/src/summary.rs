@@ -37,6 +37,10 @@ pub struct Summary {
     pub dt_s: Option<f64>,
     /// Target element size [mm].
     pub size_mm: f64,
+    /// How a `shape = "surface"` specimen was meshed on the fly: `"conforming"`
+    /// or `"envelope"`; absent for blocks and cylinders.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub surface_mesh_mode: Option<&'static str>,
     /// Accepted time steps.
     pub steps: usize,
     /// Numeric factorizations.

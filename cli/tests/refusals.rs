@@ -325,15 +325,15 @@ fn marker_not_on_the_surface() {
     assert!(line.contains("surface"), "{line}");
 }
 
-// ---- what the engine cannot simulate yet --------------------------------
+// ---- a surface specimen without its surface ----------------------------
 
 #[test]
-fn valid_but_unsupported_content_names_its_key() {
+fn a_missing_specimen_surface_names_its_key() {
     let t = Trial::new();
     t.refuse_toml(
         "shape = \"block\"\nsize_mm = [58.0, 59.5, 12.0]",
         "shape = \"surface\"\nsurface = \"daifuku.obj\"",
-        "shape = ",
-        "specimen.shape",
+        "surface = ",
+        "specimen.surface",
     );
 }

@@ -59,12 +59,42 @@ pub enum BundleError {
         /// The engine's reason (boxed: the engine's error is large).
         source: Box<PressError>,
     },
+    /// The surface of a `shape = "surface"` specimen could not be meshed (a defect
+    /// in conforming mode, or a mesher failure): the surface file and the
+    /// mesher's reason (naming the mode), with what to try instead.
+    #[error("{}:{line}: {field}: {}: {source}{hint}", file.display(), surface.display())]
+    SurfaceMesh {
+        /// The bundle's `experiment.toml`.
+        file: PathBuf,
+        /// 1-based line of `field`.
+        line: usize,
+        /// The TOML key path (`specimen.surface`).
+        field: String,
+        /// The surface file.
+        surface: PathBuf,
+        /// The mesher's reason (a defect names itself and where it is; boxed:
+        /// the error is large).
+        source: Box<SurfaceMeshError>,
+        /// What to try instead (empty, or `"; ..."`).
+        hint: String,
+    },
     /// The element size given to [`crate::Bundle::to_press`] is not a positive length.
     #[error("element size {size_mm} mm: must be finite and > 0")]
     ElementSize {
         /// The size that was given [mm].
         size_mm: f64,
     },
+}
+
+/// The mesher's error behind [`BundleError::SurfaceMesh`].
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum SurfaceMeshError {
+    /// Conforming mode ([`meshing::conforming::conforming_mesh`]).
+    #[error("conforming meshing failed: {0}")]
+    Conforming(meshing::conforming::ConformingError),
+    /// Envelope mode ([`meshing::envelope::envelope_mesh`]).
+    #[error("envelope meshing failed: {0}")]
+    Envelope(meshing::envelope::EnvelopeError),
 }
 
 /// Why writing an output failed.

@@ -97,6 +97,6 @@ pub use crate::gltf::{write_glb, GltfError, GltfScene};
 pub use atomic::{write_atomic, AtomicDir};
 pub use bundle::{
     read_bundle, read_bundle_from_str, read_bundle_with, read_materials_file, write_bundle, Bundle, BundleWrite,
-    Experiment, ForceSample, ForceSeries, MarkerSample, MarkerSeries, MaterialSpec, Model,
+    Experiment, ForceSample, ForceSeries, MarkerSample, MarkerSeries, MaterialSpec, Model, SurfaceMeshing,
 };
-pub use error::{BundleError, WriteError};
+pub use error::{BundleError, SurfaceMeshError, WriteError};

@@ -220,7 +220,8 @@ fn each_insertion_keeps_the_structure_valid() {
 // ---- stage 2: boundary recovery
 
 /// Boundary recovery alone (stage 2), no quality refinement.
-const RECOVERY_ONLY: ConformingOptions = ConformingOptions { size_mm: None, max_steiner_per_vertex: 50 };
+const RECOVERY_ONLY: ConformingOptions =
+    ConformingOptions { size_mm: None, max_steiner_per_vertex: 50, radius_edge: f64::INFINITY, sliver_deg: 0.0 };
 
 /// The gates every conforming mesh must pass, checked here independently of the
 /// mesher: exact positive orientation of every tet, every face shared by at most

@@ -31,8 +31,9 @@
 //! - "The specimen's smallest size" of the marker check is min(W, H, T) for a
 //!   block (in 2D too) and min(2R, H) for a cylinder; in 3D the distance is to the
 //!   surface of the box or cylinder, in 2D to the rectangle `[0, W] x [0, H]`.
-//! - Markers of a `surface` specimen are not checked against the surface (this
-//!   crate does not load surfaces yet).
+//! - Markers of a `surface` specimen are not checked against the surface when the
+//!   bundle is read (the surface is read when it is meshed, by `to_press`; a
+//!   marker off the mesh is then refused by the engine, naming `data.markers`).
 //! - A material in a `--materials` file replaces the bundle's table of the same name.
 //! - `[protocol] tool_surface_units` (optional, `tool = "surface"` only): see below.
 //! - `[[protocol.tools]]` (optional): more rigid tools, see below.
@@ -190,6 +191,7 @@ mod experiment;
 mod material_spec;
 mod read;
 mod series;
+mod surface_specimen;
 mod to_press;
 mod tools;
 mod validate;
@@ -201,6 +203,7 @@ pub use experiment::{
 pub use material_spec::{read_materials_file, MaterialSpec, MissingParameter, Model};
 pub use read::{read_bundle, read_bundle_from_str, read_bundle_with, Bundle, EXPERIMENT_FILE};
 pub use series::{markers_header, ForceSample, ForceSeries, MarkerSample, MarkerSeries, FORCE_HEADER};
+pub use surface_specimen::{SurfaceMeshing, BASE_BAND};
 pub use to_press::G_CM3_IN_T_MM3;
 pub use validate::{LAYER_SUM_TOLERANCE_MM, MARKER_SURFACE_TOLERANCE};
 pub use write::{experiment_toml, force_csv, markers_csv, write_bundle, BundleWrite, FORCE_FILE, MARKERS_FILE};

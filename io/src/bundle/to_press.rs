@@ -12,8 +12,10 @@
 //!   constraints (`Protocol::plate`, `Protocol::support`). Every other trial runs
 //!   with rigid contact tools ([`Bundle::contact_tools`], the module docs of
 //!   [`super`]): `PressProblem::tools`, and `support = "friction"` as
-//!   `Attachment::Free` with a floor tool. `shape = "surface"` is valid bundle
-//!   content that the engine does not simulate yet: [`BundleError::Unsupported`].
+//!   `Attachment::Free` with a floor tool. A `shape = "surface"` specimen is
+//!   meshed on the fly (conforming mode unless told otherwise,
+//!   [`Bundle::to_press_meshed`]) and always runs with contact tools: see
+//!   `surface_specimen.rs`.
 //! - Markers: one request per marker at its initial position, reported at every
 //!   time the marker was measured (`t_s = 0` included). No extra snapshots.
 //!
@@ -41,11 +43,9 @@ use fem_core::press::{
 use super::experiment::{Contact, Shape};
 use super::read::Bundle;
 use super::series::{MarkerSample, MarkerSeries};
+use super::surface_specimen::SurfaceMeshing;
 use super::validate::validate_experiment;
 use crate::error::BundleError;
-
-const SURFACE_UNSUPPORTED: &str =
-    "shape = \"surface\" is valid bundle content but not simulated yet: it arrives with surface meshing";
 
 /// 1 g/cm^3 in t/mm^3.
 pub const G_CM3_IN_T_MM3: f64 = 1e-9;
@@ -95,21 +95,13 @@ impl Bundle {
         BundleError::Engine { file, line, field, source: Box::new(source) }
     }
 
-    /// Refuses what the engine cannot simulate yet.
-    fn check_supported(&self) -> Result<(), BundleError> {
-        if self.experiment.specimen.shape == Shape::Surface {
-            return Err(self.unsupported("specimen.shape", SURFACE_UNSUPPORTED.into()));
-        }
-        Ok(())
-    }
-
     /// The specimen's volume [mm^3] from its nominal size (W H T; pi R^2 H), when known.
     pub fn volume_mm3(&self) -> Option<f64> {
         let s = &self.experiment.specimen;
         match s.shape {
             Shape::Block => s.block_size().map(|[w, h, t]| w * h * t),
             Shape::Cylinder => Some(std::f64::consts::PI * s.radius_mm?.powi(2) * s.height_mm?),
-            Shape::Surface => None,
+            Shape::Surface => self.specimen_surface().ok().map(|s| s.signed_volume(None).abs()),
         }
     }
 
@@ -137,7 +129,6 @@ impl Bundle {
     /// is `Glued`, `Frictionless`, or `Free` for `"friction"` (the floor tool of
     /// [`Bundle::contact_tools`] then holds the bottom).
     pub fn protocol(&self) -> Result<Protocol, BundleError> {
-        self.check_supported()?;
         let p = &self.experiment.protocol;
         let plate = match p.tool_contact {
             Contact::Glued => Attachment::Glued,
@@ -216,16 +207,20 @@ impl Bundle {
     }
 
     /// The default element size [mm]: a quarter of the specimen's smallest dimension
-    /// (min(W, H, T) for a block, min(R, H) for a cylinder); `None` for a surface
-    /// specimen. `wagashi press` and `wagashi fit` use it.
+    /// (min(W, H, T) for a block, min(R, H) for a cylinder, the smallest side of
+    /// the bounding box for a surface); `None` for a surface that cannot be read.
+    /// `wagashi press` and `wagashi fit` use it.
     pub fn default_size_mm(&self) -> Option<f64> {
         let s = &self.experiment.specimen;
         let smallest = match s.shape {
             Shape::Block => s.block_size().map(|[w, h, t]| w.min(h).min(t)),
             Shape::Cylinder => Some(s.radius_mm?.min(s.height_mm?)),
-            Shape::Surface => None,
+            Shape::Surface => {
+                let (lo, hi) = self.specimen_surface().ok()?.bounding_box();
+                Some((0..3).map(|k| hi[k] - lo[k]).fold(f64::INFINITY, f64::min))
+            }
         };
-        smallest.map(|d| d / 4.0)
+        smallest.filter(|d| *d > 0.0).map(|d| d / 4.0)
     }
 
     /// The engine materials of `regions` (material names), in that order.
@@ -262,8 +257,15 @@ impl Bundle {
 
     /// The engine's press problem at element size `size_mm` [mm], checked by the
     /// engine (`PressProblem::validate`); no extra snapshot times.
+    /// A surface specimen is meshed in conforming mode ([`Bundle::to_press_meshed`]).
     pub fn to_press(&self, size_mm: f64) -> Result<AnyPress, BundleError> {
-        self.build_press(size_mm, false)
+        self.build_press(size_mm, false, SurfaceMeshing::Conforming)
+    }
+
+    /// [`Bundle::to_press`], a surface specimen being meshed by `mode` (other
+    /// shapes ignore it).
+    pub fn to_press_meshed(&self, size_mm: f64, mode: SurfaceMeshing) -> Result<AnyPress, BundleError> {
+        self.build_press(size_mm, false, mode)
     }
 
     /// The axisymmetric model of a cylinder bundle at element size `size_mm` [mm]:
@@ -271,16 +273,15 @@ impl Bundle {
     /// docs), checked by the engine; no extra snapshot times. Refused, naming
     /// `specimen.shape`, for a specimen that is not a cylinder.
     pub fn to_press_axisymmetric(&self, size_mm: f64) -> Result<AnyPress, BundleError> {
-        self.build_press(size_mm, true)
+        self.build_press(size_mm, true, SurfaceMeshing::Conforming)
     }
 
-    fn build_press(&self, size_mm: f64, axisymmetric: bool) -> Result<AnyPress, BundleError> {
+    fn build_press(&self, size_mm: f64, axisymmetric: bool, mode: SurfaceMeshing) -> Result<AnyPress, BundleError> {
         if !(size_mm.is_finite() && size_mm > 0.0) {
             return Err(BundleError::ElementSize { size_mm });
         }
         // The fields are public: check again whatever may have been edited since reading.
         validate_experiment(&self.experiment, &self.map)?;
-        self.check_supported()?;
         let s = &self.experiment.specimen;
         if axisymmetric && s.shape != Shape::Cylinder {
             return Err(BundleError::Invalid {
@@ -372,8 +373,26 @@ impl Bundle {
                 let material = s.material.as_deref().ok_or_else(|| missing("specimen.material"))?;
                 solid(mesh::cylinder(r, h, size_mm, material).map_err(mesh_err)?)?
             }
-            // Refused by `check_supported`; kept as an error, never a panic.
-            (Shape::Surface, _) => return Err(self.unsupported("specimen.shape", SURFACE_UNSUPPORTED.into())),
+            (Shape::Surface, 2) => {
+                return Err(
+                    self.unsupported("dimension", "shape = \"surface\" is a 3D shape: it needs dimension = 3".into())
+                )
+            }
+            (Shape::Surface, _) => {
+                let mesh = self.mesh_specimen_surface(size_mm, mode)?;
+                let materials = self.materials_for(&self.surface_region_materials(&mesh)?)?;
+                AnyPress::Solid(SolidPress {
+                    mesh,
+                    formulation: Formulation::Solid,
+                    materials,
+                    density_t_mm3,
+                    protocol,
+                    markers: markers.clone(),
+                    snapshot_times: Vec::new(),
+                    tools: tools.clone(),
+                    effects: effects.clone(),
+                })
+            }
         };
         match &problem {
             AnyPress::Plane(p) => p.validate(),

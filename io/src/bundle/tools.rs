@@ -18,7 +18,8 @@ impl Bundle {
     /// as they always were). One exception keeps the format's meaning: a
     /// frictionless plate whose waypoints push again after rising, before
     /// `release_s` (a double compression), must be free to leave the specimen
-    /// and touch it again, so it runs as a contact tool.
+    /// and touch it again, so it runs as a contact tool. A `shape = "surface"`
+    /// specimen always runs with contact tools (its top is not a flat face).
     pub fn has_contact_tools(&self) -> bool {
         let p = &self.experiment.protocol;
         let held = |c: Contact| matches!(c, Contact::Glued | Contact::Frictionless);
@@ -27,7 +28,8 @@ impl Bundle {
             Contact::Frictionless => !self.pushes_again(),
             Contact::Friction => false,
         };
-        !(p.tool == Tool::Plate && plate_held && held(p.support) && p.tools.is_empty())
+        self.experiment.specimen.shape == Shape::Surface
+            || !(p.tool == Tool::Plate && plate_held && held(p.support) && p.tools.is_empty())
     }
 
     /// Whether the waypoints push again (d(t) grows) after a rise (d(t) falls), on
@@ -149,13 +151,7 @@ impl Bundle {
                 let h = s.height_mm.ok_or_else(|| missing("specimen.height_mm"))?;
                 Ok(([-r, 0.0, -r], [r, h, r]))
             }
-            Shape::Surface => Err(BundleError::Unsupported {
-                file: self.experiment_file(),
-                line: self.line_of("specimen.shape"),
-                field: "specimen.shape".into(),
-                what: "tools on a shape = \"surface\" specimen are not simulated yet: it arrives with surface meshing"
-                    .into(),
-            }),
+            Shape::Surface => Ok(self.specimen_surface()?.bounding_box()),
         }
     }
 

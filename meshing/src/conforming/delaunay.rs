@@ -186,6 +186,31 @@ impl Delaunay {
         !duplicate
     }
 
+    /// The tets the insertion of `p` would create (each face of the cavity's
+    /// boundary with `p`, positive; a ghost corner for a face of the hull) and
+    /// the faces it would remove (see [`Self::insert_reporting`]), without
+    /// inserting it; `false` (and nothing listed) when `p` is a vertex already.
+    pub fn star_of(&mut self, p: Point, star: &mut Vec<[u32; 4]>, destroyed: &mut Vec<[u32; 3]>) -> bool {
+        star.clear();
+        destroyed.clear();
+        let i = self.points.len() as u32;
+        self.points.push(p);
+        let start = self.locate(i);
+        let duplicate =
+            !self.is_ghost(start) && self.tets[start as usize].iter().any(|&v| self.points[v as usize] == p);
+        if !duplicate {
+            self.dig_cavity(start, i);
+            self.interior_faces(destroyed);
+            for &(t, k, _, _) in &self.boundary {
+                let mut c = self.tets[t as usize];
+                c[k] = i;
+                star.push(c);
+            }
+        }
+        self.points.pop();
+        !duplicate
+    }
+
     /// After `dig_cavity`: the faces between two cavity tets.
     fn interior_faces(&self, out: &mut Vec<[u32; 3]>) {
         for &t in &self.cavity {

@@ -22,7 +22,7 @@ use crate::predicates::{cross, dot, orient2d, projection_for, sub, Point};
 #[derive(Debug, Clone)]
 pub(crate) struct Facet {
     /// The facet's corners (vertex indices).
-    pub corners: [u32; 3],
+    corners: [u32; 3],
     /// Its triangles, counter-clockwise in the facet's frame.
     pub tris: Vec<[u32; 3]>,
     /// Points of the facet and their coordinates in its frame.
@@ -104,7 +104,28 @@ impl Facet {
                 };
                 (0..self.tris.len()).min_by(|&i, &j| d(&self.tris[i]).total_cmp(&d(&self.tris[j]))).unwrap_or(0)
             });
-        let [p, q, r] = self.tris[k];
+        let t = self.tris[k];
+        // Exactly on an edge off the boundary (the circumcentre of a right
+        // subfacet, on its hypotenuse): split the two triangles beside it, else
+        // one of the three would be flat.
+        for e in 0..3 {
+            let (p, q, r) = (t[e], t[(e + 1) % 3], t[(e + 2) % 3]);
+            if robust::orient2d(self.xy(p), self.xy(q), pm) != 0.0 || Self::is_boundary(boundary, p, q) {
+                continue;
+            }
+            let Some(&j) = self.edge_tri.get(&(q, p)) else { continue };
+            let u = self.tris[j];
+            let i = (0..3).find(|&i| u[i] == q && u[(i + 1) % 3] == p).unwrap_or(0);
+            let x = u[(i + 2) % 3];
+            self.set(k, [p, m, r]);
+            self.push([m, q, r]);
+            self.set(j, [q, m, x]);
+            self.push([m, p, x]);
+            let mut stack = vec![(q, r), (r, p), (p, x), (x, q)];
+            self.flip_stack(&mut stack, boundary);
+            return;
+        }
+        let [p, q, r] = t;
         self.set(k, [p, q, m]);
         self.push([q, r, m]);
         self.push([r, p, m]);

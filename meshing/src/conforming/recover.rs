@@ -12,6 +12,7 @@ use crate::predicates::{cross, dot, sub, Point};
 
 /// The input as a piecewise-linear complex: vertices, the unique input edges
 /// (*segments*) and triangles (*facets*), each split as Steiner points arrive.
+#[derive(Clone)]
 pub(crate) struct Recovery {
     pub dt: Delaunay,
     /// Subsegments: `(a, b, segment id)`.
@@ -38,6 +39,13 @@ pub(crate) struct Recovery {
     kinds: Vec<&'static str>,
     /// The kind of the next point added.
     pub next_kind: &'static str,
+    /// Whether the last point refused was a duplicate of a vertex (the
+    /// tetrahedralization is then unchanged).
+    pub last_duplicate: bool,
+    /// The most Steiner points one `recover_pending` call may add (unbounded
+    /// but for the budget during boundary recovery; bounded during quality
+    /// refinement, whose failure falls back to size refinement alone).
+    pub recover_limit: usize,
 }
 
 impl Recovery {
@@ -81,6 +89,8 @@ impl Recovery {
             pending: BTreeSet::new(),
             destroyed: Vec::new(),
             kinds: Vec::new(),
+            last_duplicate: false,
+            recover_limit: usize::MAX,
             next_kind: "edge",
         })
         .map(|mut r| {
@@ -130,6 +140,7 @@ impl Recovery {
             }
         }
         self.destroyed = destroyed;
+        self.last_duplicate = v != n;
         if v != n {
             let what =
                 (v as usize).checked_sub(self.dt.points().len() - self.kinds.len()).map_or("input", |k| self.kinds[k]);
@@ -189,6 +200,22 @@ impl Recovery {
         Ok(())
     }
 
+    /// Whether quality refinement may still add boundary points: a tenth of the
+    /// Steiner budget stays for the recovery their insertion triggers.
+    pub fn boundary_room(&self) -> bool {
+        self.steiner() < self.max_steiner - self.max_steiner / 10
+    }
+
+    /// Splits the subsegment with ends `a` and `b` (either order), if there is
+    /// one; whether there was.
+    pub fn split_subsegment_between(&mut self, a: u32, b: u32) -> Result<bool, ConformingError> {
+        let Some(k) = self.subsegs.iter().position(|&(x, y, _)| (x == a && y == b) || (x == b && y == a)) else {
+            return Ok(false);
+        };
+        self.split_subsegment(k)?;
+        Ok(true)
+    }
+
     /// Indices of the subsegments on facet `f`'s sides.
     fn facet_subsegs(&self, f: usize) -> impl Iterator<Item = usize> + '_ {
         self.facet_segments[f].into_iter().flat_map(|s| self.seg_subs[s as usize].iter().copied())
@@ -232,7 +259,18 @@ impl Recovery {
     /// missing subfacets refined, until every one is present (each Steiner point
     /// marks the facets whose subfacets its insertion removed as pending).
     pub fn recover_pending(&mut self) -> Result<(), ConformingError> {
+        // Flips add no point, so nothing else bounds them: past this many in
+        // one call (cocircular subfacets flipping back and forth), missing
+        // subfacets are refined instead, which the Steiner budget bounds.
+        let mut flips_left = 16 * self.pending.len() + 1024;
+        let start = self.steiner();
         while let Some(f) = self.pending.pop_first() {
+            if self.steiner() - start > self.recover_limit {
+                return Err(ConformingError::RecoveryFailed {
+                    steiner_points: self.steiner(),
+                    missing: format!("recovery after one refinement point needed over {} points", self.recover_limit),
+                });
+            }
             let subs: Vec<usize> = self.facet_subsegs(f as usize).collect();
             let missing_seg = subs.into_iter().find(|&k| {
                 let (a, b, _) = self.subsegs[k];
@@ -248,7 +286,8 @@ impl Recovery {
                 if !self.has_face(t[0], t[1], t[2]) {
                     // Cocircular points have two Delaunay triangulations: when the
                     // tetrahedralization took the other diagonal, flip to it.
-                    if self.match_by_flip(f as usize, t) {
+                    if flips_left > 0 && self.match_by_flip(f as usize, t) {
+                        flips_left -= 1;
                         self.pending.insert(f);
                         break;
                     }
@@ -274,6 +313,13 @@ impl Recovery {
             }
         }
         false
+    }
+
+    /// Whether vertex `v` is a Steiner point inside a region (on no input edge
+    /// or triangle): one that smoothing may move.
+    pub fn is_free(&self, v: u32) -> bool {
+        let first = self.dt.points().len() - self.kinds.len();
+        (v as usize).checked_sub(first).is_some_and(|k| self.kinds[k] == "interior")
     }
 
     /// Inserts a point that removes no subfacet (checked by the caller).
@@ -310,15 +356,25 @@ impl Recovery {
         if let Some((k, _)) = worst {
             return self.split_subsegment(k);
         }
-        let inside = self.facets[f].contains(c, pts);
-        let p = if inside {
-            c
-        } else {
-            let q = t.map(|v| pts[v as usize]);
-            [0, 1, 2].map(|k| (q[0][k] + q[1][k] + q[2][k]) / 3.0)
-        };
+        let q = t.map(|v| pts[v as usize]);
+        // The circumcentre when it lies strictly inside the subfacet itself, so
+        // that its insertion splits this subfacet whatever the rest of the
+        // facet's triangulation (an obtuse subfacet's circumcentre lies in a
+        // neighbour, whose split need not remove this one); else the centroid.
+        let inside = crate::predicates::projection_for(q[0], q[1], q[2]).is_some_and(|drop| {
+            let s = crate::predicates::orient2d(q[0], q[1], q[2], drop);
+            (0..3).all(|i| crate::predicates::orient2d(q[i], q[(i + 1) % 3], c, drop) == s)
+        }) && self.facets[f].contains(c, pts);
+        let centroid = [0, 1, 2].map(|k| (q[0][k] + q[1][k] + q[2][k]) / 3.0);
+        let p = if inside { c } else { centroid };
         self.next_kind = "triangle";
-        let v = self.add_point(p)?;
+        // A circumcentre that is a vertex already (one placed on a neighbouring,
+        // nearly coplanar facet): the centroid, inside the subfacet, instead.
+        let v = match self.add_point(p) {
+            Err(_) if self.last_duplicate && p != centroid => self.add_point(centroid)?,
+            r => r?,
+        };
+
         self.steiner_on_facets += 1;
         let boundary = self.facet_boundary(f);
         let pts = self.dt.points();

@@ -2,18 +2,60 @@
 //!
 //! Passes over the inside tets (classified by a flood that crosses no subfacet,
 //! at the start of each pass), worst first. A tet is *bad* when its radius-edge
-//! ratio exceeds the bound or its volume exceeds the largest allowed. Its
-//! circumcentre is inserted unless the insertion would remove a subfacet (the
-//! point encroaches it, or lies beyond the boundary): then that subfacet is
-//! refined instead (its circumcentre on the facet, or a split of the subsegment
-//! that one encroaches), and the facets whose subfacets went missing are
-//! recovered before going on. The tetrahedralization stays Delaunay and
-//! conforming throughout; a budget of points ends the passes (the mesh is valid
-//! whenever they stop).
+//! ratio exceeds the bound, its volume exceeds the largest allowed, or its
+//! smallest dihedral angle is under the sliver bound ([`Bounds`]).
+//!
+//! For a bad tet with circumcentre `c` and circumradius `r`, candidate points
+//! are `c` and [`CANDIDATES`] - 1 points drawn in the ball of radius
+//! [`OFF_CENTRE`] `r` about it (for a flat tet, whose circumcentre is at
+//! infinity or far off, `c` is its centroid and `r` half its longest edge) (a generator seeded by the tet's corners: the run
+//! is deterministic). The star each candidate would create is computed without
+//! inserting it (`Delaunay::star_of`), and a candidate is *blocked* when its
+//! insertion would remove a subfacet (it lies beyond the boundary or too near
+//! it) or when it encroaches a subfacet among the faces of its cavity (lies in
+//! the subfacet's equatorial ball): Shewchuk's rule, which keeps interior points
+//! away from the boundary so that refinement near it does not cascade. Of the
+//! free candidates the one whose star has the largest smallest dihedral angle is
+//! inserted (Li and Teng's idea of choosing, near the circumcentre, a point that
+//! creates no sliver). When every candidate is blocked: a tet over the volume
+//! bound refines the subfacet that `c` encroaches most deeply (see
+//! `Recovery::refine_subfacet`); a *cap* (two faces on input triangles meeting
+//! at a hinge flatter than [`CAP_HINGE_DEG`]) gets the hinge's subsegment
+//! split; any other tet is left (module docs of `conforming`, "What is not
+//! done"). The facets whose subfacets went missing are recovered before going
+//! on. A tet that is bad only as a sliver is also left when no free
+//! candidate's star is better than it (it then waits for `smooth.rs`); a tet
+//! left is not tried again.
+//!
+//! The tetrahedralization stays Delaunay and conforming throughout; a budget of
+//! points ends the passes (the mesh is valid whenever they stop).
 
+use super::order::SplitMix;
 use super::recover::{interior_components, Recovery};
 use super::ConformingError;
 use crate::predicates::{cross, dot, sub, Point};
+use crate::quality::tet_quality;
+
+/// Candidate points per bad tet (the circumcentre and points near it).
+pub const CANDIDATES: usize = 8;
+/// The radius of the ball about the circumcentre that candidates are drawn from,
+/// as a fraction of the circumradius.
+pub const OFF_CENTRE: f64 = 0.3;
+
+/// A sliver with two faces on the boundary whose dihedral angle at their shared
+/// edge exceeds this [deg] is a *cap* over a nearly flat hinge of the input.
+pub const CAP_HINGE_DEG: f64 = 150.0;
+
+/// What makes a tet bad.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bounds {
+    /// Largest circumradius over shortest edge (infinite: none).
+    pub radius_edge: f64,
+    /// Largest volume [mm^3] (infinite: none).
+    pub max_volume: f64,
+    /// Smallest dihedral angle [deg] (0: none).
+    pub min_dihedral_deg: f64,
+}
 
 /// What refinement did.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
@@ -24,6 +66,11 @@ pub struct RefineStats {
     pub boundary_splits: usize,
     /// Passes run.
     pub passes: usize,
+    /// Slivers left alone (no candidate made a better star).
+    pub slivers_skipped: usize,
+    /// Whether quality refinement failed (a recovery it triggered did not
+    /// converge) and size refinement ran alone instead.
+    pub quality_failed: bool,
     /// Bad tets left when the passes stopped (0 when refinement converged).
     pub bad_left: usize,
 }
@@ -53,22 +100,43 @@ pub(crate) fn circumsphere(q: [Point; 4]) -> (Point, f64, f64) {
 }
 
 impl Recovery {
-    /// Delaunay refinement (module docs): radius-edge bound `bound`, largest
-    /// volume `max_volume` (infinite: none), at most `budget` points added.
-    pub fn refine(&mut self, bound: f64, max_volume: f64, budget: usize) -> Result<RefineStats, ConformingError> {
+    /// Delaunay refinement (module docs) to `bounds`, at most `budget` points added.
+    pub fn refine(&mut self, bounds: Bounds, budget: usize) -> Result<RefineStats, ConformingError> {
         let mut stats = RefineStats::default();
         let start_points = self.dt.points().len();
-        let mut faces = Vec::new();
+        let mut star = Vec::new();
+        let mut destroyed = Vec::new();
+        let mut skipped = std::collections::HashSet::new();
+        // Cap splits at most as many as the points present when refinement
+        // starts: on some inputs they would otherwise cascade along the surface.
+        let mut caps_left = start_points;
         for _pass in 0..64 {
             stats.passes += 1;
             let (inside, _) = interior_components(&self.dt, &self.face_owner);
             let pts = self.dt.points();
-            let mut bad: Vec<(f64, u32, [u32; 4])> = inside
+            let mut bad: Vec<(f64, u32, [u32; 4], bool, bool)> = inside
                 .iter()
                 .filter_map(|&(t, v, _)| {
-                    let (_, re, vol) = circumsphere(v.map(|i| pts[i as usize]));
-                    let badness = (re / bound).max(vol / max_volume);
-                    (badness > 1.0).then_some((badness, t, v))
+                    let q = v.map(|i| pts[i as usize]);
+                    let (_, re, vol) = circumsphere(q);
+                    let too_big = vol / bounds.max_volume;
+                    let size = (re / bounds.radius_edge).max(too_big);
+                    let sliver = if bounds.min_dihedral_deg > 0.0 {
+                        let d = tet_quality(&q).min_dihedral_deg;
+                        if d < bounds.min_dihedral_deg {
+                            bounds.min_dihedral_deg / d.max(1e-6)
+                        } else {
+                            0.0
+                        }
+                    } else {
+                        0.0
+                    };
+                    let only_sliver = size <= 1.0;
+                    if skipped.contains(&v) {
+                        return None;
+                    }
+                    let badness = size.max(sliver);
+                    (badness > 1.0).then_some((badness, t, v, only_sliver, too_big > 1.0))
                 })
                 .collect();
             stats.bad_left = bad.len();
@@ -76,7 +144,7 @@ impl Recovery {
                 break;
             }
             bad.sort_by(|x, y| y.0.total_cmp(&x.0).then(x.2.cmp(&y.2)));
-            for (_, t, v) in bad {
+            for (_, t, v, only_sliver, too_big) in bad {
                 if self.dt.points().len() - start_points >= budget {
                     return Ok(stats);
                 }
@@ -84,30 +152,73 @@ impl Recovery {
                     continue; // gone since the pass started
                 }
                 let pts = self.dt.points();
-                let (c, _, _) = circumsphere(v.map(|i| pts[i as usize]));
-                if !c.iter().all(|x| x.is_finite()) || !self.dt.cavity_faces(c, &mut faces) {
-                    continue;
-                }
-                // Of the subfacets the insertion would remove, the one whose
-                // equatorial ball holds the point deepest (ties: lowest key).
-                let pts = self.dt.points();
-                let depth = |f: &[u32; 3]| {
-                    let q = f.map(|v| pts[v as usize]);
-                    let cc = super::recover::circumcentre(q);
-                    let r2 = dot(sub(q[0], cc), sub(q[0], cc));
-                    dot(sub(c, cc), sub(c, cc)) / r2
+                let q = v.map(|i| pts[i as usize]);
+                let (c, _, _) = circumsphere(q);
+                let longest = (0..4)
+                    .flat_map(|i| (i + 1..4).map(move |j| (i, j)))
+                    .map(|(i, j)| dot(sub(q[j], q[i]), sub(q[j], q[i])).sqrt())
+                    .fold(0.0, f64::max);
+                let r = dot(sub(q[0], c), sub(q[0], c)).sqrt();
+                // A flat tet (coplanar corners: its circumcentre is at infinity
+                // or far off): candidates about its centroid instead.
+                let (c, r) = if c.iter().all(|x| x.is_finite()) && r <= 1e3 * longest {
+                    (c, r)
+                } else {
+                    ([0, 1, 2].map(|k| (q[0][k] + q[1][k] + q[2][k] + q[3][k]) / 4.0), 0.5 * longest)
                 };
-                let hit = faces
-                    .iter()
-                    .filter(|f| self.face_owner.contains_key(*f))
-                    .min_by(|x, y| depth(x).total_cmp(&depth(y)).then(x.cmp(y)))
-                    .copied();
-                match hit {
-                    None => {
-                        self.insert_free(c)?;
+                let own = tet_quality(&q).min_dihedral_deg;
+                let mut rng = SplitMix(v.iter().fold(0x9E37_79B9u64, |h, &x| h.rotate_left(17) ^ u64::from(x)));
+                let mut best: Option<(f64, Point)> = None;
+                let mut blocked_by: Option<[u32; 3]> = None;
+                for k in 0..CANDIDATES {
+                    let p = if k == 0 { c } else { near(c, OFF_CENTRE * r, &mut rng) };
+                    match self.try_candidate(p, &mut star, &mut destroyed) {
+                        Candidate::Free(quality) => {
+                            if best.is_none_or(|(b, _)| quality > b) {
+                                best = Some((quality, p));
+                            }
+                        }
+                        Candidate::Blocked(face) => {
+                            if k == 0 {
+                                blocked_by = Some(face);
+                            }
+                        }
+                        Candidate::Duplicate => {}
+                    }
+                }
+                match (best, blocked_by) {
+                    (Some((quality, _)), _) if only_sliver && quality <= own => {
+                        skipped.insert(v);
+                        stats.slivers_skipped += 1;
+                    }
+                    (Some((_, p)), _) => {
+                        self.insert_free(p)?;
                         stats.circumcentres += 1;
                     }
-                    Some(face) => {
+                    // A cap: two of its faces are subfacets (on two input
+                    // triangles meeting at a flat angle); split the
+                    // subsegment they share.
+                    (None, Some(_))
+                        if !too_big && caps_left > 0 && self.boundary_room() && self.cap_edge(v).is_some() =>
+                    {
+                        caps_left -= 1;
+                        let (a, b) = self.cap_edge(v).unwrap_or_default();
+                        if !self.split_subsegment_between(a, b)? {
+                            skipped.insert(v);
+                            stats.slivers_skipped += 1;
+                            continue;
+                        }
+                        stats.boundary_splits += 1;
+                    }
+                    // Quality alone does not otherwise refine the boundary:
+                    // refining subfacets for radius-edge or slivers does not
+                    // converge yet (module docs of `conforming`).
+                    (None, Some(_)) if !too_big => {
+                        skipped.insert(v);
+                        stats.slivers_skipped += 1;
+                        continue;
+                    }
+                    (None, Some(face)) => {
                         let f = self.face_owner[&face] as usize;
                         let tri = self.facets[f]
                             .tris
@@ -119,13 +230,137 @@ impl Recovery {
                                 k == face
                             })
                             .unwrap_or(face);
-                        self.refine_subfacet_pub(f, tri)?;
-                        stats.boundary_splits += 1;
+                        match self.refine_subfacet_pub(f, tri) {
+                            Ok(()) => stats.boundary_splits += 1,
+                            // Its point is a vertex already (cocircular subfacets):
+                            // nothing changed; leave this tet.
+                            Err(_) if self.last_duplicate => {
+                                self.last_duplicate = false;
+                                skipped.insert(v);
+                                stats.slivers_skipped += 1;
+                                continue;
+                            }
+                            Err(e) => return Err(e),
+                        }
                     }
+                    (None, None) => continue,
                 }
                 self.recover_pending()?;
             }
         }
         Ok(stats)
+    }
+
+    /// The edge shared by two subfacet faces of tet `v`, if it has two and is
+    /// not flat.
+    fn cap_edge(&self, v: [u32; 4]) -> Option<(u32, u32)> {
+        let faces: Vec<[u32; 3]> = super::delaunay::FACE
+            .iter()
+            .map(|f| {
+                let mut k = f.map(|j| v[j]);
+                k.sort_unstable();
+                k
+            })
+            .filter(|k| self.face_owner.contains_key(k))
+            .collect();
+        let [f, g] = faces.as_slice() else { return None };
+        // A flat cap (on coplanar input triangles) is removed after refinement
+        // (`drop_flat_caps`); splitting its edge would make more flat caps.
+        let pts = self.dt.points();
+        if tet_quality(&v.map(|i| pts[i as usize])).min_dihedral_deg < super::FLAT_DEG {
+            return None;
+        }
+        let shared: Vec<u32> = f.iter().copied().filter(|x| g.contains(x)).collect();
+        let &[a, b] = shared.as_slice() else { return None };
+        // Only over a hinge that is nearly flat (the tet's dihedral angle at the
+        // shared edge, the domain's angle there, over CAP_HINGE_DEG): at a
+        // sharper edge of the input (a box's) the tet is no cap, and splitting
+        // the edge would only make more tets like it.
+        let [c, d] = {
+            let mut o = v.iter().copied().filter(|&x| x != a && x != b);
+            [o.next()?, o.next()?]
+        };
+        let p = |x: u32| pts[x as usize];
+        let e = sub(p(b), p(a));
+        let ee = dot(e, e);
+        let perp = |x: u32| {
+            let u = sub(p(x), p(a));
+            let t = dot(u, e) / ee;
+            [0, 1, 2].map(|k| u[k] - t * e[k])
+        };
+        let (u, w) = (perp(c), perp(d));
+        let angle = (dot(u, w) / (dot(u, u) * dot(w, w)).sqrt()).clamp(-1.0, 1.0).acos().to_degrees();
+        (angle > CAP_HINGE_DEG).then_some((a, b))
+    }
+
+    /// Whether `p` may be inserted (module docs): its star's smallest dihedral
+    /// angle, or the subfacet it blocks on (the one whose equatorial ball holds
+    /// it deepest; ties: lowest key).
+    fn try_candidate(&mut self, p: Point, star: &mut Vec<[u32; 4]>, destroyed: &mut Vec<[u32; 3]>) -> Candidate {
+        if !self.dt.star_of(p, star, destroyed) {
+            return Candidate::Duplicate;
+        }
+        let pts = self.dt.points();
+        let n = pts.len() as u32;
+        let depth = |f: &[u32; 3]| {
+            let q = f.map(|v| pts[v as usize]);
+            let cc = super::recover::circumcentre(q);
+            let r2 = dot(sub(q[0], cc), sub(q[0], cc));
+            dot(sub(p, cc), sub(p, cc)) / r2
+        };
+        let mut hit: Option<(f64, [u32; 3])> = None;
+        let mut consider = |f: [u32; 3], removed: bool| {
+            if !self.face_owner.contains_key(&f) {
+                return;
+            }
+            let d = depth(&f);
+            if (removed || d < 1.0) && hit.is_none_or(|(b, k)| d < b || (d == b && f < k)) {
+                hit = Some((d, f));
+            }
+        };
+        for f in destroyed.iter() {
+            consider(*f, true);
+        }
+        for t in star.iter() {
+            let i = t.iter().position(|&x| x == n).unwrap_or(0);
+            let mut f = super::delaunay::FACE[i].map(|j| t[j]);
+            if f.contains(&super::delaunay::GHOST) {
+                continue;
+            }
+            f.sort_unstable();
+            consider(f, false);
+        }
+        if let Some((_, f)) = hit {
+            return Candidate::Blocked(f);
+        }
+        if star.iter().any(|t| t.contains(&super::delaunay::GHOST)) {
+            return Candidate::Duplicate; // beyond the hull: never inserted
+        }
+        let mut worst = f64::INFINITY;
+        for t in star.iter() {
+            let q = t.map(|v| if v == n { p } else { pts[v as usize] });
+            worst = worst.min(tet_quality(&q).min_dihedral_deg);
+        }
+        Candidate::Free(worst)
+    }
+}
+
+/// What inserting a candidate point would do.
+enum Candidate {
+    /// No subfacet removed or encroached: the smallest dihedral angle [deg] of the star.
+    Free(f64),
+    /// It would remove or encroaches this subfacet.
+    Blocked([u32; 3]),
+    /// It is a vertex already (or beyond the hull).
+    Duplicate,
+}
+
+/// A point uniformly drawn in the ball of radius `r` about `c`.
+fn near(c: Point, r: f64, rng: &mut SplitMix) -> Point {
+    loop {
+        let u = [0; 3].map(|_| (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0);
+        if dot(u, u) <= 1.0 {
+            return [0, 1, 2].map(|k| c[k] + r * u[k]);
+        }
     }
 }

@@ -1,0 +1,132 @@
+//! Sliver removal by smoothing free vertices (stage 4), after refinement.
+//!
+//! A *free* vertex is a Steiner point inside a region: on no input edge or
+//! triangle (those stay where they are, so the boundary and the interfaces keep
+//! reproducing the input exactly). Passes visit, in vertex order, the free
+//! vertices of tets whose smallest dihedral angle is under the bound; each tries
+//! candidate positions — the centroid of its star's other vertices, points
+//! part-way towards it, and points drawn in a small ball about the vertex (a
+//! generator seeded by the vertex: deterministic) — and moves to the one that
+//! most raises the smallest dihedral angle of its star, provided every tet of
+//! the star stays positively oriented (exact `orient3d`) and under the volume
+//! bound of refinement. A move never lowers
+//! the star's smallest angle, so the mesh's smallest angle never drops; the
+//! connectivity is unchanged (the mesh is no longer Delaunay afterwards, which
+//! nothing downstream needs).
+
+use super::order::SplitMix;
+use crate::predicates::{orient3d, Point};
+use crate::quality::tet_quality;
+
+/// What smoothing did.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct SmoothStats {
+    /// Vertex moves made.
+    pub moves: usize,
+    /// Passes run.
+    pub passes: usize,
+}
+
+/// Candidate positions tried per vertex.
+const TRIES: usize = 12;
+
+/// The smallest dihedral angle of `star` with `v` at `at`; `None` when a tet of
+/// it would not be positively oriented or would be larger than `max_volume`.
+fn star_min(nodes: &[Point], cells: &[[u32; 4]], star: &[u32], v: u32, at: Point, max_volume: f64) -> Option<f64> {
+    let mut worst = f64::INFINITY;
+    for &c in star {
+        let q = cells[c as usize].map(|u| if u == v { at } else { nodes[u as usize] });
+        if orient3d(q[0], q[1], q[2], q[3]) != 1 {
+            return None;
+        }
+        let t = tet_quality(&q);
+        if t.volume_mm3 > max_volume {
+            return None;
+        }
+        worst = worst.min(t.min_dihedral_deg);
+    }
+    Some(worst)
+}
+
+/// Smooths the free vertices (`fixed[v]` false) of slivers (smallest dihedral
+/// angle under `bound_deg`) in `passes` passes (module docs), keeping every tet
+/// under `max_volume` [mm^3].
+pub(crate) fn smooth(
+    nodes: &mut [Point],
+    cells: &[[u32; 4]],
+    fixed: &[bool],
+    bound_deg: f64,
+    max_volume: f64,
+    passes: usize,
+) -> SmoothStats {
+    let mut stats = SmoothStats::default();
+    let mut stars: Vec<Vec<u32>> = vec![Vec::new(); nodes.len()];
+    for (c, cell) in cells.iter().enumerate() {
+        for &v in cell {
+            stars[v as usize].push(c as u32);
+        }
+    }
+    for _ in 0..passes {
+        stats.passes += 1;
+        let mut todo: Vec<u32> = cells
+            .iter()
+            .filter(|cell| tet_quality(&cell.map(|v| nodes[v as usize])).min_dihedral_deg < bound_deg)
+            .flatten()
+            .copied()
+            .filter(|&v| !fixed[v as usize])
+            .collect();
+        todo.sort_unstable();
+        todo.dedup();
+        let mut moved = 0;
+        for v in todo {
+            let star = &stars[v as usize];
+            let here = nodes[v as usize];
+            let Some(now) = star_min(nodes, cells, star, v, here, f64::INFINITY) else { continue };
+            let mut sum = [0.0; 3];
+            let mut n = 0.0;
+            let mut reach: f64 = 0.0;
+            for &c in star {
+                for &u in &cells[c as usize] {
+                    if u != v {
+                        let p = nodes[u as usize];
+                        (0..3).for_each(|k| sum[k] += p[k]);
+                        n += 1.0;
+                        let d = [0, 1, 2].map(|k| p[k] - here[k]);
+                        reach = reach.max((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt());
+                    }
+                }
+            }
+            let centroid = sum.map(|x| x / n);
+            let mut rng = SplitMix(0xD1E5_u64 ^ (u64::from(v) << 20));
+            let mut best = (now, here);
+            for k in 0..TRIES {
+                let at = match k {
+                    0 => centroid,
+                    1..=3 => {
+                        let f = k as f64 / 4.0;
+                        [0, 1, 2].map(|i| here[i] + f * (centroid[i] - here[i]))
+                    }
+                    _ => {
+                        let r = 0.1 * reach * (1.0 - (k as f64 - 4.0) / TRIES as f64);
+                        let u = [0; 3].map(|_| (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0);
+                        [0, 1, 2].map(|i| best.1[i] + r * u[i])
+                    }
+                };
+                if let Some(q) = star_min(nodes, cells, star, v, at, max_volume) {
+                    if q > best.0 {
+                        best = (q, at);
+                    }
+                }
+            }
+            if best.0 > now {
+                nodes[v as usize] = best.1;
+                moved += 1;
+            }
+        }
+        stats.moves += moved;
+        if moved == 0 {
+            break;
+        }
+    }
+    stats
+}
