@@ -433,14 +433,19 @@ fn default_starts(materials: &mut BTreeMap<String, MaterialSpec>, unknowns: &[Un
     }
 }
 
-fn trial_of(b: &Bundle, problem: AnyPress) -> Result<Trial, CampaignError> {
-    let region_material = match &problem {
+/// The region names of a problem's mesh, whatever its formulation.
+pub(crate) fn region_names(problem: &AnyPress) -> Vec<String> {
+    match problem {
         AnyPress::Plane(p) => p.mesh.region_names.clone(),
         AnyPress::Solid(p) => p.mesh.region_names.clone(),
         AnyPress::Axisymmetric(p) => p.mesh.region_names.clone(),
-    };
-    let protocol = &b.experiment.protocol;
-    let (release_s, end_s, last_push_s) = (protocol.release_s, protocol.end_s, protocol.last_push_s());
+    }
+}
+
+/// The force samples a fit uses (`0 < t <= end_s`, thinned to at most
+/// [`MAX_FORCE_SAMPLES`]) and their noise, estimated before thinning.
+pub(crate) fn measured_force(b: &Bundle) -> (Vec<(f64, f64)>, f64) {
+    let end_s = b.experiment.protocol.end_s;
     let mut force: Vec<(f64, f64)> = b
         .force
         .as_ref()
@@ -451,6 +456,23 @@ fn trial_of(b: &Bundle, problem: AnyPress) -> Result<Trial, CampaignError> {
         let stride = force.len().div_ceil(MAX_FORCE_SAMPLES);
         force = force.into_iter().step_by(stride).collect();
     }
+    (force, force_sigma_n)
+}
+
+/// A marker position in the model's frame: the axisymmetric model's markers
+/// live in its r-y section.
+pub(crate) fn model_position(problem: &AnyPress, position_mm: &[f64]) -> Vec<f64> {
+    match (problem, position_mm) {
+        (AnyPress::Axisymmetric(_), &[x, y, z]) => vec![x.hypot(z), y],
+        _ => position_mm.to_vec(),
+    }
+}
+
+fn trial_of(b: &Bundle, problem: AnyPress) -> Result<Trial, CampaignError> {
+    let region_material = region_names(&problem);
+    let protocol = &b.experiment.protocol;
+    let (release_s, end_s, last_push_s) = (protocol.release_s, protocol.end_s, protocol.last_push_s());
+    let (force, force_sigma_n) = measured_force(b);
     let mut markers = Vec::new();
     for (m, series) in b.markers.iter().enumerate() {
         for (i, s) in series.samples.iter().enumerate() {
@@ -464,11 +486,7 @@ fn trial_of(b: &Bundle, problem: AnyPress) -> Result<Trial, CampaignError> {
             } else {
                 continue;
             };
-            // The axisymmetric model's markers live in its r-y section.
-            let position = match (&problem, s.position_mm.as_slice()) {
-                (AnyPress::Axisymmetric(_), &[x, y, z]) => vec![x.hypot(z), y],
-                _ => s.position_mm.clone(),
-            };
+            let position = model_position(&problem, &s.position_mm);
             markers.push(MarkerObservation { marker: m, sample: i, position, channel });
         }
     }

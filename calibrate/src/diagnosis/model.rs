@@ -46,7 +46,7 @@ use rayon::prelude::*;
 use wagashi_io::{Bundle, MaterialSpec};
 
 use crate::lsq::{EvalError, Evaluation, LeastSquares, ParameterSpec};
-use crate::trial::{force_noise, set_parameter, Unknown, MAX_FORCE_SAMPLES};
+use crate::trial::{measured_force, model_position, region_names, set_parameter, Unknown};
 
 use super::DiagnosisError;
 
@@ -351,25 +351,10 @@ impl Model {
                 DiagnosisError::Input(format!("{file}: give an element size (--size-mm) for this specimen"))
             })?;
             let problem = if axisymmetric { filled.to_press_axisymmetric(size)? } else { filled.to_press(size)? };
-            let region_material = match &problem {
-                AnyPress::Plane(p) => p.mesh.region_names.clone(),
-                AnyPress::Solid(p) => p.mesh.region_names.clone(),
-                AnyPress::Axisymmetric(p) => p.mesh.region_names.clone(),
-            };
+            let region_material = region_names(&problem);
             let protocol = &b.experiment.protocol;
             let (release_s, end_s, last_push_s) = (protocol.release_s, protocol.end_s, protocol.last_push_s());
-            let mut force: Vec<(f64, f64)> = b
-                .force
-                .as_ref()
-                .map(|f| {
-                    f.samples.iter().filter(|s| s.t_s > 0.0 && s.t_s <= end_s).map(|s| (s.t_s, s.force_n)).collect()
-                })
-                .unwrap_or_default();
-            let force_sigma_n = force_noise(&force);
-            if force.len() > MAX_FORCE_SAMPLES {
-                let stride = force.len().div_ceil(MAX_FORCE_SAMPLES);
-                force = force.into_iter().step_by(stride).collect();
-            }
+            let (force, force_sigma_n) = measured_force(b);
             for &(t, _) in &force {
                 observations.push(Observation {
                     trial: k,
@@ -399,10 +384,7 @@ impl Model {
                     if s.t_s <= 0.0 || s.t_s > end_s || (s.t_s <= release_s && s.t_s < last_push_s) {
                         continue;
                     }
-                    let position = match (&problem, s.position_mm.as_slice()) {
-                        (AnyPress::Axisymmetric(_), &[x, y, z]) => vec![x.hypot(z), y],
-                        _ => s.position_mm.clone(),
-                    };
+                    let position = model_position(&problem, &s.position_mm);
                     let phase = if s.t_s > release_s { Phase::Recovery } else { Phase::Hold };
                     for c in 0..position.len() {
                         observations.push(Observation {
