@@ -518,7 +518,13 @@ impl<'t> ContactModel<'t> {
                 }
             }
             if iteration == MAX_ITERATIONS {
-                let (_, c, nodes) = self.constraint_error(input, &u, &state, t1);
+                let (_, mut c, mut nodes) = self.constraint_error(input, &u, &state, t1);
+                if nodes.is_empty() {
+                    // The gaps hold: what did not settle are statuses flipping or
+                    // slip tractions still moving; name those nodes.
+                    (c, nodes) =
+                        self.unsettled(used.as_deref(), &pass.statuses, &state, &slip_before, input, &u, &penalty);
+                }
                 return Err(PressError::ContactNotSettled {
                     step: input.step,
                     time_s: t1,
@@ -751,11 +757,65 @@ impl<'t> ContactModel<'t> {
                 return true;
             };
             self.nodes.iter().enumerate().all(|(j, &i)| {
-                let p = &state.pairs[c][j];
-                let rounding = 64.0 * f64::EPSILON * norm(self.position(input, u, i)) * penalty[j] * mu;
-                dist(p.slip_force, before[c][j]) <= (SLIP_TOLERANCE * norm(p.slip_force)).max(rounding)
+                !self.slip_moves(mu, state.pairs[c][j].slip_force, before[c][j], input, u, i, penalty[j])
             })
         })
+    }
+
+    /// Whether a friction pair's slip traction moved between two passes by more
+    /// than [`SLIP_TOLERANCE`] of itself and the rounding of its penalty spring.
+    #[allow(clippy::too_many_arguments)]
+    fn slip_moves(
+        &self,
+        mu: f64,
+        now: [f64; 3],
+        before: [f64; 3],
+        input: &StepInput<'_>,
+        u: &[f64],
+        i: u32,
+        penalty: f64,
+    ) -> bool {
+        let rounding = 64.0 * f64::EPSILON * norm(self.position(input, u, i)) * penalty * mu;
+        dist(now, before) > (SLIP_TOLERANCE * norm(now)).max(rounding)
+    }
+
+    /// The nodes of the first tool whose status changed between the last two
+    /// passes or whose slip traction still moves (as [`Self::slip_settled`]
+    /// measures it): what a step that does not settle names when every gap holds.
+    #[allow(clippy::too_many_arguments)]
+    fn unsettled(
+        &self,
+        used: Option<&[Vec<Status>]>,
+        statuses: &[Vec<Status>],
+        state: &ContactState,
+        slip_before: &[Vec<[f64; 3]>],
+        input: &StepInput<'_>,
+        u: &[f64],
+        penalty: &[f64],
+    ) -> (usize, Vec<u32>) {
+        for (c, placed) in self.tools.iter().enumerate() {
+            let mu = match placed.tool.contact {
+                ToolContact::Friction(mu) => Some(mu),
+                _ => None,
+            };
+            let nodes: Vec<u32> = self
+                .nodes
+                .iter()
+                .enumerate()
+                .filter(|&(j, &i)| {
+                    let flipped = used.is_some_and(|used| used[c][j] != statuses[c][j]);
+                    let slipping = mu.is_some_and(|mu| {
+                        self.slip_moves(mu, state.pairs[c][j].slip_force, slip_before[c][j], input, u, i, penalty[j])
+                    });
+                    flipped || slipping
+                })
+                .map(|(_, &i)| i)
+                .collect();
+            if !nodes.is_empty() {
+                return (c, nodes);
+            }
+        }
+        (0, Vec::new())
     }
 
     /// Whether a pair kept in contact by the opening band pulls on its tool (a
