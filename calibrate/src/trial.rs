@@ -128,6 +128,28 @@ fn key_of(name: &str) -> &'static str {
     }
 }
 
+/// The engine's sensitivity parameter of unknown `u` on a trial whose regions
+/// carry `region_material` and the `materials`: the regions of its material
+/// and its place among the rheology's parameters (or Poisson's ratio). `None`
+/// when its material is not on the trial or its model has no such key.
+pub(crate) fn sensitivity_parameter(
+    u: &Unknown,
+    region_material: &[String],
+    materials: &[Material],
+) -> Option<SensitivityParameter> {
+    let regions: Vec<usize> = (0..region_material.len()).filter(|&r| region_material[r] == u.material).collect();
+    if regions.is_empty() {
+        return None;
+    }
+    let kind = if u.key == "poisson" {
+        ParameterKind::Poisson
+    } else {
+        let names = materials[regions[0]].rheology.parameters();
+        ParameterKind::Rheology(names.iter().position(|(n, _)| key_of(n) == u.key)?)
+    };
+    Some(SensitivityParameter { regions, kind })
+}
+
 /// One measured marker coordinate set.
 #[derive(Debug, Clone)]
 struct MarkerObservation {
@@ -572,19 +594,9 @@ impl<'c> Objective<'c> {
         if want_jacobian {
             for (col, &i) in self.free.iter().enumerate() {
                 let u = &self.campaign.unknowns[i];
-                let regions: Vec<usize> =
-                    (0..trial.region_material.len()).filter(|&r| trial.region_material[r] == u.material).collect();
-                if regions.is_empty() {
-                    continue;
+                if let Some(parameter) = sensitivity_parameter(u, &trial.region_material, &materials) {
+                    acting.push((col, parameter));
                 }
-                let kind = if u.key == "poisson" {
-                    ParameterKind::Poisson
-                } else {
-                    let names = materials[regions[0]].rheology.parameters();
-                    let idx = names.iter().position(|(n, _)| key_of(n) == u.key).expect("the model's key");
-                    ParameterKind::Rheology(idx)
-                };
-                acting.push((col, SensitivityParameter { regions, kind }));
             }
         }
         self.campaign.simulations.fetch_add(1, Ordering::Relaxed);

@@ -39,14 +39,14 @@ use std::collections::BTreeMap;
 use fem_core::effects::{EffectId, Effects, ParamSpec};
 use fem_core::material::Material;
 use fem_core::press::{
-    simulate_any, simulate_any_with_sensitivities, AnyPress, ParameterKind, PressResult, SensitivityParameter, Settings,
+    simulate_any, simulate_any_with_sensitivities, AnyPress, PressResult, SensitivityParameter, Settings,
 };
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 use wagashi_io::{Bundle, MaterialSpec};
 
 use crate::lsq::{EvalError, Evaluation, LeastSquares, ParameterSpec};
-use crate::trial::{measured_force, model_position, region_names, set_parameter, Unknown};
+use crate::trial::{measured_force, model_position, region_names, sensitivity_parameter, set_parameter, Unknown};
 
 use super::DiagnosisError;
 
@@ -563,19 +563,9 @@ impl Model {
         };
         let mut acting = Vec::new();
         for (col, u) in self.unknowns.iter().enumerate() {
-            let regions: Vec<usize> =
-                (0..trial.region_material.len()).filter(|&r| trial.region_material[r] == u.material).collect();
-            if regions.is_empty() {
-                continue;
+            if let Some(parameter) = sensitivity_parameter(u, &trial.region_material, materials) {
+                acting.push((col, parameter));
             }
-            let kind = if u.key == "poisson" {
-                ParameterKind::Poisson
-            } else {
-                let names = materials[regions[0]].rheology.parameters();
-                let Some(idx) = names.iter().position(|(n, _)| bundle_key(n) == u.key) else { continue };
-                ParameterKind::Rheology(idx)
-            };
-            acting.push((col, SensitivityParameter { regions, kind }));
         }
         acting
     }
@@ -714,18 +704,6 @@ impl Model {
                 }
             })
             .collect()
-    }
-}
-
-/// The bundle key of an engine rheology parameter name (`E1` -> `E1_MPa`).
-fn bundle_key(name: &str) -> &'static str {
-    match name {
-        "E" => "E_MPa",
-        "E1" => "E1_MPa",
-        "E2" => "E2_MPa",
-        "c1" => "c1_MPa_s",
-        "c2" => "c2_MPa_s",
-        _ => "c3_MPa_s",
     }
 }
 
