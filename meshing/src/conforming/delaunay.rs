@@ -173,17 +173,27 @@ impl Delaunay {
     /// without inserting it; `false` (and nothing listed) when `p` is a vertex already.
     pub fn cavity_faces(&mut self, p: Point, out: &mut Vec<[u32; 3]>) -> bool {
         out.clear();
+        let dug = self.dig_probe(p);
+        if dug.is_some() {
+            self.interior_faces(out);
+        }
+        self.points.pop();
+        dug.is_some()
+    }
+
+    /// Pushes `p` as a provisional vertex and digs its cavity: its index, or
+    /// `None` (nothing dug) when `p` is a vertex already. The caller pops it.
+    fn dig_probe(&mut self, p: Point) -> Option<u32> {
         let i = self.points.len() as u32;
         self.points.push(p);
         let start = self.locate(i);
         let duplicate =
             !self.is_ghost(start) && self.tets[start as usize].iter().any(|&v| self.points[v as usize] == p);
-        if !duplicate {
-            self.dig_cavity(start, i);
-            self.interior_faces(out);
+        if duplicate {
+            return None;
         }
-        self.points.pop();
-        !duplicate
+        self.dig_cavity(start, i);
+        Some(i)
     }
 
     /// The tets the insertion of `p` would create (each face of the cavity's
@@ -193,13 +203,8 @@ impl Delaunay {
     pub fn star_of(&mut self, p: Point, star: &mut Vec<[u32; 4]>, destroyed: &mut Vec<[u32; 3]>) -> bool {
         star.clear();
         destroyed.clear();
-        let i = self.points.len() as u32;
-        self.points.push(p);
-        let start = self.locate(i);
-        let duplicate =
-            !self.is_ghost(start) && self.tets[start as usize].iter().any(|&v| self.points[v as usize] == p);
-        if !duplicate {
-            self.dig_cavity(start, i);
+        let dug = self.dig_probe(p);
+        if let Some(i) = dug {
             self.interior_faces(destroyed);
             for &(t, k, _, _) in &self.boundary {
                 let mut c = self.tets[t as usize];
@@ -208,7 +213,7 @@ impl Delaunay {
             }
         }
         self.points.pop();
-        !duplicate
+        dug.is_some()
     }
 
     /// After `dig_cavity`: the faces between two cavity tets.
