@@ -47,7 +47,7 @@
 //! with the traction `mu lambda_n` along the trial (explicit in the iteration). After
 //! a slipping step the anchor moves to the node's contact point.
 //!
-//! Three rules make the iteration settle when a slide starts or reverses:
+//! Four rules make the iteration settle when a slide starts or reverses:
 //! - **Stick predictor.** A node stuck at the step's start starts the step moved
 //!   with its anchor. Left where it was, its trial traction would be the penalty
 //!   times the tool's whole increment, far outside the cone, and every stuck node
@@ -56,6 +56,12 @@
 //!   overshot its anchor; it sticks for the next iteration. The stick window is
 //!   only `2 mu N / k` wide, so the explicit slip traction alone would never
 //!   land in it.
+//! - **The cone's edge keeps its status.** A slipping node sits at the edge of
+//!   the cone, where stick and slip give the same traction; deciding between them
+//!   there is left to the rounding of the node's position times the penalty
+//!   (`k x eps`), which for small `mu` is as large as `mu N` itself. Within that
+//!   band a pair keeps the last pass's status; flipping there made the statuses
+//!   cycle and the step fail to settle at `mu <= 1e-3`.
 //! - **Slip tractions settle.** The explicit slip tractions are part of the
 //!   convergence test: a step ends when the last solve changed none of them by more
 //!   than 1e-8 of itself (or the rounding of `mu k x`). On a plate the iteration
@@ -90,6 +96,9 @@ const FRICTION_TOLERANCE: f64 = 1e-8;
 const SLIP_TOLERANCE: f64 = 1e-8;
 /// Iterations before a step counts as not settling.
 const MAX_ITERATIONS: usize = 100;
+/// The rounding of a node's position, relative to its size, that decides
+/// friction statuses at the cone's edge (see [`law`]).
+const ROUNDING: f64 = 8.0 * f64::EPSILON;
 /// Normals turning less than this (in norm of the difference) keep the factorization.
 const NORMAL_REUSE: f64 = 1e-6;
 /// A pair in contact in the last solve stays in contact while its gap is below
@@ -1050,8 +1059,14 @@ fn law(
             // anchor: the node sticks there for the next iteration. Held on the
             // explicit slip traction it would swing from side to side, because the
             // stick window is only `2 mu N / k` wide.
-            let reverses = pair.status == Status::Normal && dot(pair.slip_direction, tt) < 0.0;
-            if mag <= limit || reverses {
+            // At the cone's edge the status is decided by the rounding of the
+            // position times the penalty (`k x eps`, comparable to `mu N` for small
+            // `mu`): within that band the pair keeps the status of the last pass.
+            let band = k * ROUNDING * norm(x);
+            let slipping = pair.status == Status::Normal && pair.slip_direction != [0.0; 3];
+            let reverses = slipping && dot(pair.slip_direction, tt) < -band * norm(pair.slip_direction);
+            let sticks = if slipping { mag < limit - band || reverses } else { mag <= limit + band };
+            if sticks {
                 pair.slip_direction = [0.0; 3];
                 pair.slip_force = [0.0; 3];
                 let f = std::array::from_fn(|i| n[i] * trial + tt[i]);
