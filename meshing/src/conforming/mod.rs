@@ -343,9 +343,10 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
     if options.sliver_deg > 0.0 {
         // `compact` numbers the used vertices in increasing order.
         let used: std::collections::BTreeSet<u32> = cell_tets.iter().flatten().copied().collect();
-        let fixed: Vec<bool> = used.iter().map(|&v| !rec.is_free(v)).collect();
+        let all = rec.freedom();
+        let freedom: Vec<recover::Freedom> = used.iter().map(|&v| all[v as usize]).collect();
         let max_volume = options.size_mm.map_or(f64::INFINITY, |h| h.powi(3) / (6.0 * 2f64.sqrt()));
-        smoothing = smooth::smooth(&mut nodes, &cells, &fixed, options.sliver_deg, max_volume, SMOOTHING_PASSES);
+        smoothing = smooth::smooth(&mut nodes, &cells, &freedom, options.sliver_deg, max_volume, SMOOTHING_PASSES);
     }
     let region_names = if nreg > 1 {
         regions_surface.region_names.clone()

@@ -15,6 +15,7 @@
 //! nothing downstream needs).
 
 use super::order::SplitMix;
+use super::recover::Freedom;
 use crate::predicates::{orient3d, Point};
 use crate::quality::tet_quality;
 
@@ -43,18 +44,44 @@ fn star_min(nodes: &[Point], cells: &[[u32; 4]], star: &[u32], v: u32, at: Point
         if t.volume_mm3 > max_volume {
             return None;
         }
-        worst = worst.min(t.min_dihedral_deg);
+        worst = worst.min(angle_quality(t.min_dihedral_deg, t.max_dihedral_deg));
     }
     Some(worst)
 }
 
-/// Smooths the free vertices (`fixed[v]` false) of slivers (smallest dihedral
+/// The quality smoothing raises: the smallest dihedral angle, or the supplement
+/// of the largest when that is smaller (a tet with an angle near 180 deg is as
+/// bad as one with an angle near 0) [deg].
+pub(crate) fn angle_quality(min_deg: f64, max_deg: f64) -> f64 {
+    min_deg.min(180.0 - max_deg)
+}
+
+/// `at` moved within what `freedom` allows from `here`: the displacement
+/// projected on its plane or line (`None` when the vertex is fixed).
+fn constrain(freedom: Freedom, here: Point, at: Point) -> Option<Point> {
+    let d = [0, 1, 2].map(|k| at[k] - here[k]);
+    let along = |t: Point| d[0] * t[0] + d[1] * t[1] + d[2] * t[2];
+    match freedom {
+        Freedom::Fixed => None,
+        Freedom::Free => Some(at),
+        Freedom::Line(t) => {
+            let s = along(t);
+            Some([0, 1, 2].map(|k| here[k] + s * t[k]))
+        }
+        Freedom::Plane([t1, t2]) => {
+            let (s1, s2) = (along(t1), along(t2));
+            Some([0, 1, 2].map(|k| here[k] + s1 * t1[k] + s2 * t2[k]))
+        }
+    }
+}
+
+/// Smooths the movable vertices (`freedom`) of slivers (smallest dihedral
 /// angle under `bound_deg`) in `passes` passes (module docs), keeping every tet
 /// under `max_volume` [mm^3].
 pub(crate) fn smooth(
     nodes: &mut [Point],
     cells: &[[u32; 4]],
-    fixed: &[bool],
+    freedom: &[Freedom],
     bound_deg: f64,
     max_volume: f64,
     passes: usize,
@@ -70,10 +97,13 @@ pub(crate) fn smooth(
         stats.passes += 1;
         let mut todo: Vec<u32> = cells
             .iter()
-            .filter(|cell| tet_quality(&cell.map(|v| nodes[v as usize])).min_dihedral_deg < bound_deg)
+            .filter(|cell| {
+                let t = tet_quality(&cell.map(|v| nodes[v as usize]));
+                angle_quality(t.min_dihedral_deg, t.max_dihedral_deg) < bound_deg
+            })
             .flatten()
             .copied()
-            .filter(|&v| !fixed[v as usize])
+            .filter(|&v| freedom[v as usize] != Freedom::Fixed)
             .collect();
         todo.sort_unstable();
         todo.dedup();
@@ -112,6 +142,7 @@ pub(crate) fn smooth(
                         [0, 1, 2].map(|i| best.1[i] + r * u[i])
                     }
                 };
+                let Some(at) = constrain(freedom[v as usize], here, at) else { continue };
                 if let Some(q) = star_min(nodes, cells, star, v, at, max_volume) {
                     if q > best.0 {
                         best = (q, at);
