@@ -1,18 +1,30 @@
-//! Sliver removal by smoothing free vertices (stage 4), after refinement.
+//! Sliver removal by smoothing (stage 5), after refinement.
 //!
-//! A *free* vertex is a Steiner point inside a region: on no input edge or
-//! triangle (those stay where they are, so the boundary and the interfaces keep
-//! reproducing the input exactly). Passes visit, in vertex order, the free
-//! vertices of tets whose smallest dihedral angle is under the bound; each tries
-//! candidate positions — the centroid of its star's other vertices, points
-//! part-way towards it, and points drawn in a small ball about the vertex (a
-//! generator seeded by the vertex: deterministic) — and moves to the one that
-//! most raises the smallest dihedral angle of its star, provided every tet of
-//! the star stays positively oriented (exact `orient3d`) and under the volume
-//! bound of refinement. A move never lowers
-//! the star's smallest angle, so the mesh's smallest angle never drops; the
-//! connectivity is unchanged (the mesh is no longer Delaunay afterwards, which
-//! nothing downstream needs).
+//! Steiner points move; input vertices do not. How far a Steiner point may
+//! move depends on where it lies (`Recovery::freedom`): one inside a region
+//! anywhere, one inside an input triangle within that triangle's plane, one on
+//! an input edge along that edge. The boundary and the interfaces therefore
+//! keep reproducing the input: a point that stays in its triangle's plane and
+//! keeps every tet positive stays inside the polygon of its boundary
+//! neighbours, which lies in the triangle (and likewise between its neighbours
+//! on an edge); the directions come from the input's exact coordinates, so a
+//! face of a box keeps its points' coordinate across it exactly. When only
+//! interior points moved (and only the smallest angle counted), the worst tets
+//! of two boxes sharing a face, at the boxes' edges with three corners on the
+//! boundary, stayed at 6.39 and 169.24 deg; now that mesh's angles are
+//! 10.01..163.08 deg.
+//!
+//! Passes visit, in vertex order, the movable vertices of tets whose quality
+//! ([`angle_quality`]: the smallest dihedral angle, or 180 deg minus the
+//! largest when that is smaller) is under the bound; each tries candidate
+//! positions — the centroid of its star's other vertices, points part-way
+//! towards it, and points drawn in a small ball about the vertex (a generator
+//! seeded by the vertex: deterministic), all projected on what the vertex may
+//! move along — and moves to the one that most raises the smallest quality of
+//! its star, provided every tet of the star stays positively oriented (exact
+//! `orient3d`) and under the volume bound of refinement. A move never lowers
+//! the star's smallest quality; the connectivity is unchanged (the mesh is no
+//! longer Delaunay afterwards, which nothing downstream needs).
 
 use super::order::SplitMix;
 use super::recover::Freedom;
@@ -31,7 +43,7 @@ pub struct SmoothStats {
 /// Candidate positions tried per vertex.
 const TRIES: usize = 12;
 
-/// The smallest dihedral angle of `star` with `v` at `at`; `None` when a tet of
+/// The smallest [`angle_quality`] of `star` with `v` at `at`; `None` when a tet of
 /// it would not be positively oriented or would be larger than `max_volume`.
 fn star_min(nodes: &[Point], cells: &[[u32; 4]], star: &[u32], v: u32, at: Point, max_volume: f64) -> Option<f64> {
     let mut worst = f64::INFINITY;
@@ -75,8 +87,8 @@ fn constrain(freedom: Freedom, here: Point, at: Point) -> Option<Point> {
     }
 }
 
-/// Smooths the movable vertices (`freedom`) of slivers (smallest dihedral
-/// angle under `bound_deg`) in `passes` passes (module docs), keeping every tet
+/// Smooths the movable vertices (`freedom`) of bad tets ([`angle_quality`]
+/// under `bound_deg`) in `passes` passes (module docs), keeping every tet
 /// under `max_volume` [mm^3].
 pub(crate) fn smooth(
     nodes: &mut [Point],
