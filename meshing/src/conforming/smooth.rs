@@ -36,6 +36,8 @@ use crate::quality::tet_quality;
 pub struct SmoothStats {
     /// Vertex moves made.
     pub moves: usize,
+    /// Those of them of Steiner points on an input edge or triangle.
+    pub boundary_moves: usize,
     /// Passes run.
     pub passes: usize,
 }
@@ -164,6 +166,9 @@ pub(crate) fn smooth(
             if best.0 > now {
                 nodes[v as usize] = best.1;
                 moved += 1;
+                if freedom[v as usize] != Freedom::Free {
+                    stats.boundary_moves += 1;
+                }
             }
         }
         stats.moves += moved;
