@@ -304,6 +304,36 @@ fn two_boxes_sharing_a_face_become_two_regions() {
     }
 }
 
+/// Smoothing moves Steiner points on the boundary and the interface too, within
+/// their face: at the quality size every boundary node of two boxes sharing a
+/// face keeps a coordinate exactly on a face of its box (x in {0, 1, 2}, y or z
+/// in {0, 1}), and every node of the interface (in both regions) keeps x = 1
+/// exactly (the gates against TetGen are in `tests/tetgen_golden.rs`).
+#[test]
+fn smoothing_moves_boundary_points_within_their_faces_exactly() {
+    let s = repair(&read_obj("meshes/layered_two_boxes.obj"), &RepairOptions::default()).unwrap().surface;
+    let out = conforming_mesh(&s, &ConformingOptions::new(0.1)).unwrap();
+    check_conforming(&out.mesh, &s);
+    assert!(out.stats.smoothing.boundary_moves > 0, "{:?}", out.stats.smoothing);
+    let m = &out.mesh;
+    for &v in &m.node_sets["boundary"] {
+        let p = m.nodes[v as usize];
+        let on = [0.0, 2.0].contains(&p[0]) || [0.0, 1.0].contains(&p[1]) || [0.0, 1.0].contains(&p[2]);
+        assert!(on, "boundary node {v} at {p:?} is on no face of the boxes");
+    }
+    let mut regions = vec![0u8; m.nodes.len()];
+    for (c, &reg) in m.cells.iter().zip(&m.cell_regions) {
+        for &v in c {
+            regions[v as usize] |= 1 << reg;
+        }
+    }
+    let interface: Vec<usize> = (0..m.nodes.len()).filter(|&v| regions[v] == 3).collect();
+    assert!(interface.len() > 100, "{} interface nodes", interface.len());
+    for v in interface {
+        assert_eq!(m.nodes[v][0], 1.0, "interface node {v} at {:?}", m.nodes[v]);
+    }
+}
+
 #[test]
 fn the_layered_bunny_keeps_its_three_nested_regions_exactly() {
     let s = read_obj("meshes/layered_bunny.obj");

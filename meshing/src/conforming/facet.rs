@@ -54,6 +54,16 @@ impl Facet {
         f
     }
 
+    /// The facet's corners.
+    pub fn corners(&self) -> [u32; 3] {
+        self.corners
+    }
+
+    /// The points on the facet (corners, and Steiner points on its edges and inside).
+    pub fn points(&self) -> impl Iterator<Item = u32> + '_ {
+        self.local.keys().copied()
+    }
+
     fn add_local(&mut self, v: u32, points: &[Point]) {
         let d = sub(points[v as usize], self.origin);
         self.local.insert(v, [dot(d, self.e1), dot(d, self.e2)]);

@@ -66,11 +66,13 @@
 //!    rounding with a face on the boundary (on coplanar input triangles, where
 //!    the symbolic perturbation of stage 1 makes zero-volume tets legal) are
 //!    removed: the boundary becomes their other faces, the same piece of plane.
-//! 5. **Smoothing** (`smooth.rs`): free Steiner vertices (inside a region, on
-//!    no input edge or triangle) of slivers move to the candidate position that
-//!    most raises the smallest dihedral angle of their star, never inverting a
-//!    tet (exact `orient3d`) nor exceeding the volume bound; input and boundary
-//!    vertices never move, so the boundary stays exact.
+//! 5. **Smoothing** (`smooth.rs`): Steiner vertices of bad tets (smallest
+//!    dihedral angle, or 180 deg minus the largest, under the sliver bound)
+//!    move to the candidate position that most raises that quality over their
+//!    star, never inverting a tet (exact `orient3d`) nor exceeding the volume
+//!    bound: interior ones anywhere, those on an input triangle within its
+//!    plane, those on an input edge along it; input vertices never move, so the
+//!    boundary stays exact.
 //!
 //! Everything is deterministic (candidate points come from generators seeded by
 //! the tet's or vertex's indices) and single-threaded.
@@ -82,9 +84,12 @@
 //! subfacet refinements on an input triangle with a 150 deg angle of the bunny
 //! left its 2D triangulation inconsistent (a point located in the wrong
 //! triangle), and boundary recovery then failed on a duplicate point. Those
-//! tets stay; on the shared models they are few enough that the gates
-//! hold on the bunny and the layered bunny, not all of them on two boxes
-//! (`tests/tetgen_golden.rs` lists which). No 2-3/3-2 flips are done: the
+//! tets stay; on the shared models they are few enough, once smoothing has
+//! moved boundary Steiner points too, that the gates hold on the
+//! bunny, the layered bunny and two boxes; not on CAD models with needle
+//! triangles (`tests/tetgen_golden.rs` lists which hold): there input edges
+//! near other input features are split into runs of tiny subsegments, which
+//! conforming Delaunay needs and constrained Delaunay does not. No 2-3/3-2 flips are done: the
 //! refinement keeps the tetrahedralization Delaunay, which boundary recovery
 //! relies on.
 //!
@@ -343,9 +348,10 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
     if options.sliver_deg > 0.0 {
         // `compact` numbers the used vertices in increasing order.
         let used: std::collections::BTreeSet<u32> = cell_tets.iter().flatten().copied().collect();
-        let fixed: Vec<bool> = used.iter().map(|&v| !rec.is_free(v)).collect();
+        let all = rec.freedom();
+        let freedom: Vec<recover::Freedom> = used.iter().map(|&v| all[v as usize]).collect();
         let max_volume = options.size_mm.map_or(f64::INFINITY, |h| h.powi(3) / (6.0 * 2f64.sqrt()));
-        smoothing = smooth::smooth(&mut nodes, &cells, &fixed, options.sliver_deg, max_volume, SMOOTHING_PASSES);
+        smoothing = smooth::smooth(&mut nodes, &cells, &freedom, options.sliver_deg, max_volume, SMOOTHING_PASSES);
     }
     let region_names = if nreg > 1 {
         regions_surface.region_names.clone()

@@ -315,11 +315,40 @@ impl Recovery {
         false
     }
 
-    /// Whether vertex `v` is a Steiner point inside a region (on no input edge
-    /// or triangle): one that smoothing may move.
-    pub fn is_free(&self, v: u32) -> bool {
-        let first = self.dt.points().len() - self.kinds.len();
-        (v as usize).checked_sub(first).is_some_and(|k| self.kinds[k] == "interior")
+    /// How smoothing may move each vertex (`Freedom`): an interior Steiner
+    /// point anywhere, a Steiner point inside an input triangle within that
+    /// triangle's plane, one on an input edge along that edge; input vertices
+    /// not at all. The directions come from the input's exact coordinates, so a
+    /// plane or edge parallel to a coordinate axis keeps the moved vertex's
+    /// coordinates across it exact.
+    pub fn freedom(&self) -> Vec<Freedom> {
+        let n = self.dt.points().len();
+        let first = n - self.kinds.len();
+        let mut out = vec![Freedom::Fixed; n];
+        for (k, kind) in self.kinds.iter().enumerate() {
+            if *kind == "interior" {
+                out[first + k] = Freedom::Free;
+            }
+        }
+        let pts = self.dt.points();
+        for &(a, b, s) in &self.subsegs {
+            let [p, q] = self.segment_ends[s as usize].map(|v| pts[v as usize]);
+            for v in [a, b] {
+                if (v as usize) >= first && self.kinds[v as usize - first] == "edge" {
+                    out[v as usize] = Freedom::Line(unit(sub(q, p)));
+                }
+            }
+        }
+        for f in &self.facets {
+            let [a, b, c] = f.corners().map(|v| pts[v as usize]);
+            let normal = cross(sub(b, a), sub(c, a));
+            for v in f.points() {
+                if (v as usize) >= first && self.kinds[v as usize - first] == "triangle" {
+                    out[v as usize] = Freedom::Plane(tangents(normal));
+                }
+            }
+        }
+        out
     }
 
     /// Inserts a point that removes no subfacet (checked by the caller).
@@ -458,4 +487,33 @@ pub(crate) fn compact(points: &[Point], tets: &[[u32; 4]]) -> (Vec<Point>, Vec<[
     let nodes = used.iter().map(|&v| points[v as usize]).collect();
     let cells = tets.iter().map(|t| t.map(|v| map[&v])).collect();
     (nodes, cells)
+}
+
+/// How smoothing may move a vertex (see [`Recovery::freedom`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Freedom {
+    /// Not at all (an input vertex).
+    Fixed,
+    /// Anywhere (an interior Steiner point).
+    Free,
+    /// Within the plane spanned by these two orthonormal directions.
+    Plane([Point; 2]),
+    /// Along this unit direction.
+    Line(Point),
+}
+
+fn unit(d: Point) -> Point {
+    let l = dot(d, d).sqrt();
+    d.map(|x| x / l)
+}
+
+/// Two orthonormal directions across `normal`: for a normal along a coordinate
+/// axis they are exactly the other two axes (zero components stay exact zeros).
+fn tangents(normal: Point) -> [Point; 2] {
+    let k = (0..3).min_by(|&i, &j| normal[i].abs().total_cmp(&normal[j].abs())).unwrap_or(0);
+    let mut e = [0.0; 3];
+    e[k] = 1.0;
+    let t1 = unit(cross(normal, e));
+    let t2 = unit(cross(unit(normal), t1));
+    [t1, t2]
 }

@@ -1,20 +1,33 @@
-//! Sliver removal by smoothing free vertices (stage 4), after refinement.
+//! Sliver removal by smoothing (stage 5), after refinement.
 //!
-//! A *free* vertex is a Steiner point inside a region: on no input edge or
-//! triangle (those stay where they are, so the boundary and the interfaces keep
-//! reproducing the input exactly). Passes visit, in vertex order, the free
-//! vertices of tets whose smallest dihedral angle is under the bound; each tries
-//! candidate positions — the centroid of its star's other vertices, points
-//! part-way towards it, and points drawn in a small ball about the vertex (a
-//! generator seeded by the vertex: deterministic) — and moves to the one that
-//! most raises the smallest dihedral angle of its star, provided every tet of
-//! the star stays positively oriented (exact `orient3d`) and under the volume
-//! bound of refinement. A move never lowers
-//! the star's smallest angle, so the mesh's smallest angle never drops; the
-//! connectivity is unchanged (the mesh is no longer Delaunay afterwards, which
-//! nothing downstream needs).
+//! Steiner points move; input vertices do not. How far a Steiner point may
+//! move depends on where it lies (`Recovery::freedom`): one inside a region
+//! anywhere, one inside an input triangle within that triangle's plane, one on
+//! an input edge along that edge. The boundary and the interfaces therefore
+//! keep reproducing the input: a point that stays in its triangle's plane and
+//! keeps every tet positive stays inside the polygon of its boundary
+//! neighbours, which lies in the triangle (and likewise between its neighbours
+//! on an edge); the directions come from the input's exact coordinates, so a
+//! face of a box keeps its points' coordinate across it exactly. When only
+//! interior points moved (and only the smallest angle counted), the worst tets
+//! of two boxes sharing a face, at the boxes' edges with three corners on the
+//! boundary, stayed at 6.39 and 169.24 deg; now that mesh's angles are
+//! 10.01..163.08 deg.
+//!
+//! Passes visit, in vertex order, the movable vertices of tets whose quality
+//! ([`angle_quality`]: the smallest dihedral angle, or 180 deg minus the
+//! largest when that is smaller) is under the bound; each tries candidate
+//! positions — the centroid of its star's other vertices, points part-way
+//! towards it, and points drawn in a small ball about the vertex (a generator
+//! seeded by the vertex: deterministic), all projected on what the vertex may
+//! move along — and moves to the one that most raises the smallest quality of
+//! its star, provided every tet of the star stays positively oriented (exact
+//! `orient3d`) and under the volume bound of refinement. A move never lowers
+//! the star's smallest quality; the connectivity is unchanged (the mesh is no
+//! longer Delaunay afterwards, which nothing downstream needs).
 
 use super::order::SplitMix;
+use super::recover::Freedom;
 use crate::predicates::{orient3d, Point};
 use crate::quality::tet_quality;
 
@@ -23,6 +36,8 @@ use crate::quality::tet_quality;
 pub struct SmoothStats {
     /// Vertex moves made.
     pub moves: usize,
+    /// Those of them of Steiner points on an input edge or triangle.
+    pub boundary_moves: usize,
     /// Passes run.
     pub passes: usize,
 }
@@ -30,7 +45,7 @@ pub struct SmoothStats {
 /// Candidate positions tried per vertex.
 const TRIES: usize = 12;
 
-/// The smallest dihedral angle of `star` with `v` at `at`; `None` when a tet of
+/// The smallest [`angle_quality`] of `star` with `v` at `at`; `None` when a tet of
 /// it would not be positively oriented or would be larger than `max_volume`.
 fn star_min(nodes: &[Point], cells: &[[u32; 4]], star: &[u32], v: u32, at: Point, max_volume: f64) -> Option<f64> {
     let mut worst = f64::INFINITY;
@@ -43,18 +58,44 @@ fn star_min(nodes: &[Point], cells: &[[u32; 4]], star: &[u32], v: u32, at: Point
         if t.volume_mm3 > max_volume {
             return None;
         }
-        worst = worst.min(t.min_dihedral_deg);
+        worst = worst.min(angle_quality(t.min_dihedral_deg, t.max_dihedral_deg));
     }
     Some(worst)
 }
 
-/// Smooths the free vertices (`fixed[v]` false) of slivers (smallest dihedral
-/// angle under `bound_deg`) in `passes` passes (module docs), keeping every tet
+/// The quality smoothing raises: the smallest dihedral angle, or the supplement
+/// of the largest when that is smaller (a tet with an angle near 180 deg is as
+/// bad as one with an angle near 0) [deg].
+pub(crate) fn angle_quality(min_deg: f64, max_deg: f64) -> f64 {
+    min_deg.min(180.0 - max_deg)
+}
+
+/// `at` moved within what `freedom` allows from `here`: the displacement
+/// projected on its plane or line (`None` when the vertex is fixed).
+fn constrain(freedom: Freedom, here: Point, at: Point) -> Option<Point> {
+    let d = [0, 1, 2].map(|k| at[k] - here[k]);
+    let along = |t: Point| d[0] * t[0] + d[1] * t[1] + d[2] * t[2];
+    match freedom {
+        Freedom::Fixed => None,
+        Freedom::Free => Some(at),
+        Freedom::Line(t) => {
+            let s = along(t);
+            Some([0, 1, 2].map(|k| here[k] + s * t[k]))
+        }
+        Freedom::Plane([t1, t2]) => {
+            let (s1, s2) = (along(t1), along(t2));
+            Some([0, 1, 2].map(|k| here[k] + s1 * t1[k] + s2 * t2[k]))
+        }
+    }
+}
+
+/// Smooths the movable vertices (`freedom`) of bad tets ([`angle_quality`]
+/// under `bound_deg`) in `passes` passes (module docs), keeping every tet
 /// under `max_volume` [mm^3].
 pub(crate) fn smooth(
     nodes: &mut [Point],
     cells: &[[u32; 4]],
-    fixed: &[bool],
+    freedom: &[Freedom],
     bound_deg: f64,
     max_volume: f64,
     passes: usize,
@@ -70,10 +111,13 @@ pub(crate) fn smooth(
         stats.passes += 1;
         let mut todo: Vec<u32> = cells
             .iter()
-            .filter(|cell| tet_quality(&cell.map(|v| nodes[v as usize])).min_dihedral_deg < bound_deg)
+            .filter(|cell| {
+                let t = tet_quality(&cell.map(|v| nodes[v as usize]));
+                angle_quality(t.min_dihedral_deg, t.max_dihedral_deg) < bound_deg
+            })
             .flatten()
             .copied()
-            .filter(|&v| !fixed[v as usize])
+            .filter(|&v| freedom[v as usize] != Freedom::Fixed)
             .collect();
         todo.sort_unstable();
         todo.dedup();
@@ -112,6 +156,7 @@ pub(crate) fn smooth(
                         [0, 1, 2].map(|i| best.1[i] + r * u[i])
                     }
                 };
+                let Some(at) = constrain(freedom[v as usize], here, at) else { continue };
                 if let Some(q) = star_min(nodes, cells, star, v, at, max_volume) {
                     if q > best.0 {
                         best = (q, at);
@@ -121,6 +166,9 @@ pub(crate) fn smooth(
             if best.0 > now {
                 nodes[v as usize] = best.1;
                 moved += 1;
+                if freedom[v as usize] != Freedom::Free {
+                    stats.boundary_moves += 1;
+                }
             }
         }
         stats.moves += moved;

@@ -48,3 +48,67 @@ pub fn read_obj(rel: &str) -> Surface {
     }
     s
 }
+
+/// A surface in the OFF format (`OFF`, counts, vertices, polygons as fans; one
+/// region), as CGAL's data files give them. `what` names the file in messages.
+#[allow(dead_code)]
+pub fn parse_off(text: &str, what: &str) -> Surface {
+    let mut tok = text.lines().map(|l| l.split('#').next().unwrap_or("")).flat_map(str::split_whitespace);
+    assert_eq!(tok.next(), Some("OFF"), "{what}: not an OFF file");
+    let mut int = |field: &str| -> usize {
+        let t = tok.next().unwrap_or_else(|| panic!("{what}: ends before {field}"));
+        t.parse().unwrap_or_else(|e| panic!("{what}: {field} `{t}`: {e}"))
+    };
+    let (nv, nf) = (int("vertex count"), int("face count"));
+    int("edge count");
+    let mut s = Surface { region_names: vec!["default".into()], ..Surface::default() };
+    let mut num = |field: &str| -> f64 {
+        let t = tok.next().unwrap_or_else(|| panic!("{what}: ends before {field}"));
+        t.parse().unwrap_or_else(|e| panic!("{what}: {field} `{t}`: {e}"))
+    };
+    for _ in 0..nv {
+        s.vertices.push([num("x"), num("y"), num("z")]);
+    }
+    for f in 0..nf {
+        let n = num("face size") as usize;
+        let c: Vec<u32> = (0..n).map(|_| num("face index") as u32).collect();
+        assert!(c.iter().all(|&v| (v as usize) < nv), "{what}: face {f} has an index out of range");
+        for k in 1..n - 1 {
+            s.triangles.push([c[0], c[k], c[k + 1]]);
+            s.triangle_regions.push(0);
+        }
+    }
+    s
+}
+
+/// A surface in ASCII STL (`vertex x y z` lines, three per facet; identical
+/// coordinates become one vertex; one region). `what` names the file in messages.
+#[allow(dead_code)]
+pub fn parse_ascii_stl(text: &str, what: &str) -> Surface {
+    let mut s = Surface { region_names: vec!["default".into()], ..Surface::default() };
+    let mut index: std::collections::HashMap<[u64; 3], u32> = std::collections::HashMap::new();
+    let mut corners = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let mut tok = line.split_whitespace();
+        if tok.next() != Some("vertex") {
+            continue;
+        }
+        let p: Vec<f64> =
+            tok.map(|t| t.parse().unwrap_or_else(|e| panic!("{what}:{}: coordinate `{t}`: {e}", i + 1))).collect();
+        assert_eq!(p.len(), 3, "{what}:{}: a vertex needs three coordinates", i + 1);
+        let p = [p[0], p[1], p[2]];
+        let next = s.vertices.len() as u32;
+        let v = *index.entry(p.map(f64::to_bits)).or_insert(next);
+        if v == next {
+            s.vertices.push(p);
+        }
+        corners.push(v);
+        if corners.len() == 3 {
+            s.triangles.push([corners[0], corners[1], corners[2]]);
+            s.triangle_regions.push(0);
+            corners.clear();
+        }
+    }
+    assert!(corners.is_empty() && !s.triangles.is_empty(), "{what}: not a whole number of facets");
+    s
+}
