@@ -46,6 +46,7 @@
 //! The API is in-process: a generator of synthetic campaigns (the blind check)
 //! builds [`wagashi_io::Bundle`]s in memory and calls [`diagnose`].
 
+pub mod blind;
 pub mod cells;
 pub mod heldout;
 pub mod model;
