@@ -9,7 +9,9 @@
 //! `nu` = 0.3; glued floor, frictionless plate), 2 s before contact, then
 //! [`DESIGN`]: push durations 2.5 to 10 s, holds 5 to 30 s, strain 10 to 20 %,
 //! heights 10 and 15 mm (speed, hold, strain level and aspect ratio all vary,
-//! diagnosis-details.md §5.7), 20 s of recovery. The diagnoser is told the model
+//! diagnosis-details.md §5.7), a withdrawal to half the depth over half the push
+//! duration (the release phase, where a dual viscosity shows), then the release
+//! and 20 s of recovery. The diagnoser is told the model
 //! (`three-element`, `nu`), the nominal geometry and protocol, the trials' age
 //! (`age_h`, the run order shuffled per campaign), the marker noise, and nothing else.
 //!
@@ -21,6 +23,16 @@
 //! | geometry | nominal W, H, T | each x (1 + 0.005 N(0,1)), clipped to +-1.5 % (0.1 mm on 20 mm: a calliper on a soft gel); markers at the same relative places of the true block |
 //! | force | white noise estimated by the difference method | AR(1) noise, sigma 3 mN, lag-1 correlation drawn per trial in [0.3, 0.7], sampled at 10 Hz, quantised to 1 mN |
 //! | markers | `marker_sigma_mm` (set to the generator's 0.03 mm, as static frames would give) | five markers (three on the free side, two on the top), Gaussian noise 0.03 mm, quantised to 0.01 mm |
+//!
+//! The sample scatter (variability and geometry errors) is a [`Scatter`]:
+//! [`Scatter::ISSUE`] as above, or [`Scatter::IDEAL`] (none), with the same
+//! random stream otherwise. **Measured on the development seeds:** with the
+//! issue's scatter the baseline's noise-free misfit is already of order 1e5
+//! noise units on a null campaign (a 5 % modulus scale moves every force sample
+//! by about 15 noise units), because the diagnoser's calibration has no
+//! per-sample scales yet (diagnosis-details.md §5.0; mod.rs "Not done here"); no
+//! lambda of 12 to 100 is then detectable and every null campaign shows a gap.
+//! The ideal setting checks everything else.
 //!
 //! **Withheld effects.** In-library: every effect the engine implements
 //! ([`EffectId::implemented`], taken from the registry, so new effects join the
@@ -123,7 +135,7 @@ const FORCE_DT_S: f64 = 0.1;
 pub const MARKER_SIGMA_MM: f64 = 0.03;
 const MARKER_QUANTUM_MM: f64 = 0.01;
 /// Evaluations of lambda_eff allowed per strength calibration.
-pub const MAX_STRENGTH_EVALS: usize = 7;
+pub const MAX_STRENGTH_EVALS: usize = 12;
 /// Accepted relative distance of the realised lambda_eff from its target.
 const STRENGTH_TOLERANCE: f64 = 0.2;
 
@@ -281,6 +293,26 @@ pub struct Generated {
 /// Why a blind run stopped.
 pub type BlindError = DiagnosisError;
 
+/// What the generator puts between the samples and the nominal specimen.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Scatter {
+    /// Range of the campaign's sample-to-sample log-sd (drawn uniformly in it).
+    pub variability: [f64; 2],
+    /// Relative standard deviation of each true dimension from the nominal one
+    /// (clipped at three of them).
+    pub geometry_sd: f64,
+}
+
+impl Scatter {
+    /// Issue 6's generator: variability 3 to 10 %, geometry errors 0.5 %.
+    pub const ISSUE: Scatter = Scatter { variability: [0.03, 0.10], geometry_sd: 0.005 };
+    /// Ideal samples: every sample the nominal material and geometry (the other
+    /// differences from the diagnoser stay). The diagnoser has no per-sample
+    /// scales in its calibration yet (mod.rs, "Not done here"), so this is the
+    /// setting in which the rest of it can be checked.
+    pub const IDEAL: Scatter = Scatter { variability: [0.0, 0.0], geometry_sd: 0.0 };
+}
+
 /// Everything drawn for one campaign before any simulation.
 struct Draws {
     variability: f64,
@@ -296,9 +328,11 @@ struct Draws {
     direction: Vec<f64>,
 }
 
+/// (end of the push, the release time, the end) [s]; the tool withdraws to half
+/// the depth over half the push duration before it lets go at the release time.
 fn protocol_times(d: &TrialDesign) -> (f64, f64, f64) {
     let push_end = PRE_CONTACT_S + d.push_s;
-    let release = push_end + d.hold_s;
+    let release = push_end + d.hold_s + 0.5 * d.push_s;
     (push_end, release, release + RECOVERY_S)
 }
 
@@ -306,7 +340,8 @@ fn protocol_times(d: &TrialDesign) -> (f64, f64, f64) {
 fn marker_times(d: &TrialDesign) -> Vec<f64> {
     let (push_end, release, end) = protocol_times(d);
     let mut t = vec![0.0];
-    t.extend((1..=8).map(|i| push_end + (release - push_end) * i as f64 / 8.0));
+    let hold_end = push_end + d.hold_s;
+    t.extend((1..=8).map(|i| push_end + (hold_end - push_end) * i as f64 / 8.0));
     t.extend((1..=10).map(|i| release + (end - release) * i as f64 / 10.0));
     t
 }
@@ -314,15 +349,18 @@ fn marker_times(d: &TrialDesign) -> Vec<f64> {
 /// Relative marker places (x / W, y / H).
 const MARKERS: [[f64; 2]; 5] = [[1.0, 0.25], [1.0, 0.5], [1.0, 0.75], [0.25, 1.0], [0.5, 1.0]];
 
-fn draws(case: &Case, seed: u64) -> Draws {
+fn draws(case: &Case, seed: u64, scatter: &Scatter) -> Draws {
+    // The same stream in every scatter setting: only the scales change.
     let mut rng = SplitMix64::new(seed);
-    let variability = 0.03 + 0.07 * rng.next_f64();
+    let [lo, hi] = scatter.variability;
+    let variability = lo + (hi - lo) * rng.next_f64();
+    let g = scatter.geometry_sd;
     let scales = DESIGN
         .iter()
         .map(|_| [(variability * rng.next_gaussian()).exp(), (variability * rng.next_gaussian()).exp()])
         .collect();
     let geometry =
-        DESIGN.iter().map(|_| [0; 3].map(|_: i32| (0.005 * rng.next_gaussian()).clamp(-0.015, 0.015))).collect();
+        DESIGN.iter().map(|_| [0; 3].map(|_: i32| (g * rng.next_gaussian()).clamp(-3.0 * g, 3.0 * g))).collect();
     let rho: Vec<f64> = DESIGN.iter().map(|_| 0.3 + 0.4 * rng.next_f64()).collect();
     let force_noise = DESIGN
         .iter()
@@ -388,6 +426,7 @@ fn draws(case: &Case, seed: u64) -> Draws {
 fn experiment_toml(name: &str, d: &TrialDesign, size: [f64; 3], material: &str, effects: &str) -> String {
     let (push_end, release, end) = protocol_times(d);
     let depth = d.strain * d.height_mm;
+    let (hold_end, half) = (push_end + d.hold_s, 0.5 * d.strain * d.height_mm);
     let [w, h, t] = size;
     format!(
         r#"format = "wagashi-experiment/1"
@@ -406,7 +445,7 @@ material = "gel"
 tool = "plate"
 tool_contact = "frictionless"
 support = "glued"
-waypoints = [[0.0, 0.0], [{PRE_CONTACT_S}, 0.0], [{push_end}, {depth}], [{release}, {depth}]]
+waypoints = [[0.0, 0.0], [{PRE_CONTACT_S}, 0.0], [{push_end}, {depth}], [{hold_end}, {depth}], [{release}, {half}]]
 release_s = {release}
 end_s = {end}
 
@@ -664,9 +703,11 @@ pub fn calibrate_strength(
         if l < target && a >= a_max {
             return Ok((a, l, evals, false));
         }
-        let below = points.iter().filter(|p| p.1 < target && p.1 > 0.0).max_by(|x, y| x.0.total_cmp(&y.0));
+        let below = points.iter().filter(|p| p.1 < target).max_by(|x, y| x.0.total_cmp(&y.0));
         let above = points.iter().filter(|p| p.1 > target).min_by(|x, y| x.0.total_cmp(&y.0));
         let next = match (below, above) {
+            // Bracketed by a point below the effect's threshold: bisection in ln a.
+            (Some(&(a0, l0)), Some(&(a1, _))) if l0 <= 0.0 => (a0 * a1).sqrt(),
             (Some(&(a0, l0)), Some(&(a1, l1))) => {
                 // Bracketed: the power law through the bracket, kept inside it.
                 let p = (l1 / l0).ln() / (a1 / a0).ln();
@@ -703,10 +744,15 @@ pub fn calibrate_strength(
 }
 
 /// Generates campaign `case` from `seed` (module docs).
-pub fn generate(case: &Case, seed: u64, options: &DiagnosisOptions) -> Result<Generated, DiagnosisError> {
+pub fn generate(
+    case: &Case,
+    seed: u64,
+    scatter: &Scatter,
+    options: &DiagnosisOptions,
+) -> Result<Generated, DiagnosisError> {
     let size = options.size_mm.ok_or_else(|| DiagnosisError::Input("the blind check needs an element size".into()))?;
     let truth_size = 0.5 * size;
-    let draws = draws(case, seed);
+    let draws = draws(case, seed, scatter);
     let null_runs = truth_runs(&draws, &Strength::None, truth_size)?;
     let noisy_null = measured(&draws, &null_runs, true)?;
     let sigmas: Vec<f64> = noisy_null
@@ -754,12 +800,18 @@ pub fn generate(case: &Case, seed: u64, options: &DiagnosisOptions) -> Result<Ge
 
 /// The true gap closure of `effect` on the noise-free campaign `case`/`seed`
 /// (module docs): the refit of the effect from its true coordinates.
-fn true_closure(case: &Case, seed: u64, gen: &Generated, options: &DiagnosisOptions) -> Result<f64, DiagnosisError> {
+fn true_closure(
+    case: &Case,
+    seed: u64,
+    scatter: &Scatter,
+    gen: &Generated,
+    options: &DiagnosisOptions,
+) -> Result<f64, DiagnosisError> {
     let Truth::InLibrary(effect) = case.truth else {
         return Ok(f64::NAN);
     };
     let size = options.size_mm.unwrap_or(5.0);
-    let draws = draws(case, seed);
+    let draws = draws(case, seed, scatter);
     let strength = Strength::of(case, &draws.direction, gen.amplitude);
     let runs = truth_runs(&draws, &strength, 0.5 * size)?;
     let bundles = measured(&draws, &runs, false)?;
@@ -824,10 +876,11 @@ pub fn run_case(
     index: usize,
     case: &Case,
     seed: u64,
+    scatter: &Scatter,
     options: &DiagnosisOptions,
 ) -> Result<(Outcome, Diagnosis), DiagnosisError> {
     let t0 = Instant::now();
-    let generated = generate(case, seed, options)?;
+    let generated = generate(case, seed, scatter, options)?;
     let t1 = Instant::now();
     let diagnosis = diagnose(&generated.bundles, &[], &BTreeMap::new(), options, &|_, _, _| {})?;
     let t2 = Instant::now();
@@ -845,7 +898,7 @@ pub fn run_case(
         .filter(|h| h.reportable)
         .map(|h| h.closure);
     let closure_true = if top1 && closure_hat.is_some() {
-        Some(true_closure(case, seed, &generated, options)?).filter(|g| g.is_finite())
+        Some(true_closure(case, seed, scatter, &generated, options)?).filter(|g| g.is_finite())
     } else {
         None
     };
@@ -1025,31 +1078,50 @@ pub fn summarise(outcomes: &[Outcome]) -> BlindSummary {
     }
 }
 
+/// A campaign that could not be generated or diagnosed (it is not scored, and
+/// is reported).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Failure {
+    /// Its index in the run.
+    pub index: usize,
+    /// Its seed.
+    pub seed: u64,
+    /// What it withheld.
+    pub case: Case,
+    /// Why, in words (the error and its sources).
+    pub error: String,
+}
+
 /// Runs `cases` (campaign `i` with seed [`campaign_seed`]`(seed, i)`), one after
 /// the other (each diagnosis is parallel inside); `progress(done, total, what)`
-/// after each.
+/// after each. A campaign whose truth does not run or whose diagnosis fails is
+/// listed among the failures and the run goes on.
 pub fn run_blind(
     cases: &[Case],
     seed: u64,
+    scatter: &Scatter,
     options: &DiagnosisOptions,
     progress: &(dyn Fn(usize, usize, &str) + Sync),
-) -> Result<Vec<Outcome>, DiagnosisError> {
+) -> (Vec<Outcome>, Vec<Failure>) {
     let mut out = Vec::with_capacity(cases.len());
+    let mut failures = Vec::new();
     progress(0, cases.len(), "");
     for (i, case) in cases.iter().enumerate() {
         let s = campaign_seed(seed, i);
-        let (o, _) = run_case(i, case, s, options).map_err(|e| {
-            DiagnosisError::Input(format!(
-                "blind campaign {i} (seed {s}, withheld {} at lambda {}): {}",
-                case.truth.name(),
-                case.lambda,
-                super::error_chain(&e)
-            ))
-        })?;
-        progress(i + 1, cases.len(), &format!("{} at {} -> {}", case.truth.name(), case.lambda, o.label));
-        out.push(o);
+        let what = match run_case(i, case, s, scatter, options) {
+            Ok((o, _)) => {
+                let w = format!("{} at {} -> {}", case.truth.name(), case.lambda, o.label);
+                out.push(o);
+                w
+            }
+            Err(e) => {
+                failures.push(Failure { index: i, seed: s, case: *case, error: super::error_chain(&e) });
+                format!("{} at {} -> failed", case.truth.name(), case.lambda)
+            }
+        };
+        progress(i + 1, cases.len(), &what);
     }
-    Ok(out)
+    (out, failures)
 }
 
 /// The diagnosis settings of the blind check: the library's defaults with 5 mm
@@ -1075,7 +1147,10 @@ mod tests {
         // lambda = 7 a^2: from a = 1, two or three steps.
         let (a, l, evals, reached) = calibrate_strength(30.0, f64::INFINITY, |a| Ok(7.0 * a * a)).unwrap();
         assert!(reached && (l / 30.0 - 1.0).abs() < 0.2 && evals <= 3, "{a} {l} {evals}");
-        // A threshold: nothing below a = 2, then linear.
+        // A threshold: nothing below a = 2, then steep (a jump from 0 to 4500 over one step of 10).
+        let (a, l, _, reached) =
+            calibrate_strength(12.0, f64::INFINITY, |a| Ok((500.0 * (a - 2.0)).max(0.0))).unwrap();
+        assert!(reached && (l / 12.0 - 1.0).abs() < 0.2, "{a} {l}");
         let (a, l, _, reached) =
             calibrate_strength(100.0, f64::INFINITY, |a| Ok((50.0 * (a - 2.0)).max(0.0))).unwrap();
         assert!(reached && (l / 100.0 - 1.0).abs() < 0.2, "{a} {l}");
@@ -1100,7 +1175,7 @@ mod tests {
     #[test]
     fn ar1_noise_has_its_variance_and_correlation() {
         let case = Case { truth: Truth::Null, lambda: 0.0 };
-        let d = draws(&case, 3);
+        let d = draws(&case, 3, &Scatter::ISSUE);
         let e: Vec<f64> = d.force_noise.iter().flatten().copied().collect();
         // The pooled lag-1 correlation estimates the length-weighted mean of the trials' rho.
         let rho_mean = d.rho.iter().zip(&d.force_noise).map(|(r, n)| r * n.len() as f64).sum::<f64>()
