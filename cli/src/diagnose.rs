@@ -595,11 +595,7 @@ pub fn blind_json(
             })
         })
         .collect();
-    let top1: Map<String, Value> = s
-        .top1
-        .iter()
-        .map(|((e, l), r)| (format!("{e} @ {l}"), rate_json(r)))
-        .collect();
+    let top1: Map<String, Value> = s.top1.iter().map(|((e, l), r)| (format!("{e} @ {l}"), rate_json(r))).collect();
     let by_lambda: Map<String, Value> = s.top1_by_lambda.iter().map(|(l, r)| (l.to_string(), rate_json(r))).collect();
     let confusion: Map<String, Value> = s
         .confusion
@@ -646,7 +642,11 @@ fn print_blind(
     output: &std::path::Path,
 ) -> anyhow::Result<()> {
     let mut out = std::io::stdout().lock();
-    writeln!(out, "{:<4} {:<22} {:>7} {:>9} {:<34} {:>7} {:>7} {:>8}", "#", "withheld", "lambda", "lam_eff", "verdict", "G_hat", "G_true", "seconds")?;
+    writeln!(
+        out,
+        "{:<4} {:<22} {:>7} {:>9} {:<34} {:>7} {:>7} {:>8}",
+        "#", "withheld", "lambda", "lam_eff", "verdict", "G_hat", "G_true", "seconds"
+    )?;
     for o in outcomes {
         let f = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{v:.2}"));
         writeln!(
@@ -695,7 +695,13 @@ fn print_blind(
             t.threshold,
             if t.value.is_finite() { format!("{:.3}", t.value) } else { "-".into() },
             t.cases,
-            if t.cases == 0 { "no case" } else if t.holds { "holds" } else { "MISSES" }
+            if t.cases == 0 {
+                "no case"
+            } else if t.holds {
+                "holds"
+            } else {
+                "MISSES"
+            }
         )?;
     }
     writeln!(out, "wrote {}", output.join("blind.json").display())?;

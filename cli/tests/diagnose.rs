@@ -196,7 +196,8 @@ fn bad_input_is_refused_in_one_line() {
 fn blind_self_check_writes_blind_json() {
     let tmp = tempfile::tempdir().unwrap();
     let cwd = tmp.path();
-    let o = wagashi_in(cwd, ["diagnose", "--blind", "1", "--seed", "7", "--effects", "force-offset,gravity", "-o", "b"]);
+    let o =
+        wagashi_in(cwd, ["diagnose", "--blind", "1", "--seed", "7", "--effects", "force-offset,gravity", "-o", "b"]);
     assert_success(&o);
     let b: serde_json::Value = serde_json::from_slice(&std::fs::read(cwd.join("b/blind.json")).unwrap()).unwrap();
     let campaigns = b["campaigns"].as_array().unwrap();
