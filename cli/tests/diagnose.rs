@@ -186,3 +186,48 @@ fn bad_input_is_refused_in_one_line() {
     assert!(line.contains("missing"), "{line}");
     assert!(!cwd.join("out").exists());
 }
+
+/// `--blind`: one synthetic campaign (seed 7, two candidates to keep it short)
+/// is generated, diagnosed and scored; blind.json has the campaign's record,
+/// the scores, the targets and the confusion matrix, and stdout the table.
+/// Conflicting or missing arguments are refused by clap (status 2) with
+/// nothing written.
+#[test]
+fn blind_self_check_writes_blind_json() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cwd = tmp.path();
+    let o =
+        wagashi_in(cwd, ["diagnose", "--blind", "1", "--seed", "7", "--effects", "force-offset,gravity", "-o", "b"]);
+    assert_success(&o);
+    let b: serde_json::Value = serde_json::from_slice(&std::fs::read(cwd.join("b/blind.json")).unwrap()).unwrap();
+    let campaigns = b["campaigns"].as_array().unwrap();
+    assert_eq!(campaigns.len(), 1);
+    let c = &campaigns[0];
+    for key in ["truth", "kind", "lambda_target", "verdict", "column", "top1", "variability", "force_rho", "seconds"] {
+        assert!(!c[key].is_null(), "campaign lacks {key}: {c:#}");
+    }
+    let v = c["variability"].as_f64().unwrap();
+    assert!((0.03..=0.10).contains(&v), "variability {v}");
+    for r in c["force_rho"].as_array().unwrap() {
+        assert!((0.3..=0.7).contains(&r.as_f64().unwrap()));
+    }
+    if c["kind"] != "null" {
+        let (target, eff) = (c["lambda_target"].as_f64().unwrap(), c["lambda_eff"].as_f64().unwrap());
+        assert!(c["strength_reached"] == false || (eff / target - 1.0).abs() < 0.2, "{c:#}");
+    }
+    let s = &b["summary"];
+    assert_eq!(s["targets"].as_array().unwrap().len(), 5);
+    let row = &s["confusion"][c["truth"].as_str().unwrap()];
+    assert_eq!(row[c["column"].as_str().unwrap()], 1, "{s:#}");
+    let text = stdout(&o);
+    assert!(text.contains("confusion matrix") && text.contains("targets (issue 6)"), "{text}");
+
+    let o = wagashi_in(cwd, ["diagnose", "--blind", "2", "--calibrate", "x", "-o", "c"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--calibrate"), "{}", stderr(&o));
+    let o = wagashi_in(cwd, ["diagnose", "--blind", "0", "-o", "c"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let o = wagashi_in(cwd, ["diagnose", "-o", "c"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(!cwd.join("c").exists());
+}

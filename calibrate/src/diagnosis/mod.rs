@@ -39,13 +39,16 @@
 //!
 //! **Not done here** (reported, not hidden): per-sample random scales in the
 //! calibration itself (they enter only as held-out anchoring), replicate ANOVA,
-//! the simulator-free checks, the parameter-inconsistency map, a greedy second
-//! effect, and the blind self-check; the held-out refits are one Gauss-Newton
-//! step of case deletion rather than full refits ([`heldout`]).
+//! the simulator-free checks, the parameter-inconsistency map and a greedy
+//! second effect; the held-out refits are one Gauss-Newton step of case deletion
+//! rather than full refits ([`heldout`]); the numerical-error budget refines the
+//! time steps, not the mesh.
 //!
-//! The API is in-process: a generator of synthetic campaigns (the blind check)
-//! builds [`wagashi_io::Bundle`]s in memory and calls [`diagnose`].
+//! The API is in-process: the blind self-check ([`blind`]) generates synthetic
+//! campaigns as [`wagashi_io::Bundle`]s in memory, calls [`diagnose`] and scores
+//! the verdicts.
 
+pub mod blind;
 pub mod cells;
 pub mod heldout;
 pub mod model;

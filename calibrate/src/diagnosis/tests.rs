@@ -145,3 +145,85 @@ fn results_do_not_depend_on_the_number_of_threads() {
     assert_eq!(one, three);
     assert!(one.candidate(EffectId::ForceOffset).unwrap().heldout.is_some());
 }
+
+/// The blind generator is a function of the seed: the measured bundles (force
+/// and marker samples, bit for bit) and the realised strength are the same on
+/// one thread and on three.
+#[test]
+fn the_blind_generator_does_not_depend_on_the_number_of_threads() {
+    use super::blind::{default_options, generate, Case, Scatter, Truth};
+    let case = Case { truth: Truth::InLibrary(EffectId::ForceOffset), lambda: 30.0 };
+    let opts = default_options(1);
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| generate(&case, 77, &Scatter::ISSUE, &opts).unwrap())
+    };
+    let (one, three) = (run(1), run(3));
+    assert_eq!(one.lambda_eff.to_bits(), three.lambda_eff.to_bits());
+    assert_eq!(one.strength, three.strength);
+    for (a, b) in one.bundles.iter().zip(&three.bundles) {
+        assert_eq!(a.force, b.force);
+        assert_eq!(a.markers, b.markers);
+    }
+    assert!(one.reached && (one.lambda_eff / 30.0 - 1.0).abs() < 0.2, "{one:?}");
+}
+
+/// The frozen blind CI set (seed 20261121, never used while tuning; the
+/// development seeds are 101 and 102, see blind.rs): eight campaigns with ideal
+/// samples ([`super::blind::Scatter::IDEAL`]; with the issue's scatter nothing
+/// can be attributed until the calibration has per-sample scales). Checks that
+/// every campaign is generated at its strength (lambda_eff within 20 % of its
+/// target), that the scores add up, and the targets of issue 6 that hold on this
+/// set ([`HOLDING`]); the others are printed with their values and reported as
+/// misses (not asserted, not loosened).
+#[test]
+fn frozen_blind_ci_set() {
+    use super::blind::{default_options, run_blind, summarise, Case, OutOfLibrary, Scatter, Truth};
+    const HOLDING: &[&str] = &[];
+    let inlib = |e, lambda| Case { truth: Truth::InLibrary(e), lambda };
+    let cases = [
+        Case { truth: Truth::Null, lambda: 0.0 },
+        inlib(EffectId::ForceOffset, 100.0),
+        inlib(EffectId::MachineCompliance, 100.0),
+        inlib(EffectId::StressThinning, 30.0),
+        Case { truth: Truth::Null, lambda: 0.0 },
+        inlib(EffectId::BinghamDashpot, 30.0),
+        inlib(EffectId::Ageing, 100.0),
+        Case { truth: Truth::OutOfLibrary(OutOfLibrary::BroadSpectrum), lambda: 100.0 },
+    ];
+    let (outcomes, failures) =
+        run_blind(&cases, 20_261_121, &Scatter::IDEAL, &default_options(20_261_121), &|_, _, _| {});
+    assert!(failures.is_empty(), "{failures:#?}");
+    assert_eq!(outcomes.len(), cases.len());
+    for o in &outcomes {
+        let g = &o.generated;
+        if o.case.lambda > 0.0 {
+            assert!(g.reached && (g.lambda_eff / o.case.lambda - 1.0).abs() < 0.2, "{} {:?}", o.index, g.strength);
+        } else {
+            assert_eq!(g.lambda_eff, 0.0);
+        }
+        eprintln!(
+            "{} {} @ {}: lambda_eff {:.1} (null misfit {:.1}) -> {} ({:.1} s + {:.1} s)",
+            o.index,
+            o.case.truth.name(),
+            o.case.lambda,
+            g.lambda_eff,
+            g.lambda_null,
+            o.label,
+            o.generate_s,
+            o.diagnose_s
+        );
+    }
+    let s = summarise(&outcomes);
+    let counted: usize = s.confusion.values().flat_map(|row| row.values()).sum();
+    assert_eq!(counted, cases.len());
+    assert_eq!(s.false_attribution.total, 2);
+    assert_eq!(s.out_of_library_flagged.total, 1);
+    assert_eq!(s.top1_by_lambda.values().map(|r| r.total).sum::<usize>(), 5);
+    for t in &s.targets {
+        eprintln!("{} {} {}: {:.3} over {} -> {}", t.metric, t.relation, t.threshold, t.value, t.cases, t.holds);
+        if HOLDING.contains(&t.metric) {
+            assert!(t.holds, "{t:?}");
+        }
+    }
+}
