@@ -83,7 +83,7 @@ fn main() -> ExitCode {
         Err(err) if is_broken_pipe(&err) => ExitCode::SUCCESS,
         Err(err) => {
             // One line, as ripgrep does: the context chain joined with ": ".
-            eprintln!("error: {}", one_line(&format!("{err:#}")));
+            eprintln!("error: {}", one_line(&chain_line(err.chain())));
             ExitCode::FAILURE
         }
     }
@@ -91,6 +91,24 @@ fn main() -> ExitCode {
 
 fn is_broken_pipe(err: &anyhow::Error) -> bool {
     err.chain().any(|e| e.downcast_ref::<std::io::Error>().is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe))
+}
+
+/// The messages of an error and its sources joined with ": ", each once: the
+/// libraries' errors often print their source in their own message too (a
+/// `{0}` beside `#[from]`), and a message the line already holds adds nothing.
+fn chain_line<'a>(chain: impl Iterator<Item = &'a (dyn std::error::Error + 'static)>) -> String {
+    let mut line = String::new();
+    for e in chain {
+        let message = e.to_string();
+        if line.contains(&message) {
+            continue;
+        }
+        if !line.is_empty() {
+            line.push_str(": ");
+        }
+        line.push_str(&message);
+    }
+    line
 }
 
 /// `text` on one line: lines trimmed and joined with a space (the messages of

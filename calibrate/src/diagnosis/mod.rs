@@ -558,13 +558,17 @@ pub fn diagnose(
     })
 }
 
-/// An error and its sources, joined with `: `.
+/// An error and its sources, joined with `: `, each once (a source the line
+/// already holds, printed by its wrapper's own message, is not repeated).
 fn error_chain(e: &dyn std::error::Error) -> String {
     let mut s = e.to_string();
     let mut source = e.source();
     while let Some(inner) = source {
-        s.push_str(": ");
-        s.push_str(&inner.to_string());
+        let message = inner.to_string();
+        if !s.contains(&message) {
+            s.push_str(": ");
+            s.push_str(&message);
+        }
         source = inner.source();
     }
     s
