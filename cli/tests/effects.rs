@@ -116,11 +116,11 @@ fn fit_holds_effects_or_refuses_them() {
         assert!(line.contains(key) && line.contains("sensitivities"), "{line}");
     }
 
-    write_trial(&cwd.join("stiff"), "\n[effects]\nstrain_stiffening = 1.0\n");
-    let o = wagashi_in(cwd, ["press", "stiff", "-o", "x"]);
+    write_trial(&cwd.join("sticky"), "\n[effects]\nadhesion_strength_MPa = 0.01\n");
+    let o = wagashi_in(cwd, ["press", "sticky", "-o", "x"]);
     let line = assert_one_line_error(&o);
     assert!(
-        line.contains("experiment.toml:25: effects.strain_stiffening:") && line.contains("not implemented"),
+        line.contains("experiment.toml:25: effects.adhesion_strength_MPa:") && line.contains("not implemented"),
         "{line}"
     );
 }
@@ -136,7 +136,9 @@ fn press_runs_material_point_effects() {
     let cwd = tmp.path();
     write_trial(&cwd.join("base"), "");
     write_trial(&cwd.join("slider"), "\n[effects]\nplastic_yield_stress_MPa = 0.003\nplastic_hardening_MPa = 0.02\n");
-    for name in ["base", "slider"] {
+    write_trial(&cwd.join("stiff"), "\n[effects]\nstrain_stiffening = 5.0\n");
+    write_trial(&cwd.join("large"), "\n[effects]\nfinite_strain = 1.0\n");
+    for name in ["base", "slider", "stiff", "large"] {
         assert_success(&wagashi_in(cwd, ["press", name, "-o", &format!("out-{name}"), "--size-mm", "5"]));
     }
     let force_at = |name: &str, t: f64| {
@@ -146,6 +148,12 @@ fn press_runs_material_point_effects() {
     // Elastic gel, uniaxial-like push to 10 %: 0.005 MPa on 200 mm^2 at 10 s.
     let (base, slider) = (force_at("base", 10.0), force_at("slider", 10.0));
     assert!(slider < 0.9 * base, "{slider} vs {base}");
+    // Strain stiffening a = 5 at 10 %: about 1 + a e / 2 = 1.25 times the force.
+    let stiff = force_at("stiff", 10.0);
+    assert!(stiff > 1.15 * base && stiff < 1.35 * base, "{stiff} vs {base}");
+    // Finite strain (Saint Venant-Kirchhoff) softens: about (1 + eps)(1 + eps/2) = 0.855 at 10 %.
+    let large = force_at("large", 10.0);
+    assert!(large > 0.75 * base && large < 0.95 * base, "{large} vs {base}");
     assert!(force_at("slider", 5.0) > 0.0);
 
     write_trial(&cwd.join("bad"), "\n[effects]\nplastic_yield_stress_MPa = -0.003\n");
