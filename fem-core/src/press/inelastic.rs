@@ -26,6 +26,10 @@
 //! solution: [`PressError::NotConverged`], and the stepper retries the step from
 //! its old state with a quarter of the step.
 //!
+//! E6 (`finite-strain`) changes the kinematics, not the law: its steps take
+//! [`solve_finite_step`] (the blended Green-Lagrange strain, the internal force
+//! `w B(u)^T S`, the tangent with its geometric part).
+//!
 //! E4's per-cell direction flag (unloading when `s1 . (e1 - e0) < 0`) is frozen
 //! during the iteration and re-checked at convergence; if a flag flipped the step
 //! is solved again with the new flags, at most [`DIRECTION_PASSES`] times, so that

@@ -44,7 +44,8 @@ pub use tools::{Keyframe, Tool, ToolContact, ToolShape};
 /// plates as contact tools), `gravity` and `machine-compliance` act inside the
 /// steps, the material-point effects (`plastic-slider`, `bingham-dashpot`,
 /// `stress-thinning`, `dual-viscosity`, `strain-stiffening`) in each cell's update with a global
-/// iteration per step, and `force-offset` on the reported bottom force afterwards.
+/// iteration per step, `finite-strain` in the kinematics of that iteration (total
+/// Lagrangian), and `force-offset` on the reported bottom force afterwards.
 pub fn simulate<const D: usize, const N: usize, const S: usize>(
     problem: &PressProblem<D, N, S>,
     settings: &Settings,
