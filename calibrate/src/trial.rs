@@ -30,10 +30,20 @@
 //! carry no residual.
 //!
 //! A bundle's `[effects]` (`fem_core::effects`) are held at their values while the
-//! materials are fitted: `force-offset` and `gravity`, whose forward sensitivities
-//! the engine carries. A trial with an active effect whose sensitivities it does
-//! not carry yet (`ageing`, `machine-compliance`, `plate-friction`) is refused by
-//! [`Campaign::new`], naming the key, rather than fitted with wrong Jacobians.
+//! materials are fitted. With `force-offset` and `gravity` alone the Jacobian
+//! comes from the engine's forward sensitivities. With an active effect whose
+//! sensitivities the engine does not carry (`ageing`, `machine-compliance` and
+//! the material-point effects `plastic-slider`, `bingham-dashpot`,
+//! `stress-thinning`, `dual-viscosity`, `strain-stiffening`, `finite-strain`) the
+//! trial's Jacobian columns are *forward differences on a frozen discretisation*:
+//! the run at the point fixes the step ends, the point is replayed on them
+//! (`Settings::step_ends_s`) and so is each perturbed run, so the adaptive step
+//! choice does not enter the difference (the diagnosis's rule,
+//! diagnosis-details.md §5.1.3). Step: [`FD_STEP`] of a log-scaled unknown's value,
+//! of a linear one's range. `plate-friction` is still refused by
+//! [`Campaign::new`], naming the key: a contact step may not be subdivided on a
+//! replay, so its differences would need adaptive runs, whose step choice moves
+//! the force by about the step tolerance.
 
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -48,6 +58,10 @@ use rayon::prelude::*;
 use wagashi_io::{Bundle, MaterialSpec};
 
 use crate::lsq::{EvalError, Evaluation, LeastSquares, ParameterSpec};
+
+/// The relative step of the forward differences of a trial whose effects have no
+/// forward sensitivities (module docs).
+pub const FD_STEP: f64 = 1e-6;
 
 /// Force samples per trial used in a fit, at most.
 pub const MAX_FORCE_SAMPLES: usize = 1500;
@@ -368,9 +382,16 @@ impl Campaign {
                 }
             };
             let problem = if axisymmetric { filled.to_press_axisymmetric(size)? } else { filled.to_press(size)? };
-            // Effects are held at the bundle's values; refuse those whose
-            // sensitivities the engine does not carry (wrong Jacobians otherwise).
-            if let Err(e) = problem.effects().check_sensitivities() {
+            // Effects are held at the bundle's values; those without forward
+            // sensitivities are differenced on frozen steps, except contact ones
+            // (module docs), which are refused.
+            let contact = problem
+                .effects()
+                .active()
+                .into_iter()
+                .find(|e| !e.has_sensitivities() && e.hook() == fem_core::effects::HookPoint::Contact);
+            if let Some(effect) = contact {
+                let e = fem_core::effects::EffectError::NoSensitivities { effect, key: effect.params()[0].key };
                 let field = format!("effects.{}", e.key());
                 return Err(CampaignError::Invalid(format!(
                     "{}:{}: effects.{e}",
@@ -589,6 +610,8 @@ impl<'c> Objective<'c> {
     ) -> Result<(Vec<f64>, Vec<Vec<f64>>), EvalError> {
         let materials = trial.materials(table)?;
         let problem = trial.with_materials(materials.clone());
+        // Effects without forward sensitivities: forward differences (module docs).
+        let differenced = problem.effects().check_sensitivities().is_err();
         // The free unknowns that act on this trial, as engine parameters.
         let mut acting: Vec<(usize, SensitivityParameter)> = Vec::new();
         if want_jacobian {
@@ -601,7 +624,7 @@ impl<'c> Objective<'c> {
         }
         self.campaign.simulations.fetch_add(1, Ordering::Relaxed);
         let settings = &self.campaign.settings;
-        let (result, sens): (PressResult, Option<Sensitivities>) = if acting.is_empty() {
+        let (result, sens): (PressResult, Option<Sensitivities>) = if acting.is_empty() || differenced {
             let r = simulate_any(&problem, settings, &mut |_| {});
             (r.map_err(|e| EvalError::with_source(format!("trial {}", trial.name), e))?, None)
         } else {
@@ -613,6 +636,38 @@ impl<'c> Objective<'c> {
         let n = self.free.len();
         let mut res = Vec::new();
         let mut jac: Vec<Vec<f64>> = Vec::new();
+        if differenced && want_jacobian && !acting.is_empty() {
+            res = self.trial_residuals_of(trial, &result);
+            let frozen = Settings {
+                step_ends_s: Some(result.steps.iter().map(|s| s.t_s).collect()),
+                fixed_dt_s: None,
+                ..settings.clone()
+            };
+            let run = |table: &BTreeMap<String, MaterialSpec>| -> Result<Vec<f64>, EvalError> {
+                self.campaign.simulations.fetch_add(1, Ordering::Relaxed);
+                let r = simulate_any(&trial.with_materials(trial.materials(table)?), &frozen, &mut |_| {})
+                    .map_err(|e| EvalError::with_source(format!("trial {}", trial.name), e))?;
+                Ok(self.trial_residuals_of(trial, &r))
+            };
+            let base = run(table)?;
+            jac = vec![vec![0.0; n]; res.len()];
+            for &(col, _) in &acting {
+                let u = &self.campaign.unknowns[self.free[col]];
+                let spec = u.spec();
+                let value = table[&u.material].get(u.key).expect("a free unknown has a value");
+                let h = match spec.scale {
+                    crate::lsq::Scale::Log => FD_STEP * value,
+                    crate::lsq::Scale::Linear => FD_STEP * (spec.upper - spec.lower),
+                };
+                let h = if value + h > spec.upper { -h } else { h };
+                let mut perturbed = table.clone();
+                set_parameter(perturbed.get_mut(&u.material).expect("the unknown's material"), u.key, value + h);
+                for (row, (plus, at)) in jac.iter_mut().zip(run(&perturbed)?.iter().zip(&base)) {
+                    row[col] = (plus - at) / h;
+                }
+            }
+            return Ok((res, jac));
+        }
         for &(channel, _) in &self.channels {
             let Some(sigma) = self.sigma(trial, channel) else { continue };
             match channel {
@@ -651,6 +706,28 @@ impl<'c> Objective<'c> {
             }
         }
         Ok((res, jac))
+    }
+}
+
+impl Objective<'_> {
+    /// The residuals of one trial for a run (those of [`Self::trial_residuals`]).
+    fn trial_residuals_of(&self, trial: &Trial, result: &PressResult) -> Vec<f64> {
+        let mut res = Vec::new();
+        for &(channel, _) in &self.channels {
+            let Some(sigma) = self.sigma(trial, channel) else { continue };
+            match channel {
+                Channel::Force => {
+                    res.extend(trial.force.iter().map(|&(t, f)| (result.bottom_force_at(t) - f) / sigma));
+                }
+                c => {
+                    for o in trial.markers.iter().filter(|o| o.channel == c) {
+                        let sim = &result.markers[o.marker].samples[o.sample].1;
+                        res.extend(sim.iter().zip(&o.position).map(|(x_sim, x_meas)| (x_sim - x_meas) / sigma));
+                    }
+                }
+            }
+        }
+        res
     }
 }
 

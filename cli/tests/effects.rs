@@ -79,9 +79,11 @@ fn press_simulates_effects() {
 }
 
 /// A trial simulated with a force offset and gravity is fitted back (E to 1e-4)
-/// with the same effects in place; with ageing, compliance or plate friction
-/// `wagashi fit` refuses in one line naming the key; an effect key the engine
-/// does not implement is refused by `press` with the file, line and key.
+/// with the same effects in place; with ageing or compliance added to the
+/// bundle `wagashi fit` fits with forward differences (ageing by `exp(0.01 * 2)`
+/// absorbs into E: E = 0.05 exp(-0.02) to 1e-4; a compliance needs a stiffer E);
+/// with plate friction it refuses in one line naming the key; an effect key the
+/// engine does not implement is refused by `press` with the file, line and key.
 #[test]
 fn fit_holds_effects_or_refuses_them() {
     let tmp = tempfile::tempdir().unwrap();
@@ -104,6 +106,7 @@ fn fit_holds_effects_or_refuses_them() {
         ("machine_compliance_mm_per_N = 0.01", "machine_compliance_mm_per_N"),
         ("plate_friction = 0.3", "plate_friction"),
     ] {
+        let fitted = key != "plate_friction";
         let measured = cwd.join("measured/experiment.toml");
         let text = std::fs::read_to_string(&measured).unwrap();
         let dir = cwd.join(format!("with-{key}"));
@@ -111,16 +114,45 @@ fn fit_holds_effects_or_refuses_them() {
         std::fs::copy(cwd.join("measured/force.csv"), dir.join("force.csv")).unwrap();
         std::fs::write(dir.join("experiment.toml"), text.replace("[effects]\n", &format!("[effects]\n{effects}\n")))
             .unwrap();
-        let o = wagashi_in(cwd, ["fit", dir.to_str().unwrap(), "--materials", "start.toml", "-o", "refused"]);
-        let line = assert_one_line_error(&o);
-        assert!(line.contains(key) && line.contains("sensitivities"), "{line}");
+        let out = format!("fit-{key}");
+        let o = wagashi_in(
+            cwd,
+            [
+                "fit",
+                dir.to_str().unwrap(),
+                "--materials",
+                "start.toml",
+                "--size-mm",
+                "2.5",
+                "--procedure",
+                "joint",
+                "-o",
+                &out,
+            ],
+        );
+        if !fitted {
+            let line = assert_one_line_error(&o);
+            assert!(line.contains(key) && line.contains("sensitivities"), "{line}");
+            continue;
+        }
+        assert_success(&o);
+        let fit: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(cwd.join(&out).join("fit.json")).unwrap()).unwrap();
+        let e = fit["sets"]["joint"]["gel"]["E_MPa"]["value"].as_f64().unwrap_or_else(|| panic!("{fit}"));
+        println!("{key}: E = {e}");
+        if key == "ageing_E_rate_per_h" {
+            let expected = 0.05 * (-0.02f64).exp();
+            assert!((e - expected).abs() < 1e-4 * expected, "{key}: E = {e} vs {expected}");
+        } else {
+            assert!(e > 0.05 * (1.0 + 1e-3), "{key}: E = {e}");
+        }
     }
 
-    write_trial(&cwd.join("stiff"), "\n[effects]\nstrain_stiffening = 1.0\n");
-    let o = wagashi_in(cwd, ["press", "stiff", "-o", "x"]);
+    write_trial(&cwd.join("sticky"), "\n[effects]\nadhesion_strength_MPa = 0.01\n");
+    let o = wagashi_in(cwd, ["press", "sticky", "-o", "x"]);
     let line = assert_one_line_error(&o);
     assert!(
-        line.contains("experiment.toml:25: effects.strain_stiffening:") && line.contains("not implemented"),
+        line.contains("experiment.toml:25: effects.adhesion_strength_MPa:") && line.contains("not implemented"),
         "{line}"
     );
 }
@@ -129,14 +161,17 @@ fn fit_holds_effects_or_refuses_them() {
 /// the gel's peak stress of 0.005 MPa) lowers the force at the end of the push
 /// and leaves the released specimen pressed (the force file ends at zero force
 /// either way); an out-of-bounds value is refused naming the file, the line and
-/// the key; `wagashi fit` refuses the slider in one line naming its key.
+/// the key; `wagashi fit` fits E back (to 1e-4) from a trial simulated with strain
+/// stiffening, with the effect in place (forward-difference Jacobians).
 #[test]
 fn press_runs_material_point_effects() {
     let tmp = tempfile::tempdir().unwrap();
     let cwd = tmp.path();
     write_trial(&cwd.join("base"), "");
     write_trial(&cwd.join("slider"), "\n[effects]\nplastic_yield_stress_MPa = 0.003\nplastic_hardening_MPa = 0.02\n");
-    for name in ["base", "slider"] {
+    write_trial(&cwd.join("stiff"), "\n[effects]\nstrain_stiffening = 5.0\n");
+    write_trial(&cwd.join("large"), "\n[effects]\nfinite_strain = 1.0\n");
+    for name in ["base", "slider", "stiff", "large"] {
         assert_success(&wagashi_in(cwd, ["press", name, "-o", &format!("out-{name}"), "--size-mm", "5"]));
     }
     let force_at = |name: &str, t: f64| {
@@ -146,6 +181,12 @@ fn press_runs_material_point_effects() {
     // Elastic gel, uniaxial-like push to 10 %: 0.005 MPa on 200 mm^2 at 10 s.
     let (base, slider) = (force_at("base", 10.0), force_at("slider", 10.0));
     assert!(slider < 0.9 * base, "{slider} vs {base}");
+    // Strain stiffening a = 5 at 10 %: about 1 + a e / 2 = 1.25 times the force.
+    let stiff = force_at("stiff", 10.0);
+    assert!(stiff > 1.15 * base && stiff < 1.35 * base, "{stiff} vs {base}");
+    // Finite strain (Saint Venant-Kirchhoff) softens: about (1 + eps)(1 + eps/2) = 0.855 at 10 %.
+    let large = force_at("large", 10.0);
+    assert!(large > 0.75 * base && large < 0.95 * base, "{large} vs {base}");
     assert!(force_at("slider", 5.0) > 0.0);
 
     write_trial(&cwd.join("bad"), "\n[effects]\nplastic_yield_stress_MPa = -0.003\n");
@@ -156,16 +197,15 @@ fn press_runs_material_point_effects() {
         "{line}"
     );
 
-    assert_success(&wagashi_in(cwd, ["press", "base", "-o", "measured", "--size-mm", "5"]));
-    let text = std::fs::read_to_string(cwd.join("measured/experiment.toml")).unwrap();
-    std::fs::write(
-        cwd.join("measured/experiment.toml"),
-        format!("{text}\n[effects]\nplastic_yield_stress_MPa = 0.003\n"),
-    )
-    .unwrap();
     std::fs::write(cwd.join("start.toml"), "[materials.gel]\nmodel = \"elastic\"\npoisson = 0.3\nE_MPa = 0.02\n")
         .unwrap();
-    let o = wagashi_in(cwd, ["fit", "measured", "--materials", "start.toml", "-o", "refused"]);
-    let line = assert_one_line_error(&o);
-    assert!(line.contains("plastic_yield_stress_MPa") && line.contains("sensitivities"), "{line}");
+    let o = wagashi_in(
+        cwd,
+        ["fit", "out-stiff", "--materials", "start.toml", "--size-mm", "5", "--procedure", "joint", "-o", "fit-stiff"],
+    );
+    assert_success(&o);
+    let fit: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(cwd.join("fit-stiff/fit.json")).unwrap()).unwrap();
+    let e = fit["sets"]["joint"]["gel"]["E_MPa"]["value"].as_f64().unwrap_or_else(|| panic!("{fit}"));
+    assert!((e - 0.05).abs() < 1e-4 * 0.05, "E = {e}");
 }

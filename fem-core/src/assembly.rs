@@ -175,6 +175,38 @@ pub fn assemble_stiffness<const D: usize, const N: usize, const S: usize>(
     values
 }
 
+/// Assembles per-cell node-pair blocks `cell_block(e, a, b)` (node `a` of cell `e`
+/// against node `b`, `D x D`, weight included) into values on `pattern`: the
+/// general form of [`assemble_stiffness`] for tangents that are not `B^T C B`
+/// (the finite-strain tangent with its geometric part). Rows by node, in
+/// parallel, in a fixed order.
+pub fn assemble_blocks<const D: usize, const N: usize>(
+    topology: &Topology,
+    pattern: &CsrPattern,
+    cells: &[[u32; N]],
+    cell_block: &(dyn Fn(usize, usize, usize) -> SMatrix<f64, D, D> + Sync),
+) -> Vec<f64> {
+    assert_eq!(pattern.dim, D);
+    let mut values = vec![0.0; pattern.nnz()];
+    let blocks = pattern.node_row_blocks(&mut values);
+    blocks.into_par_iter().enumerate().for_each(|(i, block)| {
+        let nb = &topology.neighbours[topology.adj_ptr[i]..topology.adj_ptr[i + 1]];
+        let row_len = D * nb.len();
+        for &(e, a) in &topology.node_cells[topology.cell_ptr[i]..topology.cell_ptr[i + 1]] {
+            for (b, &j) in cells[e as usize].iter().enumerate() {
+                let kab = cell_block(e as usize, a as usize, b);
+                let pos = nb.binary_search(&j).expect("pattern holds every cell neighbour");
+                for r in 0..D {
+                    for l in 0..D {
+                        block[r * row_len + pos * D + l] += kab[(r, l)];
+                    }
+                }
+            }
+        }
+    });
+    values
+}
+
 /// Sums per-cell nodal vectors (`cell_forces[e][a]`, node `a` of cell `e`) into a
 /// global vector, node by node in increasing cell order.
 pub fn assemble_vector<const D: usize, const N: usize>(

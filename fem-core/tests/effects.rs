@@ -148,6 +148,8 @@ fn unimplemented_effects_are_refused_by_key() {
             "bingham-dashpot",
             "stress-thinning",
             "dual-viscosity",
+            "strain-stiffening",
+            "finite-strain",
             "plate-friction",
             "machine-compliance",
             "gravity",

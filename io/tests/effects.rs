@@ -72,8 +72,9 @@ fn effect_keys_reach_the_engine() {
 fn bad_effect_keys_are_refused_by_line() {
     let cases = [
         ("force_ofset_N = 0.1", "effects.force_ofset_N", "unknown key"),
-        ("strain_stiffening = 1.0", "effects.strain_stiffening", "not implemented"),
-        ("finite_strain = 0.0", "effects.finite_strain", "not implemented"),
+        ("adhesion_strength_MPa = 0.01", "effects.adhesion_strength_MPa", "not implemented"),
+        ("strain_stiffening = 60.0", "effects.strain_stiffening", "outside [-4, 50]"),
+        ("finite_strain = 1.5", "effects.finite_strain", "outside [0, 1]"),
         ("plastic_yield_stress_MPa = -0.01", "effects.plastic_yield_stress_MPa", "outside [0, inf]"),
         ("plastic_hardening_MPa = -1.0", "effects.plastic_hardening_MPa", "outside [0, inf]"),
         ("bingham_threshold_MPa = -0.001", "effects.bingham_threshold_MPa", "outside [0, inf]"),
@@ -161,6 +162,8 @@ fn material_point_keys_run() {
         ("bingham_threshold_MPa = 0.001", EffectId::BinghamDashpot),
         ("thinning_inverse_stress_1_per_MPa = 500.0\nthinning_exponent = 1.5", EffectId::StressThinning),
         ("dual_viscosity_log_ratio = 1.0", EffectId::DualViscosity),
+        ("strain_stiffening = 5.0", EffectId::StrainStiffening),
+        ("finite_strain = 1.0", EffectId::FiniteStrain),
     ] {
         let (e, f) = last_force(&format!("{chain}\n[effects]\n{lines}\n"));
         assert_eq!(e.material_point().map(|m| m.0), Some(id));

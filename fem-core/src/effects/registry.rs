@@ -444,6 +444,8 @@ impl EffectId {
                 | EffectId::BinghamDashpot
                 | EffectId::StressThinning
                 | EffectId::DualViscosity
+                | EffectId::StrainStiffening
+                | EffectId::FiniteStrain
                 | EffectId::PlateFriction
                 | EffectId::MachineCompliance
                 | EffectId::Gravity

@@ -234,7 +234,7 @@ impl Effects {
         self.force_material_point = on;
     }
 
-    /// The material-point effect (E1 to E4) the engine runs, with its values: the
+    /// The material-point effect (E1 to E5) the engine runs, with its values: the
     /// active one, or with [`Effects::force_material_point_path`] the one that is
     /// set. `None`: the linear path. At most one is allowed ([`Effects::validate`]).
     pub fn material_point(&self) -> Option<(EffectId, Vec<f64>)> {
@@ -269,6 +269,8 @@ impl Effects {
                 InelasticLaw::Thinning { inverse_stress_per_mpa: v[0], exponent: v[1], c3_mpa_s: c3()? }
             }
             EffectId::DualViscosity => InelasticLaw::Dual { log_ratio: v[0], c3_mpa_s: c3()? },
+            EffectId::StrainStiffening => InelasticLaw::Stiffening { a: v[0] },
+            EffectId::FiniteStrain => InelasticLaw::FiniteStrain { blend: v[0] },
             other => {
                 return Err(EffectError::NotImplemented { effect: other, key: other.params()[0].key });
             }

@@ -47,9 +47,11 @@
 //! serve every formulation with one signature.
 
 mod constitutive;
+mod finite;
 mod simplex;
 
 pub use constitutive::{unit_young_matrix, Formulation};
+pub use finite::{displacement_gradient, geometric_block, green_lagrange_block, green_lagrange_strain};
 pub use simplex::{jacobian, outward_facet, signed_measure, ReferenceSimplex, Simplex};
 
 use nalgebra::{SMatrix, SVector};

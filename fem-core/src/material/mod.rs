@@ -10,7 +10,9 @@
 mod point;
 mod rheology;
 
-pub use point::{energy_norm, InelasticLaw, PointFailure, PointUpdate, MAX_DASHPOT_RATIO, TANGENT_HARDENING};
+pub use point::{
+    energy_norm, InelasticLaw, PointFailure, PointUpdate, MAX_DASHPOT_RATIO, MIN_STIFFENING_FACTOR, TANGENT_HARDENING,
+};
 pub use rheology::{phi1, phi1_derivative, ChainElement, MaterialError, RelaxationKernel, Rheology};
 
 /// A material: a rheological chain and a Poisson ratio.

@@ -1,6 +1,7 @@
 //! Inelastic series strains at a material point: the local update of the
 //! material-point effects (`plastic-slider`, `bingham-dashpot`,
-//! `stress-thinning`, `dual-viscosity`; see [`crate::effects`] for the design).
+//! `stress-thinning`, `dual-viscosity`, `strain-stiffening`; see
+//! [`crate::effects`] for the design).
 //!
 //! ## Formulation
 //!
@@ -30,7 +31,12 @@
 //! von Mises' and the flow to an isochoric one; at the seed's `nu` the flow has
 //! the chain's own Poisson ratio (as the baseline's dashpot `c3` has).
 //!
-//! Every update is *radial*: the new stress image is a positive multiple of the
+//! Strain stiffening (E5) is the exception to the stress-driven laws: its
+//! inelastic strain `e_in = -(a |e1|_C / 2) e1` is a function of the total strain
+//! `e1` alone (the chain then acts on `psi(e1) = e1 - e_in`, Fung's quasi-linear
+//! form), so its update needs `e1` and no iteration of its own.
+//!
+//! Every other update is *radial*: the new stress image is a positive multiple of the
 //! trial (relative to the back stress for the slider), which turns each law into
 //! one scalar equation, solved in closed form (slider, Bingham, dual) or by a
 //! safeguarded Newton iteration (Cross).
@@ -55,6 +61,13 @@ pub enum InelasticLaw {
     Thinning { inverse_stress_per_mpa: f64, exponent: f64, c3_mpa_s: f64 },
     /// E4: the dashpot's viscosity is `c3` while loading, `c3 exp(psi)` while unloading.
     Dual { log_ratio: f64, c3_mpa_s: f64 },
+    /// E5: strain stiffening, `E_i(e) = E_i0 (1 + a |e|_C)` as a tangent modulus
+    /// (Fung's quasi-linear form: the chain acts on `psi(e) = (1 + a |e|_C / 2) e`).
+    Stiffening { a: f64 },
+    /// E6: finite strain. No inelastic strain: the law leaves the chain as it is,
+    /// and the kinematics change (the blended Green-Lagrange strain, the internal
+    /// force `w B(u)^T S`; [`crate::element::green_lagrange_strain`]).
+    FiniteStrain { blend: f64 },
 }
 
 /// The result of a local update.
@@ -77,7 +90,15 @@ pub enum PointFailure {
     /// exceed it with the BDF2 factor), so the backward-Euler correction of a
     /// slower dashpot has no positive solution. A shorter step cures it.
     StepTooLong { ratio: f64 },
+    /// Strain softening (`a < 0`) has used up the stiffness: the tangent modulus
+    /// `1 + a |e|_C` of the stiffened strain is not positive at `|e|_C = strain`.
+    NoStiffness { strain: f64 },
 }
+
+/// The least tangent factor `1 + a |e|_C` strain softening accepts: below it a
+/// cell is refused ([`PointFailure::NoStiffness`]), since the stiffened strain
+/// then no longer grows with the strain and equilibrium loses uniqueness.
+pub const MIN_STIFFENING_FACTOR: f64 = 0.05;
 
 /// `|x|_C = sqrt(x . C1 x)`.
 pub fn energy_norm<const S: usize>(c1: &SMatrix<f64, S, S>, x: &SVector<f64, S>) -> f64 {
@@ -101,6 +122,8 @@ impl InelasticLaw {
             InelasticLaw::Bingham { threshold_mpa, .. } => threshold_mpa == 0.0,
             InelasticLaw::Thinning { inverse_stress_per_mpa, .. } => inverse_stress_per_mpa == 0.0,
             InelasticLaw::Dual { log_ratio, .. } => log_ratio == 0.0,
+            InelasticLaw::Stiffening { a } => a == 0.0,
+            InelasticLaw::FiniteStrain { blend } => blend == 0.0,
         }
     }
 
@@ -111,7 +134,10 @@ impl InelasticLaw {
 
     /// The local update of one cell over a step: `c1` the region's unit-Young
     /// matrix, `tau_trial = g (e1 - e_in0) - q`, `inelastic0 = e_in0`, `g` the
-    /// step factor, `dt` the step, `unloading` the cell's direction flag (E4 only).
+    /// step factor, `dt` the step, `unloading` the cell's direction flag (E4 only),
+    /// `strain = e1` the cell's total strain at the step's end (E5 only: its law is
+    /// a function of the strain, not of the stress).
+    #[allow(clippy::too_many_arguments)]
     pub fn update<const S: usize>(
         &self,
         c1: &SMatrix<f64, S, S>,
@@ -120,6 +146,7 @@ impl InelasticLaw {
         g: f64,
         dt: f64,
         unloading: bool,
+        strain: &SVector<f64, S>,
     ) -> Result<PointUpdate<S>, PointFailure> {
         let identity = SMatrix::<f64, S, S>::identity();
         let unchanged = PointUpdate { inelastic: *inelastic0, tau: *tau_trial, tangent: identity };
@@ -221,6 +248,28 @@ impl InelasticLaw {
                 let tau = tau_trial / denom;
                 Ok(PointUpdate { inelastic: inelastic0 + (tau_trial - tau) / g, tau, tangent: identity / denom })
             }
+            InelasticLaw::FiniteStrain { .. } => Ok(unchanged),
+            InelasticLaw::Stiffening { a } => {
+                if a == 0.0 {
+                    return Ok(unchanged);
+                }
+                // The chain's strain is psi(e1) = (1 + a n / 2) e1 with n = |e1|_C, so
+                // e_in1 = e1 - psi(e1) = -(a n / 2) e1 and tau1 = tau_trial - g (e_in1 - e_in0)
+                // = g psi(e1) - q. T = d psi / d e1 = (1 + a n / 2) I + (a / 2n) e1 (C1 e1)^T;
+                // C1 T is symmetric (psi is the gradient of the potential n^2/2 + a n^3/6
+                // in the C1 metric), with eigenvalues 1 + a n / 2 and, along e1, 1 + a n.
+                let n = energy_norm(c1, strain);
+                if 1.0 + a * n < MIN_STIFFENING_FACTOR {
+                    return Err(PointFailure::NoStiffness { strain: n });
+                }
+                let inelastic = strain * (-0.5 * a * n);
+                let tau = tau_trial - (inelastic - inelastic0) * g;
+                let mut tangent = identity * (1.0 + 0.5 * a * n);
+                if n > 0.0 {
+                    tangent += strain * (c1 * strain).transpose() * (0.5 * a / n);
+                }
+                Ok(PointUpdate { inelastic, tau, tangent })
+            }
         }
     }
 }
@@ -265,7 +314,7 @@ mod tests {
         ];
         let (g, dt) = (0.05, 2.0);
         for law in laws {
-            let at = |t: &SVector<f64, 4>| law.update(&c, t, &e0, g, dt, true).unwrap();
+            let at = |t: &SVector<f64, 4>| law.update(&c, t, &e0, g, dt, true, &e0).unwrap();
             let u = at(&trial);
             for j in 0..4 {
                 let h = 1e-6 * trial.norm();
@@ -300,17 +349,18 @@ mod tests {
         let trial = uniaxial(-0.02);
         let (g, dt, c3) = (0.05, 2.0, 3.0);
         let k = g * dt / c3;
-        let s = InelasticLaw::Slider { yield_mpa: 0.005, hardening_mpa: 0.01 }.update(&c, &trial, &e0, g, dt, false);
+        let s =
+            InelasticLaw::Slider { yield_mpa: 0.005, hardening_mpa: 0.01 }.update(&c, &trial, &e0, g, dt, false, &e0);
         let s = s.unwrap();
         assert!((energy_norm(&c, &(s.tau - s.inelastic * 0.01)) - 0.005).abs() < 1e-15);
-        let b = InelasticLaw::Bingham { threshold_mpa: 0.004, c3_mpa_s: c3 }.update(&c, &trial, &e0, g, dt, false);
+        let b = InelasticLaw::Bingham { threshold_mpa: 0.004, c3_mpa_s: c3 }.update(&c, &trial, &e0, g, dt, false, &e0);
         let b = b.unwrap();
         // Net dashpot flow over the step: the chain's tau1/c3 dt plus the correction.
         let net = b.tau * (dt / c3) + b.inelastic;
         let expected = b.tau * ((1.0 - 0.004 / energy_norm(&c, &b.tau)) * dt / c3);
         assert!((net - expected).norm() < 1e-15, "{net} vs {expected}");
         let small = uniaxial(-0.001);
-        let b = InelasticLaw::Bingham { threshold_mpa: 0.004, c3_mpa_s: c3 }.update(&c, &small, &e0, g, dt, false);
+        let b = InelasticLaw::Bingham { threshold_mpa: 0.004, c3_mpa_s: c3 }.update(&c, &small, &e0, g, dt, false, &e0);
         let b = b.unwrap();
         assert!((b.tau * (dt / c3) + b.inelastic).norm() < 1e-18);
         assert!((b.tau - small / (1.0 - k)).norm() < 1e-18);
@@ -319,14 +369,61 @@ mod tests {
             InelasticLaw::Bingham { threshold_mpa: 0.0, c3_mpa_s: c3 },
             InelasticLaw::Thinning { inverse_stress_per_mpa: 0.0, exponent: 1.0, c3_mpa_s: c3 },
             InelasticLaw::Dual { log_ratio: 0.0, c3_mpa_s: c3 },
+            InelasticLaw::Stiffening { a: 0.0 },
         ];
         for law in nulls {
             assert!(law.is_null());
-            let u = law.update(&c, &trial, &e0, g, dt, true).unwrap();
+            let u = law.update(&c, &trial, &e0, g, dt, true, &e0).unwrap();
             assert_eq!(u.tau, trial, "{law:?}");
             assert_eq!(u.inelastic, e0, "{law:?}");
         }
-        let long = InelasticLaw::Bingham { threshold_mpa: 0.004, c3_mpa_s: c3 }.update(&c, &trial, &e0, g, 60.0, false);
+        let long =
+            InelasticLaw::Bingham { threshold_mpa: 0.004, c3_mpa_s: c3 }.update(&c, &trial, &e0, g, 60.0, false, &e0);
         assert!(matches!(long, Err(PointFailure::StepTooLong { .. })));
+    }
+
+    /// Strain stiffening: in uniaxial stress `sigma = E0 (e + a e |e| / 2)` (tangent
+    /// `E0 (1 + a |e|)`) with no lateral stress; the update gives `tau1 = g psi(e1) - q`
+    /// from any start; its tangent matches central differences of `psi` (relative
+    /// step 1e-6, agreement 1e-8) and `C1 T` is symmetric; softening past the
+    /// least tangent factor is refused.
+    #[test]
+    fn stiffening_update_matches_its_closed_form() {
+        let c = c1();
+        let (g, dt, a) = (0.7, 1.0, 6.0);
+        let e0 = SVector::<f64, 4>::from([0.003, -0.002, 0.001, 0.0005]);
+        let law = InelasticLaw::Stiffening { a };
+        // tau_trial = g (e1 - e_in0) - q with q = 0.
+        let at = |e1: &SVector<f64, 4>| law.update(&c, &((e1 - e0) * g), &e0, g, dt, false, e1).unwrap();
+        for sigma in [-0.12, 0.05] {
+            let e1 = uniaxial(sigma);
+            let u = at(&e1);
+            let s = c * u.tau / g;
+            let expected = sigma + a * sigma * sigma.abs() / 2.0;
+            assert!((s[1] - expected).abs() < 1e-15, "{} vs {expected}", s[1]);
+            for k in [0, 2, 3] {
+                assert!(s[k].abs() < 1e-15, "lateral stress {}", s[k]);
+            }
+        }
+        let e1 = uniaxial(-0.1) + SVector::<f64, 4>::from([0.01, -0.004, 0.02, 0.03]);
+        let u = at(&e1);
+        for j in 0..4 {
+            let h = 1e-6 * e1.norm();
+            let (mut up, mut down) = (e1, e1);
+            up[j] += h;
+            down[j] -= h;
+            let fd = (at(&up).tau - at(&down).tau) / (2.0 * h * g);
+            for i in 0..4 {
+                assert!((u.tangent[(i, j)] - fd[i]).abs() < 1e-8, "({i}, {j}): {} vs {}", u.tangent[(i, j)], fd[i]);
+            }
+        }
+        let ct = c * u.tangent;
+        assert!((ct - ct.transpose()).norm() < 1e-14 * ct.norm());
+        let soft = InelasticLaw::Stiffening { a: -4.0 };
+        let e1 = uniaxial(-0.3);
+        assert!(matches!(
+            soft.update(&c, &(e1 * g), &SVector::zeros(), g, dt, false, &e1),
+            Err(PointFailure::NoStiffness { .. })
+        ));
     }
 }

@@ -1,5 +1,5 @@
 //! The global iteration of a quasi-static step on the material-point path
-//! (effects E1 to E4, [`crate::effects`]; the local laws in
+//! (effects E1 to E5, [`crate::effects`]; the local laws in
 //! [`crate::material::InelasticLaw`]).
 //!
 //! With an inelastic strain `e_in` in series, the step's stress image per cell is
@@ -26,6 +26,10 @@
 //! solution: [`PressError::NotConverged`], and the stepper retries the step from
 //! its old state with a quarter of the step.
 //!
+//! E6 (`finite-strain`) changes the kinematics, not the law: its steps take
+//! [`solve_finite_step`] (the blended Green-Lagrange strain, the internal force
+//! `w B(u)^T S`, the tangent with its geometric part).
+//!
 //! E4's per-cell direction flag (unloading when `s1 . (e1 - e0) < 0`) is frozen
 //! during the iteration and re-checked at convergence; if a flag flipped the step
 //! is solved again with the new flags, at most [`DIRECTION_PASSES`] times, so that
@@ -35,8 +39,10 @@ use nalgebra::{SMatrix, SVector};
 
 use super::model::Model;
 use super::PressError;
-use crate::assembly::{assemble_stiffness, assemble_vector};
-use crate::element::{cell_strain, nodal_force, ReferenceSimplex, Simplex};
+use crate::assembly::{assemble_blocks, assemble_stiffness, assemble_vector};
+use crate::element::{
+    cell_strain, displacement_gradient, geometric_block, green_lagrange_block, nodal_force, ReferenceSimplex, Simplex,
+};
 use crate::material::{energy_norm, PointFailure, PointUpdate};
 use crate::parallel::map_collect;
 use crate::solve::ReducedSystem;
@@ -103,6 +109,9 @@ pub(crate) fn solve_step<const D: usize, const N: usize, const S: usize>(
 where
     Simplex<D, N>: ReferenceSimplex<D, N>,
 {
+    if let Some(blend) = model.finite {
+        return solve_finite_step(model, input, system, solve, u1, blend);
+    }
     let laws = model.point.as_ref().expect("the material-point path has laws");
     let mesh = &model.problem.mesh;
     let ncell = mesh.num_cells();
@@ -134,7 +143,7 @@ where
                 let trial = (e1 - input.inelastic0[e]) * input.g[r] - input.q[e];
                 let unload = directional && flags[e];
                 laws[r]
-                    .update(&model.region_c1[r], &trial, &input.inelastic0[e], input.g[r], input.dt, unload)
+                    .update(&model.region_c1[r], &trial, &input.inelastic0[e], input.g[r], input.dt, unload, &e1)
                     .map(|p| (e1, p))
             });
             updates.into_iter().enumerate().map(|(e, x)| x.map_err(|f| (e, f))).collect()
@@ -143,6 +152,11 @@ where
             PointFailure::StepTooLong { ratio } => not_converged(format!(
                 "element {e}: the dashpot correction needs g dt / c3 < {} (it is {ratio:.3}); a shorter step",
                 crate::material::MAX_DASHPOT_RATIO
+            )),
+            PointFailure::NoStiffness { strain } => not_converged(format!(
+                "element {e}: strain softening leaves no stiffness at the strain |e|_C = {strain:.4} \
+                 (1 + a |e|_C below {})",
+                crate::material::MIN_STIFFENING_FACTOR
             )),
         };
 
@@ -261,4 +275,126 @@ where
         });
     }
     unreachable!("the last pass returns")
+}
+
+/// Solves a step on the finite-strain path (effect E6, [`crate::effects`]): the
+/// chain acts on the blended Green-Lagrange strain `E_b(u)` of each cell, the
+/// stress `S1 = C1 (g E_b(u1) - q)` is the 2nd Piola-Kirchhoff stress, and the
+/// residual is `sum_e w B(u1)^T S1 - f_body` on the free rows
+/// ([`crate::element::green_lagrange_block`]). Predictor: the linear step
+/// (`solve(base)`); then modified Newton with the step's linear factorization,
+/// switching to full Newton with the tangent `sum_e w [B^T g C1 B + K_G(S)]`
+/// (material and geometric parts, symmetric) when an iteration reduces the
+/// residual by less than [`SLOW_CONTRACTION`], refactored when it contracts by
+/// less than [`TANGENT_REUSE`]. Same tolerance, limits and errors as
+/// [`solve_step`]. No inelastic strain (the returned ones are zero).
+fn solve_finite_step<const D: usize, const N: usize, const S: usize>(
+    model: &Model<'_, D, N, S>,
+    input: &PointInput<'_, S>,
+    system: &ReducedSystem,
+    solve: &mut super::stepper::FreeSolve<'_>,
+    u1: &mut Vec<f64>,
+    blend: f64,
+) -> Result<PointStep<S>, PressError>
+where
+    Simplex<D, N>: ReferenceSimplex<D, N>,
+{
+    let mesh = &model.problem.mesh;
+    let ncell = mesh.num_cells();
+    let ndof = model.num_dofs();
+    let not_converged = |detail: String| PressError::NotConverged { step: input.step, time_s: input.t1, detail };
+    let scale = input.scale;
+    let mut factorizations = 0usize;
+    // Predictor: the small-strain step.
+    solve(input.base, u1)?;
+    let mut previous = f64::INFINITY;
+    let mut tangent_mode = false;
+    let mut tangent: Option<crate::solve::Factor<'_>> = None;
+    for iteration in 0..MAX_ITERATIONS {
+        for &d in &system.dof_of_free {
+            if !u1[d as usize].is_finite() {
+                return Err(not_converged(format!("non-finite displacement at dof {d}")));
+            }
+        }
+        // Per cell: the gradient, its hoop strain and the stress S1.
+        let cells: Vec<(nalgebra::SMatrix<f64, D, D>, f64, SVector<f64, S>)> = map_collect(ncell, |e| {
+            let r = mesh.cell_regions[e] as usize;
+            let ue = model.cell_displacements(e, u1);
+            let (h, hoop) = displacement_gradient::<D, N, S>(&model.geometry[e].gradients, &ue);
+            let strain = model.strain_of(e, &ue);
+            let s = model.region_c1[r] * ((strain - input.inelastic0[e]) * input.g[r] - input.q[e]);
+            (h, hoop, s)
+        });
+        let forces: Vec<[SVector<f64, D>; N]> = map_collect(ncell, |e| {
+            let g = &model.geometry[e];
+            let (h, hoop, s) = &cells[e];
+            std::array::from_fn(|a| {
+                green_lagrange_block::<D, N, S>(&g.gradients, h, *hoop, blend, a).transpose() * s * g.weight
+            })
+        });
+        let mut residual = vec![0.0; ndof];
+        assemble_vector::<D, N>(&model.topology, &forces, &mut residual);
+        let mut norm2 = 0.0;
+        for (d, r) in residual.iter_mut().enumerate() {
+            *r -= model.body_force[d];
+        }
+        for &d in &system.dof_of_free {
+            norm2 += residual[d as usize].powi(2);
+        }
+        let norm = norm2.sqrt();
+        if norm <= TOLERANCE * scale {
+            return Ok(PointStep {
+                inelastic: input.inelastic0.to_vec(),
+                unloading: Vec::new(),
+                residual: if scale > 0.0 { norm / scale } else { 0.0 },
+                factorizations,
+            });
+        }
+        if iteration + 1 == MAX_ITERATIONS {
+            break;
+        }
+        if !tangent_mode && iteration >= 1 && norm > SLOW_CONTRACTION * previous {
+            tangent_mode = true;
+        }
+        let contraction = norm / previous;
+        previous = norm;
+        let mut du = vec![0.0; ndof];
+        if tangent_mode && (tangent.is_none() || contraction > TANGENT_REUSE) {
+            let block = |e: usize, a: usize, b: usize| {
+                let r = mesh.cell_regions[e] as usize;
+                let g = &model.geometry[e];
+                let (h, hoop, s) = &cells[e];
+                let ba = green_lagrange_block::<D, N, S>(&g.gradients, h, *hoop, blend, a);
+                let bb = green_lagrange_block::<D, N, S>(&g.gradients, h, *hoop, blend, b);
+                let material = ba.transpose() * (model.region_c1[r] * input.g[r]) * bb;
+                (material + geometric_block::<D, N, S>(&g.gradients, s, blend, a, b)) * g.weight
+            };
+            let values = assemble_blocks::<D, N>(&model.topology, &model.pattern, &mesh.cells, &block);
+            tangent = system.factor(&[(1.0, values.as_slice())], None).ok();
+            factorizations += usize::from(tangent.is_some());
+            if tangent.is_none() {
+                // Not positive definite: go on with the linear matrix.
+                tangent_mode = false;
+            }
+        }
+        match tangent.as_ref().filter(|_| tangent_mode) {
+            Some(factor) => {
+                let mut x: Vec<f64> = system.dof_of_free.iter().map(|&d| -residual[d as usize]).collect();
+                factor.solve_in_place(&mut x);
+                for (i, &d) in system.dof_of_free.iter().enumerate() {
+                    du[d as usize] = x[i];
+                }
+            }
+            None => {
+                let b: Vec<f64> = residual.iter().map(|r| -r).collect();
+                solve(&b, &mut du)?;
+            }
+        }
+        for &d in &system.dof_of_free {
+            u1[d as usize] += du[d as usize];
+        }
+    }
+    Err(not_converged(format!(
+        "finite strain: the residual is above {TOLERANCE:.0e} of the force scale after {MAX_ITERATIONS} iterations"
+    )))
 }

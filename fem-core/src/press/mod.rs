@@ -43,8 +43,9 @@ pub use tools::{Keyframe, Tool, ToolContact, ToolShape};
 /// `plate-friction` change the problem before the run (aged materials; friction
 /// plates as contact tools), `gravity` and `machine-compliance` act inside the
 /// steps, the material-point effects (`plastic-slider`, `bingham-dashpot`,
-/// `stress-thinning`, `dual-viscosity`) in each cell's update with a global
-/// iteration per step, and `force-offset` on the reported bottom force afterwards.
+/// `stress-thinning`, `dual-viscosity`, `strain-stiffening`) in each cell's update with a global
+/// iteration per step, `finite-strain` in the kinematics of that iteration (total
+/// Lagrangian), and `force-offset` on the reported bottom force afterwards.
 pub fn simulate<const D: usize, const N: usize, const S: usize>(
     problem: &PressProblem<D, N, S>,
     settings: &Settings,

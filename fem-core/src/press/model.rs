@@ -14,8 +14,8 @@ use rayon::prelude::*;
 use super::{Attachment, PressError, PressProblem};
 use crate::assembly::{assemble_stiffness, CsrPattern, Topology};
 use crate::element::{
-    cell_geometry, cell_geometry_in, strain_block, unit_young_matrix, CellGeometry, Formulation, ReferenceSimplex,
-    Simplex,
+    cell_geometry, cell_geometry_in, cell_strain, displacement_gradient, green_lagrange_block, green_lagrange_strain,
+    strain_block, unit_young_matrix, CellGeometry, Formulation, ReferenceSimplex, Simplex,
 };
 use crate::material::{InelasticLaw, RelaxationKernel};
 use crate::mesh::MeshError;
@@ -47,6 +47,10 @@ pub(crate) struct Constraints {
 pub(crate) struct Functional<const S: usize> {
     pub cell: usize,
     pub rho: SVector<f64, S>,
+    /// The cell's nodes in the set (local indices) and the functional's sign, for
+    /// the deformed functional of the finite-strain path.
+    pub locals: Vec<usize>,
+    pub sign: f64,
 }
 
 /// A marker located in its cell.
@@ -85,6 +89,9 @@ pub(crate) struct Model<'p, const D: usize, const N: usize, const S: usize> {
     /// The inelastic law per region when a material-point effect runs
     /// ([`crate::effects`]); `None`: the linear path.
     pub point: Option<Vec<InelasticLaw>>,
+    /// The `finite-strain` blend when that effect runs (the finite-strain
+    /// kinematics of `super::inelastic`); `None`: small strain.
+    pub finite: Option<f64>,
 }
 
 impl<'p, const D: usize, const N: usize, const S: usize> Model<'p, D, N, S>
@@ -216,15 +223,22 @@ where
                 pattern.row_ptr[r] + row.iter().position(|&c| c as usize == r).expect("the diagonal is in the pattern")
             })
             .collect();
-        // The material-point effect's law per region (E1 to E4), if one runs.
+        // The material-point effect's law per region (E1 to E5), if one runs.
         let laws = problem
             .materials
             .iter()
             .map(|m| problem.effects.inelastic_law(&m.rheology))
             .collect::<Result<Vec<_>, _>>()?;
         let point = laws.into_iter().collect::<Option<Vec<InelasticLaw>>>();
+        let finite = point.as_ref().and_then(|laws| {
+            laws.iter().find_map(|l| match *l {
+                InelasticLaw::FiniteStrain { blend } => Some(blend),
+                _ => None,
+            })
+        });
         Ok(Self {
             point,
+            finite,
             diagonal_positions,
             node_order,
             problem,
@@ -275,6 +289,37 @@ where
     #[inline]
     pub fn cell_displacements(&self, e: usize, u: &[f64]) -> [SVector<f64, D>; N] {
         self.problem.mesh.cells[e].map(|v| SVector::<f64, D>::from_fn(|k, _| u[v as usize * D + k]))
+    }
+
+    /// The strain of cell `e` for its nodal displacements `u`: the small strain,
+    /// or on the finite-strain path the blended Green-Lagrange strain.
+    #[inline]
+    pub fn strain_of(&self, e: usize, u: &[SVector<f64, D>; N]) -> SVector<f64, S> {
+        match self.finite {
+            Some(blend) => green_lagrange_strain::<D, N, S>(&self.geometry[e].gradients, u, blend),
+            None => cell_strain::<D, N, S>(&self.geometry[e].gradients, u),
+        }
+    }
+
+    /// A reaction functional at the displacement `u`: `rho` itself on the small-strain
+    /// path (and at the blend 0); on the finite-strain path the y rows of the
+    /// deformed `w B_a(u)^T` summed over the set's nodes of the cell, so that the
+    /// reaction is `rho(u) . S` with the 2nd Piola-Kirchhoff stress `S`.
+    pub fn functional_at(&self, f: &Functional<S>, u: &[f64]) -> SVector<f64, S> {
+        match self.finite {
+            Some(blend) if blend != 0.0 => {
+                let g = &self.geometry[f.cell];
+                let ue = self.cell_displacements(f.cell, u);
+                let (h, hoop) = displacement_gradient::<D, N, S>(&g.gradients, &ue);
+                let mut rho = SVector::<f64, S>::zeros();
+                for &a in &f.locals {
+                    rho += green_lagrange_block::<D, N, S>(&g.gradients, &h, hoop, blend, a).column(1)
+                        * (g.weight * f.sign);
+                }
+                rho
+            }
+            _ => f.rho,
+        }
     }
 
     /// `det(I + grad u)` of cell `e`: the deformed-to-initial volume ratio; for an
@@ -416,16 +461,18 @@ fn functional<const D: usize, const N: usize, const S: usize>(
     set: &[u32],
     sign: f64,
 ) -> Vec<Functional<S>> {
-    let mut rho: std::collections::BTreeMap<usize, SVector<f64, S>> = Default::default();
+    let mut rho: std::collections::BTreeMap<usize, (SVector<f64, S>, Vec<usize>)> = Default::default();
     for &i in set {
         let i = i as usize;
         for &(e, a) in &topology.node_cells[topology.cell_ptr[i]..topology.cell_ptr[i + 1]] {
             let g = &geometry[e as usize];
             let b = strain_block::<D, N, S>(&g.gradients, a as usize);
-            *rho.entry(e as usize).or_insert_with(SVector::zeros) += b.column(1) * (g.weight * sign);
+            let entry = rho.entry(e as usize).or_insert_with(|| (SVector::zeros(), Vec::new()));
+            entry.0 += b.column(1) * (g.weight * sign);
+            entry.1.push(a as usize);
         }
     }
-    rho.into_iter().map(|(cell, rho)| Functional { cell, rho }).collect()
+    rho.into_iter().map(|(cell, (rho, locals))| Functional { cell, rho, locals, sign }).collect()
 }
 
 fn locate<const D: usize, const N: usize>(

@@ -21,7 +21,7 @@
 //! plate exactly (their acceleration is zero between kinks), so reactions carry no
 //! spurious inertia.
 //!
-//! Material-point effects (E1 to E4, [`crate::effects`]): each cell carries an
+//! Material-point effects (E1 to E5, [`crate::effects`]): each cell carries an
 //! inelastic strain in series with the chain, the chain's strain and histories
 //! are those of `e - e_in`, and the step is solved by the iteration of
 //! `super::inelastic` (modified Newton on the same factorization, full Newton when
@@ -45,7 +45,7 @@ use super::result::{ForceSegment, RegionTerms};
 use super::sensitivity::{check_parameters, Sensitivities, SensitivityParameter, StepView, Tracker};
 use super::{Integrator, MarkerTrack, PressError, PressProblem, PressResult, Progress, Settings, Snapshot, StepRecord};
 use crate::assembly::assemble_vector;
-use crate::element::{cell_strain, nodal_force, ReferenceSimplex, Simplex};
+use crate::element::{nodal_force, ReferenceSimplex, Simplex};
 use crate::material::phi1;
 use crate::solve::{Factor, ReducedSystem};
 
@@ -166,7 +166,7 @@ where
             "machine compliance needs the quasi-static integrator and no sensitivities".into(),
         ));
     }
-    // The material-point path (crate::effects, E1 to E4; press::inelastic).
+    // The material-point path (crate::effects, E1 to E5; press::inelastic).
     if model.point.is_some() && (settings.integrator != Integrator::QuasiStatic || tracker.is_some()) {
         return Err(PressError::BadSettings(
             "material-point effects need the quasi-static integrator and no sensitivities".into(),
@@ -471,7 +471,9 @@ where
                 outcome.segment.detached_ends = Some([start, outcome.segment.eval_formula(h)]);
             }
         }
-        if !constraints.plate_attached {
+        // Finite strain: the reactions are exact at the step ends only (the
+        // functional moves with the deformation), so interpolate between them.
+        if !constraints.plate_attached || model.finite.is_some_and(|b| b != 0.0) {
             let start = segments.last().map_or([0.0; 2], |l: &ForceSegment| l.eval(l.dt));
             outcome.segment.detached_ends = Some([start, outcome.segment.eval_formula(h)]);
         }
@@ -857,7 +859,8 @@ where
         let r = mesh.cell_regions[e] as usize;
         let (k, f) = (&model.region_kernel[r], &factors[r]);
         let ue = model.cell_displacements(e, &u1);
-        let e1 = cell_strain::<D, N, S>(&model.geometry[e].gradients, &ue);
+        // The small strain, or the finite-strain effect's blended Green-Lagrange strain.
+        let e1 = model.strain_of(e, &ue);
         // The chain's strain on the material-point path.
         let e1 = match point.as_ref() {
             Some(p) => e1 - p.inelastic[e],
@@ -892,7 +895,8 @@ where
         for f in list {
             let r = mesh.cell_regions[f.cell] as usize;
             let c: &SMatrix<f64, S, S> = &model.region_c1[r];
-            let rc = c * f.rho; // C1 symmetric: rho . (C1 x) = (C1 rho) . x
+            // The deformed functional on the finite-strain path (`f.rho` otherwise).
+            let rc = c * model.functional_at(f, &u1); // C1 symmetric: rho . (C1 x) = (C1 rho) . x
             let t = &mut terms[r];
             let e1 = &updated[f.cell].0;
             t.rate[side] += rc.dot(&(e1 - s0.strain[f.cell])) / dt;

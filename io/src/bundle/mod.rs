@@ -64,24 +64,35 @@
 //! thinning_inverse_stress_1_per_MPa = 200.0  # stress-thinning 1/sigma_c: c3 / (1 + (s/sigma_c)^m)
 //! thinning_exponent = 1.0             # stress-thinning m in [0.2, 4] (default 1)
 //! dual_viscosity_log_ratio = 1.0      # dual-viscosity psi in [-10, 10]: c3 exp(psi) in unloading
+//! strain_stiffening = 5.0             # strain-stiffening a in [-4, 50]: tangent moduli E_i (1 + a e_eq)
+//! finite_strain = 1.0                 # finite-strain blend b in [0, 1]: Green-Lagrange kinematics at 1
 //! ```
 //!
-//! The last six are the material-point effects (`fem_core::effects`): at most
+//! The last eight are the material-point effects (`fem_core::effects`): at most
 //! one of them per trial, on the constrained plate (not with contact tools,
 //! `plate_friction` or `machine_compliance_mm_per_N`); the dashpot ones need a
 //! chain with `c3` (not `elastic`).
 //!
 //! Unit suffixes read as the format's (`_N`, `_mm`, `_MPa`) with `_per_` for a
 //! quotient (`_N_per_s` is N/s, `_mm_per_N` mm/N, `_per_h` 1/h), since `_MPa_s`
-//! already means a product. The other effects' keys
-//! (`strain_stiffening`, `finite_strain`, `adhesion_strength_MPa`,
+//! already means a product. `strain_stiffening` acts on the strain size
+//! `e_eq = sqrt(e . C1 e)` (the axial strain in uniaxial compression): the chain
+//! sees `(1 + a e_eq / 2) e`, so an elastic specimen in uniaxial compression
+//! carries `sigma = E (e + a e^2 / 2)`. `finite_strain` runs the chain on the
+//! strain `eps + b 1/2 H^T H` in a total Lagrangian formulation (2nd
+//! Piola-Kirchhoff stress, forces `B(u)^T S`): an elastic specimen in uniaxial
+//! compression carries the nominal stress `(1 + b eps) E (eps + b eps^2 / 2)`,
+//! softer than the small-strain one. The other effects' keys
+//! (`adhesion_strength_MPa`,
 //! `adhesion_opening_mm`) are known and refused as "not implemented in the
 //! engine yet". Refused, naming the file, the line and the key: any other key; a
 //! value outside its parameter's bounds (`gravity` in [0, 1], `plate_friction` in
 //! [0, 10], `machine_compliance_mm_per_N` >= 0, ageing rates in [-1, 1] per hour,
 //! the slider's stresses and the Bingham threshold >= 0,
 //! `thinning_inverse_stress_1_per_MPa` >= 0, `thinning_exponent` in [0.2, 4],
-//! `dual_viscosity_log_ratio` in [-10, 10]); two material-point effects at once;
+//! `dual_viscosity_log_ratio` in [-10, 10], `strain_stiffening` in [-4, 50],
+//! `finite_strain` in [0, 1]); two
+//! material-point effects at once;
 //! a dashpot effect on an `elastic` material; a negative `age_h`; ageing rates without
 //! `age_h`; `gravity` together with `[protocol] gravity = true` (the factor 1
 //! already); `plate_friction` on a plate that is not frictionless or on a trial
@@ -93,9 +104,10 @@
 //! a glued floor stays glued): the same tools, the same results. The force in
 //! `force.csv` of a simulated trial is the bottom sensor's, with the `gravity`
 //! share of the weight in it (an untared sensor under the specimen); such a
-//! trial is written with `force_tared = false`. `wagashi fit` fits with
-//! `force-offset` and `gravity` in place and refuses the other effects (no
-//! sensitivities yet).
+//! trial is written with `force_tared = false`. `wagashi fit` fits with the
+//! effects in place (forward sensitivities for `force-offset` and `gravity`,
+//! forward differences on frozen steps for the others) and refuses
+//! `plate_friction` (no sensitivities through contact yet).
 //!
 //! ## Rigid tools
 //!
