@@ -625,7 +625,8 @@ impl<'t> ContactModel<'t> {
         let mut state = state0.clone();
         let mut u = u_start.to_vec();
         // The held values and statuses of the last solve.
-        let mut used: Option<(Vec<(usize, f64)>, Vec<Vec<Status>>)> = None;
+        type Used = (Vec<(usize, f64)>, Vec<Vec<Status>>);
+        let mut used: Option<Used> = None;
         for _ in 0..EXACT_ITERATIONS {
             // Held dofs: (dof, value, canonical tool, candidate).
             let mut held: Vec<(usize, f64, usize, usize)> = Vec::new();
