@@ -1,12 +1,13 @@
 //! Benchmarks of the contact issue (criterion;
 //! `cargo bench -p wagashi-workspace-tests --bench contact`).
 //!
-//! - `plate_step/{constrained,tool}`: the engine issue's plate case (the seed's
-//!   material 1 trial, glued plate and floor) on a 3D block of about 100k
-//!   tetrahedra, shortened to its push (28.87 s) with 20 fixed steps, once with the
-//!   constrained plate and once with the plate as a glued contact tool. The ratio
-//!   of the two times is the cost contact adds per step (same steps, same
-//!   factorizations of the same size).
+//! - `plate_step/{constrained,tool,frictionless_tool}`: the engine issue's plate
+//!   case (the seed's material 1 trial, glued plate and floor) on a 3D block of
+//!   about 100k tetrahedra, shortened to its push (28.87 s) with 20 fixed steps,
+//!   once with the constrained plate, once with the plate as a glued contact tool
+//!   and once as a frictionless one. The ratio of the times is the cost contact
+//!   adds per step (same steps; the tools' held dofs are eliminated exactly, one
+//!   factorization and one solve per step).
 //! - `sphere_indentation`: a frictionless rigid sphere (R = 20 mm) pressed 2 mm
 //!   into an elastic block of about 100k tetrahedra, glued on the floor, end to end.
 //!
@@ -34,13 +35,12 @@ fn push_only() -> Protocol {
     p
 }
 
-fn plate_problem(with_tool: bool) -> SolidPress {
+fn plate_problem(tool: Option<ToolContact>) -> SolidPress {
     let m = mesh::block(SIZE, element_size(1e5), "mat1").unwrap();
     let mut p = SolidPress::new_3d(m, vec![Material::seed_mat1_force()], push_only()).unwrap();
-    if with_tool {
+    if let Some(contact) = tool {
         let (lo, hi) = p.mesh.bounding_box();
-        p.tools =
-            vec![Tool::plate_above("plate", lo, hi, &p.protocol.waypoints, ToolContact::Glued, p.protocol.release_s)];
+        p.tools = vec![Tool::plate_above("plate", lo, hi, &p.protocol.waypoints, contact, p.protocol.release_s)];
     }
     p
 }
@@ -70,18 +70,24 @@ fn fixed_steps() -> Settings {
 fn bench_plate(c: &mut Criterion) {
     let mut group = c.benchmark_group("plate_step");
     group.sample_size(10).measurement_time(Duration::from_secs(30));
-    for (name, with_tool) in [("constrained", false), ("tool", true)] {
-        let p = plate_problem(with_tool);
+    let cases = [
+        ("constrained", None),
+        ("tool", Some(ToolContact::Glued)),
+        ("frictionless_tool", Some(ToolContact::Frictionless)),
+    ];
+    for (name, tool) in cases {
+        let p = plate_problem(tool);
         let r = press::simulate(&p, &fixed_steps(), &mut |_| {}).unwrap();
         eprintln!(
-            "plate_step/{name}: {} cells, {} steps, {} factorizations, peak {:.4} N",
+            "plate_step/{name}: {} cells, {} steps, {} factorizations, {} contact solves, peak {:.4} N",
             p.mesh.num_cells(),
             r.steps.len(),
             r.num_factorizations,
+            r.contact_solves,
             r.peak_force()
         );
         group.bench_function(name, |b| {
-            b.iter(|| press::simulate(&plate_problem(with_tool), &fixed_steps(), &mut |_| {}).unwrap())
+            b.iter(|| press::simulate(&plate_problem(tool), &fixed_steps(), &mut |_| {}).unwrap())
         });
     }
     group.finish();

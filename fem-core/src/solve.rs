@@ -160,6 +160,30 @@ impl ReducedSystem {
                 vals[q] += extra[self.dof_of_free[j] as usize];
             }
         }
+        self.factor_values(vals)
+    }
+
+    /// Factors `sum_i coef_i A_i` with the free dofs marked in `decoupled` (per
+    /// dof) cut off from the others: their off-diagonal entries are zero, their
+    /// diagonal kept. Solving with it and a zero right-hand side on those dofs is
+    /// the exact elimination of dofs held at given values (their coupling moved to
+    /// the right-hand side beforehand), without a new symbolic factorization: the
+    /// pattern is the same, and the cut entries stay exact zeros in the factor.
+    pub fn factor_decoupled(&self, terms: &[(f64, &[f64])], decoupled: &[bool]) -> Result<Factor<'_>, SolveError> {
+        let mut vals: Vec<f64> = self.positions.iter().map(|&p| terms.iter().map(|(c, a)| c * a[p]).sum()).collect();
+        for j in 0..self.num_free() {
+            let cut_column = decoupled[self.dof_of_free[j] as usize];
+            for q in self.col_ptr[j]..self.col_ptr[j + 1] {
+                let i = self.row_idx[q];
+                if i != j && (cut_column || decoupled[self.dof_of_free[i] as usize]) {
+                    vals[q] = 0.0;
+                }
+            }
+        }
+        self.factor_values(vals)
+    }
+
+    fn factor_values(&self, vals: Vec<f64>) -> Result<Factor<'_>, SolveError> {
         let sym = unsafe {
             // The pattern was checked in `new`.
             faer::sparse::SymbolicSparseColMatRef::new_unchecked(
@@ -281,6 +305,59 @@ mod tests {
             for i in 0..n {
                 assert!((batch[c * n + i] - single[i]).abs() <= 1e-12 * single[i].abs().max(1.0), "column {c} row {i}");
             }
+        }
+    }
+
+    /// Cutting dofs off the matrix and solving with their coupling on the right-hand
+    /// side is the elimination of those dofs: the same solution as the system
+    /// built with them held, on the same pattern (no new symbolic factorization).
+    #[test]
+    fn decoupled_dofs_are_eliminated_exactly() {
+        let m = crate::mesh::rectangle(4.0, 3.0, 1.0, "a").unwrap();
+        let topo = Topology::new(m.num_nodes(), &m.cells);
+        let pat = CsrPattern::new(&topo, 2);
+        let geo: Vec<_> =
+            (0..m.num_cells()).map(|e| cell_geometry::<2, 3>(&m.cell_coordinates(e), 1.0).unwrap()).collect();
+        let c = unit_young_matrix::<3>(Formulation::PlaneStrain { thickness_mm: 1.0 }, 0.25);
+        let k = assemble_stiffness::<2, 3, 3>(&topo, &pat, &m.cells, &geo, &|_| Some(c));
+        let nd = pat.num_dofs();
+        let mut bottom = vec![false; nd];
+        for &n in &m.node_sets["bottom"] {
+            bottom[2 * n as usize] = true;
+            bottom[2 * n as usize + 1] = true;
+        }
+        // The top's y dofs held at -0.1, the x dof of its first node at 0.05.
+        let top = &m.node_sets["top"];
+        let mut held: Vec<(usize, f64)> = top.iter().map(|&n| (2 * n as usize + 1, -0.1)).collect();
+        held.push((2 * top[0] as usize, 0.05));
+        let mut both = bottom.clone();
+        let mut cut = vec![false; nd];
+        let mut u_held = vec![0.0; nd];
+        for &(d, v) in &held {
+            both[d] = true;
+            cut[d] = true;
+            u_held[d] = v;
+        }
+        let b: Vec<f64> = (0..nd).map(|d| 0.01 * (d as f64).sin()).collect();
+        let mut coupling = vec![0.0; nd];
+        pat.mul_vec(&k, &u_held, &mut coupling);
+        let rhs: Vec<f64> = (0..nd).map(|d| if cut[d] { 0.0 } else { b[d] - coupling[d] }).collect();
+        // Reference: the reduced system without the held dofs.
+        let reduced = ReducedSystem::new(&pat, &both, None).unwrap();
+        let mut x_ref: Vec<f64> = reduced.dof_of_free.iter().map(|&d| rhs[d as usize]).collect();
+        reduced.factor(&[(1.0, &k)], None).unwrap().solve_in_place(&mut x_ref);
+        // The same held dofs cut off a system that leaves them free.
+        let sys = ReducedSystem::new(&pat, &bottom, None).unwrap();
+        let mut x: Vec<f64> = sys.dof_of_free.iter().map(|&d| rhs[d as usize]).collect();
+        sys.factor_decoupled(&[(1.0, &k)], &cut).unwrap().solve_in_place(&mut x);
+        let scale = x_ref.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        assert!(scale > 1e-3);
+        for (i, &d) in reduced.dof_of_free.iter().enumerate() {
+            let j = sys.free_of_dof[d as usize] as usize;
+            assert!((x[j] - x_ref[i]).abs() <= 1e-12 * scale, "dof {d}: {} vs {}", x[j], x_ref[i]);
+        }
+        for &(d, _) in &held {
+            assert_eq!(x[sys.free_of_dof[d] as usize], 0.0, "a cut dof with a zero right-hand side stays zero");
         }
     }
 }

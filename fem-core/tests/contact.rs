@@ -521,3 +521,62 @@ fn lee_radok_viscoelastic_sphere_indentation() {
     assert!(errors[1] <= 0.05, "finest mesh: {:.4} off Lee-Radok", errors[1]);
     assert!(errors[1] < errors[0], "errors do not fall under refinement: {errors:?}");
 }
+
+/// A glued or frictionless plate tool that never turns is held exactly (the
+/// contact module's exact path): on the 3D block (and the plane section) glued on
+/// its floor and pushed in ten fixed steps, it reproduces the constrained plate
+/// to 1e-10 of the peak force and of the push, with one factorization for the
+/// run and one solve per step (the active set does not change after the touch).
+#[test]
+fn flat_plate_tool_is_exact_with_one_solve_per_step() {
+    let material = Material::seed_mat1_force();
+    let settings = Settings { fixed_dt_s: Some(1.0), max_dt_s: Some(1.0), ..Settings::default() };
+    for (plate, contact) in
+        [(Attachment::Glued, ToolContact::Glued), (Attachment::Frictionless, ToolContact::Frictionless)]
+    {
+        let mut p = ramp(2.0, 10.0);
+        p.plate = plate;
+        p.support = Attachment::Glued;
+        let references = [
+            (
+                "solid",
+                AnyPress::Solid(
+                    SolidPress::new_3d(mesh::block([W, H, T], 5.0, "m").unwrap(), vec![material.clone()], p.clone())
+                        .unwrap(),
+                ),
+            ),
+            (
+                "plane",
+                AnyPress::Plane(
+                    PlanePress::new_2d(mesh::rectangle(W, H, 2.5, "m").unwrap(), T, vec![material.clone()], p.clone())
+                        .unwrap(),
+                ),
+            ),
+        ];
+        for (name, reference) in references {
+            let expected = press::simulate_any(&reference, &settings, &mut |_| {}).unwrap();
+            let got = press::simulate_any(&with_plate_tool(&reference, contact), &settings, &mut |_| {}).unwrap();
+            assert_eq!(got.steps.len(), 10, "{name} {contact:?}");
+            assert_eq!(got.num_factorizations, 1, "{name} {contact:?}: one factorization for the run");
+            assert_eq!(got.contact_solves, got.steps.len(), "{name} {contact:?}: one solve per step");
+            let peak = expected.peak_force();
+            for (e, g) in expected.steps.iter().zip(&got.steps) {
+                assert!((e.t_s - g.t_s).abs() <= 1e-12, "{name}: step ends {} vs {}", e.t_s, g.t_s);
+                let bottom = (e.bottom_force_n - g.bottom_force_n).abs();
+                assert!(bottom <= 1e-10 * peak, "{name} {contact:?} t={}: bottom force off by {bottom:.3e} N", e.t_s);
+            }
+            for s in got.tools[0].samples.iter().skip(1) {
+                let plate = expected.plate_force_at(s.t_s);
+                let tool = s.force_n[1];
+                assert!((tool - plate).abs() <= 1e-10 * peak, "{name} {contact:?} t={}: tool {tool} vs {plate}", s.t_s);
+            }
+            let (a, b) = (expected.snapshot_at(10.0).unwrap(), got.snapshot_at(10.0).unwrap());
+            let du = a.displacement.iter().zip(&b.displacement).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+            assert!(du <= 1e-10 * 2.0, "{name} {contact:?}: final shapes differ by {du:.3e} mm");
+            eprintln!(
+                "{name} {contact:?}: {} solves, {} factorization, shape {du:.2e} mm",
+                got.contact_solves, got.num_factorizations
+            );
+        }
+    }
+}

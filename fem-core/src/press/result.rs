@@ -140,6 +140,9 @@ pub struct PressResult {
     pub markers: Vec<MarkerTrack>,
     /// Number of numeric factorizations.
     pub num_factorizations: usize,
+    /// Right-hand sides solved with the step matrix in steps with contact tools
+    /// (penalized, eliminated or low-rank solves; zero without tools).
+    pub contact_solves: usize,
     /// Nonzeros of the (largest) Cholesky factor.
     pub factor_nonzeros: usize,
     /// Free degrees of freedom (largest constraint set).

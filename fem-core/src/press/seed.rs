@@ -188,6 +188,7 @@ where
         snapshots,
         markers: tracks,
         num_factorizations: 0,
+        contact_solves: 0,
         factor_nonzeros: 0,
         num_free_dofs: model.released.held.iter().filter(|h| !**h).count(),
         tools: Vec::new(),

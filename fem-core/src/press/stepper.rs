@@ -33,6 +33,7 @@
 //! kink (waypoints, release, end). After a kink the estimator restarts from a tiny
 //! step (it cannot check the first step of a segment) and grows at most 4x a step.
 
+use std::cell::{Cell, RefCell};
 use std::time::Instant;
 
 use crate::parallel::map_collect;
@@ -209,9 +210,11 @@ where
         Some(ContactModel::new(problem, &model.pattern, &model.attached.held)?)
     };
     let mut contact_state = contact.as_ref().map(|c| c.initial_state());
-    // Keyed by the penalty pattern's hash and the step key.
-    type ContactKey = (u64, (u64, u64));
-    let mut contact_factor: Option<(ContactKey, Factor<'_>)> = None;
+    // Keyed by the path (penalties or eliminated dofs), its matrix's hash and the
+    // step key; one slot for both paths, so that two factors never coexist.
+    type ContactKey = (bool, u64, (u64, u64));
+    let contact_factor: RefCell<Option<(ContactKey, Factor<'_>)>> = RefCell::new(None);
+    let mut contact_solves = 0usize;
     let mut contact_retries = 0usize;
     let mut tool_tracks: Vec<ToolTrack> = match contact.as_ref() {
         Some(c) => c
@@ -321,13 +324,16 @@ where
                 scale: single_scale,
             };
             let mut settled = None;
-            let mut refactored = false;
+            let refactored = Cell::new(false);
+            let factorizations = Cell::new(0usize);
+            let solves = Cell::new(0usize);
             let outcome = {
                 let mut solve = |b: &[f64], u: &mut Vec<f64>| -> Result<Option<Vec<f64>>, PressError> {
                     let mut inner = |hash: u64, penalty: &dyn Fn() -> Vec<f64>, extra: &[f64], cols: Option<usize>| {
-                        let key = (hash, step_key);
+                        let key = (false, hash, step_key);
+                        let mut contact_factor = contact_factor.borrow_mut();
                         if contact_factor.as_ref().map(|(k, _)| *k) != Some(key) {
-                            contact_factor = None;
+                            *contact_factor = None;
                             let p: Vec<f64> = penalty().into_iter().map(|v| v / single_scale).collect();
                             let mut terms: Vec<(f64, &[f64])> = model
                                 .groups
@@ -340,11 +346,12 @@ where
                             terms.push((1.0, p.as_slice()));
                             let factor =
                                 system.factor(&terms, None).map_err(|e| model.singular(step_index + 1, t1, e))?;
-                            num_factorizations += 1;
-                            refactored = true;
-                            contact_factor = Some((key, factor));
+                            factorizations.set(factorizations.get() + 1);
+                            refactored.set(true);
+                            *contact_factor = Some((key, factor));
                         }
                         let factor = &contact_factor.as_ref().expect("set above").1;
+                        solves.set(solves.get() + cols.unwrap_or(1));
                         if let Some(ncols) = cols {
                             // Columns of the unpenalized matrix's inverse (contact's low-rank path).
                             let (nf, nd) = (system.dof_of_free.len(), u.len());
@@ -372,13 +379,76 @@ where
                         }
                         Ok(next)
                     };
+                    // The exact path: the held dofs cut off the matrix (same pattern,
+                    // same symbolic factorization), their coupling moved to the
+                    // right-hand side, their reactions `A u - b` from their rows.
+                    let coefficients: Vec<f64> = model.groups.iter().map(|g| step_factor(&g.kernel, h, bdf)).collect();
+                    let entry = |p: usize| -> f64 {
+                        model.groups.iter().zip(&coefficients).map(|(g, c)| c * g.stiffness[p]).sum::<f64>()
+                    };
+                    let mut eliminate = |hash: u64, held: &[(usize, f64)]| {
+                        let pattern = &model.pattern;
+                        let mut cut = vec![false; u.len()];
+                        held.iter().for_each(|&(dof, _)| cut[dof] = true);
+                        let key = (true, hash, step_key);
+                        let mut contact_factor = contact_factor.borrow_mut();
+                        if contact_factor.as_ref().map(|(k, _)| *k) != Some(key) {
+                            *contact_factor = None;
+                            let terms: Vec<(f64, &[f64])> = model
+                                .groups
+                                .iter()
+                                .zip(&coefficients)
+                                .map(|(g, &c)| (if single_group { 1.0 } else { c }, g.stiffness.as_slice()))
+                                .collect();
+                            let factor = system
+                                .factor_decoupled(&terms, &cut)
+                                .map_err(|e| model.singular(step_index + 1, t1, e))?;
+                            factorizations.set(factorizations.get() + 1);
+                            refactored.set(true);
+                            *contact_factor = Some((key, factor));
+                        }
+                        let factor = &contact_factor.as_ref().expect("set above").1;
+                        solves.set(solves.get() + 1);
+                        let mut next = u.clone();
+                        let mut rhs = b.to_vec();
+                        for &(dof, v) in held {
+                            next[dof] = v;
+                            // The matrix is symmetric: column `dof` is row `dof`.
+                            for p in pattern.row_ptr[dof]..pattern.row_ptr[dof + 1] {
+                                rhs[pattern.col_idx[p] as usize] -= entry(p) * v;
+                            }
+                        }
+                        let mut x: Vec<f64> = system
+                            .dof_of_free
+                            .iter()
+                            .map(|&d| if cut[d as usize] { 0.0 } else { rhs[d as usize] })
+                            .collect();
+                        factor.solve_in_place(&mut x);
+                        for (i, &d) in system.dof_of_free.iter().enumerate() {
+                            if !cut[d as usize] {
+                                next[d as usize] = x[i] / single_scale;
+                            }
+                        }
+                        // `b` holds the held dofs' coupling already: sum the free columns.
+                        let reactions = held
+                            .iter()
+                            .map(|&(dof, _)| {
+                                (pattern.row_ptr[dof]..pattern.row_ptr[dof + 1])
+                                    .filter(|&p| system.free_of_dof[pattern.col_idx[p] as usize] != u32::MAX)
+                                    .map(|p| entry(p) * next[pattern.col_idx[p] as usize])
+                                    .sum::<f64>()
+                                    - b[dof]
+                            })
+                            .collect();
+                        Ok((next, reactions))
+                    };
                     let state0 = contact_state.as_ref().expect("contact runs have a state");
                     // Start from the last step's displacement (the held dofs at their new values).
                     let mut start = u.clone();
                     for &d in &system.dof_of_free {
                         start[d as usize] = state.u[d as usize];
                     }
-                    let s = cm.settle(&input, state0, start, &mut inner, model.pattern.nnz())?;
+                    let s = cm.settle(&input, state0, start, &mut inner, &mut eliminate, model.pattern.nnz())?;
                     *u = s.u.clone();
                     let forces = s.forces.clone();
                     settled = Some(s);
@@ -386,7 +456,9 @@ where
                 };
                 step(&model, &state, h, bdf, t1, constraints, system, &mut solve, ga, dynamic, step_index + 1, None)
             };
-            outcome.map(|o| (o, refactored, settled))
+            num_factorizations += factorizations.get();
+            contact_solves += solves.get();
+            outcome.map(|o| (o, refactored.get(), settled))
         } else {
             // Numeric factor for this constraint set and step size.
             let key =
@@ -614,6 +686,7 @@ where
             snapshots,
             markers: tracks,
             num_factorizations,
+            contact_solves,
             factor_nonzeros: sys_attached
                 .factor_nonzeros()
                 .max(sys_released.as_ref().map_or(0, |s| s.factor_nonzeros())),
