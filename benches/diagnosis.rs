@@ -66,7 +66,7 @@ fn bench(c: &mut Criterion) {
         d.not_evaluated.iter().map(|(e, _)| e.id()).collect::<Vec<_>>().join(", ")
     );
     let mut group = c.benchmark_group("diagnosis");
-    group.sample_size(10).measurement_time(Duration::from_secs(300));
+    group.sample_size(10).measurement_time(Duration::from_secs(30));
     group.bench_function("fungi_3_trials", |b| b.iter(|| run(&all)));
     group.finish();
 }

@@ -1,4 +1,4 @@
-//! The material-point path's cost (effects E1 to E4, `fem_core::effects`)
+//! The material-point path's cost (effects E1 to E6, `fem_core::effects`)
 //! against the linear baseline (criterion; `cargo bench -p wagashi-workspace-tests
 //! --bench material_point`).
 //!
@@ -8,7 +8,9 @@
 //! triangles), frictionless plate, glued floor, default settings. Cases:
 //! `baseline` (no effect: the linear path), `slider` (sigma_y = half the baseline's
 //! peak stress, H = 0.01 MPa), `bingham` (sigma_B = 0.3 of the peak), `thinning`
-//! (1/sigma_c = 2/peak, m = 1), `dual` (psi = 1). Steps and factorizations are
+//! (1/sigma_c = 2/peak, m = 1), `dual` (psi = 1), `stiffening` (a = 8: moduli
+//! up 80 % at the 10 % strain of the push), `finite` (blend 1: Green-Lagrange
+//! strain, total Lagrangian). Steps and factorizations are
 //! printed once per case on stderr. The problem is built inside each case, so a
 //! filter (`-- baseline`) runs that case alone.
 
@@ -65,6 +67,8 @@ fn bench(c: &mut Criterion) {
     case(c, "bingham", |peak| with(EffectId::BinghamDashpot, vec![0.3 * peak]));
     case(c, "thinning", |peak| with(EffectId::StressThinning, vec![2.0 / peak, 1.0]));
     case(c, "dual", |_| with(EffectId::DualViscosity, vec![1.0]));
+    case(c, "stiffening", |_| with(EffectId::StrainStiffening, vec![8.0]));
+    case(c, "finite", |_| with(EffectId::FiniteStrain, vec![1.0]));
 }
 
 criterion_group!(benches, bench);
