@@ -252,8 +252,9 @@ mod tests {
     use crate::assembly::{assemble_stiffness, Topology};
     use crate::element::{cell_geometry, unit_young_matrix, Formulation};
 
-    #[test]
-    fn solves_a_constrained_stiffness_system() {
+    /// A plane-strain 4 x 3 block of unit elements: its mesh, topology, pattern,
+    /// stiffness values and the bottom's dofs (both held).
+    fn plane_strain_block() -> (crate::mesh::TriMesh, Topology, CsrPattern, Vec<f64>, Vec<bool>) {
         let m = crate::mesh::rectangle(4.0, 3.0, 1.0, "a").unwrap();
         let topo = Topology::new(m.num_nodes(), &m.cells);
         let pat = CsrPattern::new(&topo, 2);
@@ -261,11 +262,17 @@ mod tests {
             (0..m.num_cells()).map(|e| cell_geometry::<2, 3>(&m.cell_coordinates(e), 1.0).unwrap()).collect();
         let c = unit_young_matrix::<3>(Formulation::PlaneStrain { thickness_mm: 1.0 }, 0.25);
         let k = assemble_stiffness::<2, 3, 3>(&topo, &pat, &m.cells, &geo, &|_| Some(c));
-        let mut constrained = vec![false; pat.num_dofs()];
+        let mut bottom = vec![false; pat.num_dofs()];
         for &n in &m.node_sets["bottom"] {
-            constrained[2 * n as usize] = true;
-            constrained[2 * n as usize + 1] = true;
+            bottom[2 * n as usize] = true;
+            bottom[2 * n as usize + 1] = true;
         }
+        (m, topo, pat, k, bottom)
+    }
+
+    #[test]
+    fn solves_a_constrained_stiffness_system() {
+        let (m, topo, pat, k, constrained) = plane_strain_block();
         let sys = ReducedSystem::new(&pat, &constrained, None).unwrap();
         let order = crate::ordering::nested_dissection(&m.nodes, &topo);
         let nd = ReducedSystem::new(&pat, &constrained, Some(&order)).unwrap();
@@ -313,19 +320,8 @@ mod tests {
     /// built with them held, on the same pattern (no new symbolic factorization).
     #[test]
     fn decoupled_dofs_are_eliminated_exactly() {
-        let m = crate::mesh::rectangle(4.0, 3.0, 1.0, "a").unwrap();
-        let topo = Topology::new(m.num_nodes(), &m.cells);
-        let pat = CsrPattern::new(&topo, 2);
-        let geo: Vec<_> =
-            (0..m.num_cells()).map(|e| cell_geometry::<2, 3>(&m.cell_coordinates(e), 1.0).unwrap()).collect();
-        let c = unit_young_matrix::<3>(Formulation::PlaneStrain { thickness_mm: 1.0 }, 0.25);
-        let k = assemble_stiffness::<2, 3, 3>(&topo, &pat, &m.cells, &geo, &|_| Some(c));
+        let (m, _, pat, k, bottom) = plane_strain_block();
         let nd = pat.num_dofs();
-        let mut bottom = vec![false; nd];
-        for &n in &m.node_sets["bottom"] {
-            bottom[2 * n as usize] = true;
-            bottom[2 * n as usize + 1] = true;
-        }
         // The top's y dofs held at -0.1, the x dof of its first node at 0.05.
         let top = &m.node_sets["top"];
         let mut held: Vec<(usize, f64)> = top.iter().map(|&n| (2 * n as usize + 1, -0.1)).collect();

@@ -96,6 +96,25 @@ pub(crate) struct PointInput<'a, const S: usize> {
     pub step: usize,
 }
 
+/// The out-of-balance force of the cells' nodal forces against the body force, per
+/// dof, and its norm over the free dofs.
+fn out_of_balance<const D: usize, const N: usize, const S: usize>(
+    model: &Model<'_, D, N, S>,
+    system: &ReducedSystem,
+    forces: &[[SVector<f64, D>; N]],
+) -> (Vec<f64>, f64)
+where
+    Simplex<D, N>: ReferenceSimplex<D, N>,
+{
+    let mut residual = vec![0.0; model.num_dofs()];
+    assemble_vector::<D, N>(&model.topology, forces, &mut residual);
+    for (r, b) in residual.iter_mut().zip(&model.body_force) {
+        *r -= b;
+    }
+    let norm = system.dof_of_free.iter().map(|&d| residual[d as usize].powi(2)).sum::<f64>().sqrt();
+    (residual, norm)
+}
+
 /// Solves a step on the material-point path: `u1` holds the held values (and any
 /// start for the free ones) on entry and the solution on exit. `solve(b, u)` is
 /// the step's linear solve.
@@ -189,16 +208,7 @@ where
                 let s = model.region_c1[r] * updates[e].1.tau;
                 std::array::from_fn(|a| nodal_force::<D, N, S>(&model.geometry[e], &s, a))
             });
-            let mut residual = vec![0.0; ndof];
-            assemble_vector::<D, N>(&model.topology, &forces, &mut residual);
-            let mut norm2 = 0.0;
-            for (d, r) in residual.iter_mut().enumerate() {
-                *r -= model.body_force[d];
-            }
-            for &d in &system.dof_of_free {
-                norm2 += residual[d as usize].powi(2);
-            }
-            let norm = norm2.sqrt();
+            let (residual, norm) = out_of_balance(model, system, &forces);
             if norm <= TOLERANCE * scale {
                 converged = Some((updates, norm));
                 break;
@@ -332,16 +342,7 @@ where
                 green_lagrange_block::<D, N, S>(&g.gradients, h, *hoop, blend, a).transpose() * s * g.weight
             })
         });
-        let mut residual = vec![0.0; ndof];
-        assemble_vector::<D, N>(&model.topology, &forces, &mut residual);
-        let mut norm2 = 0.0;
-        for (d, r) in residual.iter_mut().enumerate() {
-            *r -= model.body_force[d];
-        }
-        for &d in &system.dof_of_free {
-            norm2 += residual[d as usize].powi(2);
-        }
-        let norm = norm2.sqrt();
+        let (residual, norm) = out_of_balance(model, system, &forces);
         if norm <= TOLERANCE * scale {
             return Ok(PointStep {
                 inelastic: input.inelastic0.to_vec(),
