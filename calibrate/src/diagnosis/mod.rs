@@ -540,7 +540,17 @@ pub fn diagnose(
         }
     }
 
-    let verdict = decide(&where_cells, &evaluated, &r0, h0.as_deref(), &segments, &ho_segments, options);
+    let mut verdict = decide(&where_cells, &evaluated, &r0, h0.as_deref(), &segments, &ho_segments, options);
+    // A verdict says what it could not test: candidates whose runs failed on these
+    // trials (e.g. effects the engine does not run with contact tools) are named.
+    let failed: Vec<&str> =
+        not_evaluated.iter().filter(|(_, why)| why.starts_with("failed: ")).map(|(e, _)| e.id()).collect();
+    if !failed.is_empty() && verdict.label != "none" {
+        verdict.sentence.push_str(&format!(
+            " Not tested, their runs failed on these trials: {} (see not_evaluated).",
+            failed.join(", ")
+        ));
+    }
     let named = verdict.effects.first().and_then(|id| evaluated.iter().find(|e| e.report.effect == *id));
     let curves = force_curves(&model, &r0, named.map_or(&r0, |e| &e.residuals));
     Ok(Diagnosis {

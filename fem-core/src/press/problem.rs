@@ -226,6 +226,16 @@ pub enum AnyPress {
 }
 
 impl AnyPress {
+    /// Whether the problem presses with contact tools (which run without
+    /// sensitivities: derivatives of such a run are taken by differences).
+    pub fn has_tools(&self) -> bool {
+        match self {
+            AnyPress::Plane(p) => !p.tools.is_empty(),
+            AnyPress::Solid(p) => !p.tools.is_empty(),
+            AnyPress::Axisymmetric(p) => !p.tools.is_empty(),
+        }
+    }
+
     /// The problem's effects.
     pub fn effects(&self) -> &Effects {
         match self {
