@@ -4,6 +4,12 @@
 //! ```text
 //! cargo run --release -p wagashi-meshing --example conforming_probe
 //! cargo run --release -p wagashi-meshing --example conforming_probe -- ../shared/data/meshes/npm_bunny.obj 0.3 [Q] [SLIVER_DEG]
+//! cargo run --release -p wagashi-meshing --example conforming_probe -- /usr/share/doc/netgen/examples/hinge.stl 2.0
+//! ```
+//!
+//! OBJ (read with `tobj`), OFF and ASCII STL files are read.
+//!
+//! ```text
 //! ```
 use std::time::Instant;
 
@@ -27,13 +33,61 @@ fn read_obj(path: &str) -> Surface {
     s
 }
 
+/// An OFF file (polygons as fans) or an ASCII STL file (identical coordinates
+/// become one vertex), one region.
+fn read_off_or_stl(path: &str) -> Surface {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path}: {e}"));
+    let mut s = Surface { region_names: vec!["default".into()], ..Surface::default() };
+    if path.ends_with(".off") {
+        let mut tok = text.lines().map(|l| l.split('#').next().unwrap_or("")).flat_map(str::split_whitespace);
+        let _ = tok.next();
+        let mut num = || tok.next().and_then(|t| t.parse::<f64>().ok()).unwrap_or_else(|| panic!("{path}: bad number"));
+        let (nv, nf, _) = (num() as usize, num() as usize, num());
+        for _ in 0..nv {
+            s.vertices.push([num(), num(), num()]);
+        }
+        for _ in 0..nf {
+            let n = num() as usize;
+            let c: Vec<u32> = (0..n).map(|_| num() as u32).collect();
+            for k in 1..n - 1 {
+                s.triangles.push([c[0], c[k], c[k + 1]]);
+                s.triangle_regions.push(0);
+            }
+        }
+    } else {
+        let mut index = std::collections::HashMap::new();
+        let mut corners = Vec::new();
+        for line in text.lines() {
+            let mut tok = line.split_whitespace();
+            if tok.next() != Some("vertex") {
+                continue;
+            }
+            let p: Vec<f64> = tok.map(|t| t.parse().unwrap_or_else(|e| panic!("{path}: {e}"))).collect();
+            let p = [p[0], p[1], p[2]];
+            let next = s.vertices.len() as u32;
+            let v = *index.entry(p.map(f64::to_bits)).or_insert(next);
+            if v == next {
+                s.vertices.push(p);
+            }
+            corners.push(v);
+            if corners.len() == 3 {
+                s.triangles.push([corners[0], corners[1], corners[2]]);
+                s.triangle_regions.push(0);
+                corners.clear();
+            }
+        }
+    }
+    s
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let arg = |i: usize| args.get(i).and_then(|a| a.parse::<f64>().ok());
     let defaults = ConformingOptions::default();
     let (q, sliver) = (arg(3).unwrap_or(defaults.radius_edge), arg(4).unwrap_or(defaults.sliver_deg));
     let (s, sizes) = match args.get(1) {
-        Some(path) => (read_obj(path), vec![arg(2)]),
+        Some(path) if path.ends_with(".obj") => (read_obj(path), vec![arg(2)]),
+        Some(path) => (read_off_or_stl(path), vec![arg(2)]),
         None => (Surface::cuboid([0.0; 3], [10.0, 20.0, 5.0], "box"), vec![None, Some(4.0), Some(2.0), Some(1.0)]),
     };
     for h in sizes {

@@ -341,7 +341,7 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
         }
     }
     // Flat caps on coplanar input triangles go (see `drop_flat_caps`).
-    let tets = drop_flat_caps(points, tets);
+    let tets = drop_flat_caps(points, tets, facet::COPLANAR_TOL * surface.diagonal());
     let cell_tets: Vec<[u32; 4]> = tets.iter().map(|(_, t, _)| *t).collect();
     let (mut nodes, cells) = recover::compact(points, &cell_tets);
     let mut smoothing = SmoothStats::default();
@@ -403,6 +403,7 @@ const FLAT_DEG: f64 = 1e-3;
 fn drop_flat_caps(
     points: &[crate::predicates::Point],
     mut tets: Vec<(u32, [u32; 4], u32)>,
+    tol: f64,
 ) -> Vec<(u32, [u32; 4], u32)> {
     loop {
         // Faces by sorted corners -> (count, component).
@@ -430,8 +431,11 @@ fn drop_flat_caps(
                 })
                 .count();
             if on_boundary >= 1 {
+                // Flat: its smallest height under `tol` (a needle or a wedge
+                // with a tiny angle is no flat cap: removing it would move the
+                // boundary).
                 let q = t.map(|v| points[v as usize]);
-                if crate::quality::tet_quality(&q).min_dihedral_deg < FLAT_DEG {
+                if crate::quality::tet_quality(&q).min_dihedral_deg < FLAT_DEG && on_its_plane(q, tol) {
                     removed.insert(*t);
                 }
             }
@@ -441,4 +445,19 @@ fn drop_flat_caps(
             return tets;
         }
     }
+}
+
+/// Whether the tet `q`'s smallest height (its far corner's distance from the
+/// plane of its largest face) is at most `tol`.
+fn on_its_plane(q: [crate::predicates::Point; 4], tol: f64) -> bool {
+    use crate::predicates::{cross, dot, sub};
+    let (n, far) = FACE
+        .iter()
+        .enumerate()
+        .map(|(i, f)| (cross(sub(q[f[1]], q[f[0]]), sub(q[f[2]], q[f[0]])), q[i], q[f[0]]))
+        .map(|(n, opposite, origin)| (n, (opposite, origin)))
+        .max_by(|a, b| dot(a.0, a.0).total_cmp(&dot(b.0, b.0)))
+        .unwrap_or(([0.0; 3], ([0.0; 3], [0.0; 3])));
+    let l = dot(n, n).sqrt();
+    l > 0.0 && (dot(sub(far.0, far.1), n) / l).abs() <= tol
 }

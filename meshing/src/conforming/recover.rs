@@ -10,8 +10,9 @@ use super::facet::Facet;
 use super::ConformingError;
 use crate::predicates::{cross, dot, sub, Point};
 
-/// The input as a piecewise-linear complex: vertices, the unique input edges
-/// (*segments*) and triangles (*facets*), each split as Steiner points arrive.
+/// The input as a piecewise-linear complex: vertices, the input edges between
+/// facets (*segments*) and the *facets* (planar polygons of coplanar input
+/// triangles, `facet::coplanar_groups`), each split as Steiner points arrive.
 #[derive(Clone)]
 pub(crate) struct Recovery {
     pub dt: Delaunay,
@@ -23,8 +24,8 @@ pub(crate) struct Recovery {
     segment_ends: Vec<[u32; 2]>,
     /// Facets containing each segment.
     segment_facets: Vec<Vec<u32>>,
-    /// Segment ids of each facet's three sides.
-    facet_segments: Vec<[u32; 3]>,
+    /// Segment ids of each facet's sides.
+    facet_segments: Vec<Vec<u32>>,
     pub facets: Vec<Facet>,
     pub steiner_on_segments: usize,
     pub steiner_on_facets: usize,
@@ -51,26 +52,54 @@ pub(crate) struct Recovery {
 impl Recovery {
     pub fn new(vertices: &[Point], triangles: &[[u32; 3]], max_steiner: usize) -> Result<Self, ConformingError> {
         let dt = Delaunay::new(vertices).map_err(ConformingError::Delaunay)?;
-        let mut seg_id: HashMap<(u32, u32), u32> = HashMap::new();
+        let groups = super::facet::coplanar_groups(vertices, triangles);
+        let mut group_of = vec![0u32; triangles.len()];
+        for (g, members) in groups.iter().enumerate() {
+            for &f in members {
+                group_of[f] = g as u32;
+            }
+        }
+        // Edges and the triangles on them, in order of first use.
+        let mut edge_tris: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
+        let mut edge_order = Vec::new();
+        for (f, t) in triangles.iter().enumerate() {
+            for i in 0..3 {
+                let e = (t[i].min(t[(i + 1) % 3]), t[i].max(t[(i + 1) % 3]));
+                let list = edge_tris.entry(e).or_default();
+                if list.is_empty() {
+                    edge_order.push(e);
+                }
+                list.push(f);
+            }
+        }
+        // A segment is an edge that is not inside one facet (two triangles of it).
         let mut segment_ends = Vec::new();
         let mut segment_facets: Vec<Vec<u32>> = Vec::new();
-        let mut facet_segments = Vec::new();
-        let mut facets = Vec::new();
-        for (f, t) in triangles.iter().enumerate() {
-            let mut ids = [0u32; 3];
-            for i in 0..3 {
-                let (a, b) = (t[i].min(t[(i + 1) % 3]), t[i].max(t[(i + 1) % 3]));
-                let id = *seg_id.entry((a, b)).or_insert_with(|| {
-                    segment_ends.push([a, b]);
-                    segment_facets.push(Vec::new());
-                    (segment_ends.len() - 1) as u32
-                });
-                segment_facets[id as usize].push(f as u32);
-                ids[i] = id;
+        let mut facet_segments: Vec<Vec<u32>> = vec![Vec::new(); groups.len()];
+        for e in edge_order {
+            let on = &edge_tris[&e];
+            if on.len() == 2 && group_of[on[0]] == group_of[on[1]] {
+                continue;
             }
-            facet_segments.push(ids);
-            facets.push(Facet::new(*t, vertices));
+            let id = segment_ends.len() as u32;
+            segment_ends.push([e.0, e.1]);
+            let mut gs: Vec<u32> = on.iter().map(|&f| group_of[f]).collect();
+            gs.sort_unstable();
+            gs.dedup();
+            for &g in &gs {
+                facet_segments[g as usize].push(id);
+            }
+            segment_facets.push(gs);
         }
+        let facets: Vec<Facet> = groups
+            .iter()
+            .enumerate()
+            .map(|(g, members)| {
+                let sides: Vec<(u32, u32)> =
+                    facet_segments[g].iter().map(|&s| (segment_ends[s as usize][0], segment_ends[s as usize][1])).collect();
+                Facet::new(members.iter().map(|&f| triangles[f]).collect(), &sides, vertices)
+            })
+            .collect();
         let subsegs = segment_ends.iter().enumerate().map(|(i, e)| (e[0], e[1], i as u32)).collect();
         let seg_subs = (0..segment_ends.len()).map(|i| vec![i]).collect();
         Ok(Recovery {
@@ -95,7 +124,7 @@ impl Recovery {
         })
         .map(|mut r| {
             for f in 0..r.facets.len() {
-                r.index_facet(f, &[]);
+                r.index_facet(f);
             }
             r
         })
@@ -190,11 +219,9 @@ impl Recovery {
         self.seg_subs[s as usize].push(self.subsegs.len() - 1);
         let facets = self.segment_facets[s as usize].clone();
         for f in facets {
-            let boundary = self.facet_boundary(f as usize);
             let pts = self.dt.points();
-            let old = self.facets[f as usize].tris.clone();
-            self.facets[f as usize].split_edge(a, b, v, pts, &boundary);
-            self.index_facet(f as usize, &old);
+            self.facets[f as usize].split_edge(a, b, v, pts);
+            self.index_facet(f as usize);
             self.pending.insert(f);
         }
         Ok(())
@@ -218,25 +245,26 @@ impl Recovery {
 
     /// Indices of the subsegments on facet `f`'s sides.
     fn facet_subsegs(&self, f: usize) -> impl Iterator<Item = usize> + '_ {
-        self.facet_segments[f].into_iter().flat_map(|s| self.seg_subs[s as usize].iter().copied())
+        self.facet_segments[f].iter().flat_map(|&s| self.seg_subs[s as usize].iter().copied())
     }
 
-    /// The subsegments on facet `f`'s sides.
-    fn facet_boundary(&self, f: usize) -> Vec<(u32, u32)> {
-        self.facet_subsegs(f).map(|k| (self.subsegs[k].0, self.subsegs[k].1)).collect()
-    }
-
-    /// Replaces facet `f`'s entries in `face_owner` (its triangles were `old`).
-    fn index_facet(&mut self, f: usize, old: &[[u32; 3]]) {
-        for t in old {
-            let mut k = *t;
+    /// Brings facet `f`'s entries in `face_owner` up to date with the changes of
+    /// its triangulation since the last call.
+    fn index_facet(&mut self, f: usize) {
+        let (removed, added) = self.facets[f].take_changes();
+        for t in removed {
+            let mut k = t;
             k.sort_unstable();
-            self.face_owner.remove(&k);
+            if self.face_owner.get(&k) == Some(&(f as u32)) {
+                self.face_owner.remove(&k);
+            }
         }
-        for t in &self.facets[f].tris {
-            let mut k = *t;
-            k.sort_unstable();
-            self.face_owner.insert(k, f as u32);
+        for t in added {
+            if self.facets[f].has_tri(t) {
+                let mut k = t;
+                k.sort_unstable();
+                self.face_owner.insert(k, f as u32);
+            }
         }
     }
 
@@ -303,12 +331,10 @@ impl Recovery {
     /// Flips an edge of the missing subfacet `t` of facet `f` when both triangles
     /// of the flipped quad are faces of the tetrahedralization; whether it did.
     fn match_by_flip(&mut self, f: usize, t: [u32; 3]) -> bool {
-        let boundary = self.facet_boundary(f);
-        for (u, v, w, x) in self.facets[f].flips_of(t, &boundary) {
+        for (u, v, w, x) in self.facets[f].flips_of(t) {
             if self.has_face(w, u, x) && self.has_face(x, v, w) {
-                let old = self.facets[f].tris.clone();
                 self.facets[f].flip(u, v);
-                self.index_facet(f, &old);
+                self.index_facet(f);
                 return true;
             }
         }
@@ -340,8 +366,7 @@ impl Recovery {
             }
         }
         for f in &self.facets {
-            let [a, b, c] = f.corners().map(|v| pts[v as usize]);
-            let normal = cross(sub(b, a), sub(c, a));
+            let normal = f.normal();
             for v in f.points() {
                 if (v as usize) >= first && self.kinds[v as usize - first] == "triangle" {
                     out[v as usize] = Freedom::Plane(tangents(normal));
@@ -362,12 +387,12 @@ impl Recovery {
         self.refine_subfacet(f, t)
     }
 
-    /// A missing subfacet `t` of facet `f`: insert its circumcentre, or split a
-    /// subsegment of `f` that the circumcentre encroaches (lies in the diametral
-    /// ball of).
-    fn refine_subfacet(&mut self, f: usize, t: [u32; 3]) -> Result<(), ConformingError> {
+    /// The subsegment of facet `f` whose closed diametral ball holds `c`
+    /// deepest (with a margin for rounding: a point on a subsegment, a right
+    /// subfacet's circumcentre, splits the subsegment instead of landing next
+    /// to it).
+    fn encroached_subseg(&self, f: usize, c: Point) -> Option<usize> {
         let pts = self.dt.points();
-        let c = circumcentre(t.map(|v| pts[v as usize]));
         let mut worst: Option<(usize, f64)> = None;
         for k in self.facet_subsegs(f) {
             let (a, b, _) = self.subsegs[k];
@@ -375,26 +400,41 @@ impl Recovery {
             let m = [0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1]), 0.5 * (pa[2] + pb[2])];
             let r2 = 0.25 * dot(sub(pb, pa), sub(pb, pa));
             let d2 = dot(sub(c, m), sub(c, m));
-            // Closed ball, with a margin for rounding: a circumcentre on a
-            // subsegment (a right subfacet's) splits the subsegment instead of
-            // landing next to it.
             if d2 <= r2 * (1.0 + 1e-9) && worst.is_none_or(|(_, w)| d2 / r2 < w) {
                 worst = Some((k, d2 / r2));
             }
         }
-        if let Some((k, _)) = worst {
+        worst.map(|(k, _)| k)
+    }
+
+    /// A missing subfacet `t` of facet `f`: insert its circumcentre, or split a
+    /// subsegment of `f` that the circumcentre encroaches (lies in the diametral
+    /// ball of).
+    fn refine_subfacet(&mut self, f: usize, t: [u32; 3]) -> Result<(), ConformingError> {
+        let pts = self.dt.points();
+        // In the facet's frame: a skinny subfacet's normal is inaccurate, and a
+        // circumcentre computed in 3D would leave the facet's plane.
+        let c = self.facets[f].circumcentre(t);
+        if let Some(k) = self.encroached_subseg(f, c) {
             return self.split_subsegment(k);
         }
         let q = t.map(|v| pts[v as usize]);
         // The circumcentre when it lies strictly inside the subfacet itself, so
         // that its insertion splits this subfacet whatever the rest of the
         // facet's triangulation (an obtuse subfacet's circumcentre lies in a
-        // neighbour, whose split need not remove this one); else the centroid.
+        // neighbour, whose split need not remove this one); else the centroid,
+        // unless that encroaches a subsegment (a needle subfacet's centroid lies
+        // next to its long sides), which is split instead.
         let inside = crate::predicates::projection_for(q[0], q[1], q[2]).is_some_and(|drop| {
             let s = crate::predicates::orient2d(q[0], q[1], q[2], drop);
             (0..3).all(|i| crate::predicates::orient2d(q[i], q[(i + 1) % 3], c, drop) == s)
         }) && self.facets[f].contains(c, pts);
         let centroid = [0, 1, 2].map(|k| (q[0][k] + q[1][k] + q[2][k]) / 3.0);
+        if !inside {
+            if let Some(k) = self.encroached_subseg(f, centroid) {
+                return self.split_subsegment(k);
+            }
+        }
         let p = if inside { c } else { centroid };
         self.next_kind = "triangle";
         // A circumcentre that is a vertex already (one placed on a neighbouring,
@@ -405,11 +445,9 @@ impl Recovery {
         };
 
         self.steiner_on_facets += 1;
-        let boundary = self.facet_boundary(f);
         let pts = self.dt.points();
-        let old = self.facets[f].tris.clone();
-        self.facets[f].insert_interior(v, pts, &boundary);
-        self.index_facet(f, &old);
+        self.facets[f].insert_interior(v, pts);
+        self.index_facet(f);
         self.pending.insert(f as u32);
         Ok(())
     }
