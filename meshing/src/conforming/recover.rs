@@ -227,6 +227,11 @@ impl Recovery {
         Ok(())
     }
 
+    /// The number of input vertices (the first points of the tetrahedralization).
+    pub fn num_input(&self) -> usize {
+        self.dt.points().len() - self.kinds.len()
+    }
+
     /// Whether quality refinement may still add boundary points: a tenth of the
     /// Steiner budget stays for the recovery their insertion triggers.
     pub fn boundary_room(&self) -> bool {

@@ -195,6 +195,28 @@ impl Recovery {
                         self.insert_free(p)?;
                         stats.circumcentres += 1;
                     }
+                    // A bad tet on four input vertices (smoothing cannot move
+                    // them) whose circumcentre encroaches a subfacet: refine
+                    // that subfacet (Shewchuk's rule; only for these, see the
+                    // module docs).
+                    (None, Some(face))
+                        if !too_big
+                            && caps_left > 0
+                            && self.boundary_room()
+                            && v.iter().all(|&x| (x as usize) < self.num_input()) =>
+                    {
+                        caps_left -= 1;
+                        match self.refine_face(face) {
+                            Ok(()) => stats.boundary_splits += 1,
+                            Err(_) if self.last_duplicate => {
+                                self.last_duplicate = false;
+                                skipped.insert(v);
+                                stats.slivers_skipped += 1;
+                                continue;
+                            }
+                            Err(e) => return Err(e),
+                        }
+                    }
                     // A cap: two of its faces are subfacets (on two input
                     // triangles meeting at a flat angle); split the
                     // subsegment they share.
@@ -218,37 +240,40 @@ impl Recovery {
                         stats.slivers_skipped += 1;
                         continue;
                     }
-                    (None, Some(face)) => {
-                        let f = self.face_owner[&face] as usize;
-                        let tri = self.facets[f]
-                            .tris
-                            .iter()
-                            .copied()
-                            .find(|t| {
-                                let mut k = *t;
-                                k.sort_unstable();
-                                k == face
-                            })
-                            .unwrap_or(face);
-                        match self.refine_subfacet_pub(f, tri) {
-                            Ok(()) => stats.boundary_splits += 1,
-                            // Its point is a vertex already (cocircular subfacets):
-                            // nothing changed; leave this tet.
-                            Err(_) if self.last_duplicate => {
-                                self.last_duplicate = false;
-                                skipped.insert(v);
-                                stats.slivers_skipped += 1;
-                                continue;
-                            }
-                            Err(e) => return Err(e),
+                    (None, Some(face)) => match self.refine_face(face) {
+                        Ok(()) => stats.boundary_splits += 1,
+                        // Its point is a vertex already (cocircular subfacets):
+                        // nothing changed; leave this tet.
+                        Err(_) if self.last_duplicate => {
+                            self.last_duplicate = false;
+                            skipped.insert(v);
+                            stats.slivers_skipped += 1;
+                            continue;
                         }
-                    }
+                        Err(e) => return Err(e),
+                    },
                     (None, None) => continue,
                 }
                 self.recover_pending()?;
             }
         }
         Ok(stats)
+    }
+
+    /// Refines the subfacet with sorted corners `face` (`Recovery::refine_subfacet`).
+    fn refine_face(&mut self, face: [u32; 3]) -> Result<(), ConformingError> {
+        let f = self.face_owner[&face] as usize;
+        let tri = self.facets[f]
+            .tris
+            .iter()
+            .copied()
+            .find(|t| {
+                let mut k = *t;
+                k.sort_unstable();
+                k == face
+            })
+            .unwrap_or(face);
+        self.refine_subfacet_pub(f, tri)
     }
 
     /// The edge shared by two subfacet faces of tet `v`, if it has two and is
