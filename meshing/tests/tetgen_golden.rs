@@ -57,8 +57,8 @@ enum Source {
 }
 
 /// A model: name, source, h [mm], and the gates that hold on it (measured; a
-/// gate left out misses). `gates: None`: our mesher is not run on it (it does
-/// not finish in the time a test may take; TetGen's figures are still checked).
+/// gate left out misses, and the test prints it). `gates: None`: our mesher is
+/// not run on it (TetGen's figures are still checked).
 struct Model {
     name: &'static str,
     source: Source,
@@ -90,21 +90,23 @@ const MODELS: [Model; 5] = [
         size_mm: 0.1,
         gates: Some(ALL),
     },
-    // CGAL's fandisk (CAD, 12 946 triangles, many of them needles): only the
-    // count holds (measured: dihedral 0.15..179.73 deg, 0.91 % under 10 deg,
-    // p99.9 radius-edge 906 against TetGen's 3.82..165.64, 0.57 %, 2.55). Input
-    // edges close to other input features get split into runs of tiny
-    // subsegments (conforming Delaunay needs them; TetGen's constrained
-    // Delaunay does not), and tets on four input vertices over nearly flat
-    // hinges stay.
+    // CGAL's fandisk (CAD, 12 946 triangles): all hold since coplanar input
+    // triangles merge into facets, bad tets on four input vertices refine the
+    // subfacet their circumcentre encroaches and smoothing counts angles over
+    // 165 deg (measured: 46 365 tets, 10.02..160.29 deg, 0 % under 10 deg,
+    // p99.9 radius-edge 2.13).
     Model {
         name: "fandisk",
         source: Source::Debian { package: "libcgal-demo", path: CGAL_DATA, member: Some("data/meshes/fandisk.off") },
         size_mm: 0.05,
-        gates: Some(&[Gate::Count]),
+        gates: Some(ALL),
     },
-    // Netgen's hinge (CAD STL, 1 212 triangles, needle-heavy): our boundary
-    // recovery and refinement had not finished after 7 min (TetGen: under 1 s).
+    // Netgen's hinge (CAD STL, 1 212 triangles, needle-heavy, coordinates with
+    // 7 digits): the p99.9 radius-edge ratio misses (measured: 4.10 against
+    // TetGen's 1.41; 23 719 tets, 7.27..164.74 deg, 0.12 % under 10 deg).
+    // Tets next to the boundary that are bad only by radius-edge are left when
+    // their circumcentre encroaches a subfacet (module docs of `conforming`,
+    // "What is not done").
     Model {
         name: "hinge",
         source: Source::Debian {
@@ -113,7 +115,7 @@ const MODELS: [Model; 5] = [
             member: None,
         },
         size_mm: 2.0,
-        gates: None,
+        gates: Some(&[Gate::Count, Gate::MinDihedral, Gate::MaxDihedral, Gate::Below10]),
     },
 ];
 
@@ -236,7 +238,7 @@ fn our_conforming_meshes_pass_the_gates_against_tetgens_golden_figures() {
         );
         assert!(r.volume_error.abs() <= 1e-9, "{}: volume error {:e}", m.name, r.volume_error);
         assert!(r.hausdorff_relative <= 1e-9, "{}: Hausdorff {:e}", m.name, r.hausdorff_relative);
-        for gate in gates {
+        for gate in ALL {
             let (ok, what) = match gate {
                 Gate::Count => (r.num_cells as f64 <= 1.25 * g.num_cells as f64, format!("{} tets", r.num_cells)),
                 Gate::MinDihedral => (r.min_dihedral_deg >= g.min_dihedral_deg, format!("{}", r.min_dihedral_deg)),
@@ -246,7 +248,13 @@ fn our_conforming_meshes_pass_the_gates_against_tetgens_golden_figures() {
                 }
                 Gate::RadiusEdge => (r.p999_radius_edge <= g.p999_radius_edge, format!("{}", r.p999_radius_edge)),
             };
-            assert!(ok, "{}: gate {gate:?} misses: ours {what}, TetGen {g:?}", m.name);
+            if gates.contains(gate) {
+                assert!(ok, "{}: gate {gate:?} misses: ours {what}, TetGen {g:?}", m.name);
+            } else if !ok {
+                eprintln!("{}: gate {gate:?} misses (known, not asserted): ours {what}", m.name);
+            } else {
+                eprintln!("{}: gate {gate:?} holds now: ours {what} (add it to MODELS)", m.name);
+            }
         }
     }
 }

@@ -127,7 +127,7 @@ pub use refine::RefineStats;
 pub use smooth::SmoothStats;
 
 /// Passes of sliver smoothing.
-pub const SMOOTHING_PASSES: usize = 4;
+pub const SMOOTHING_PASSES: usize = 8;
 
 use crate::validate::InvalidSurface;
 use crate::{Surface, WindingNumber};

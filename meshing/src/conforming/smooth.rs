@@ -43,7 +43,7 @@ pub struct SmoothStats {
 }
 
 /// Candidate positions tried per vertex.
-const TRIES: usize = 12;
+const TRIES: usize = 24;
 
 /// The smallest [`angle_quality`] of `star` with `v` at `at`; `None` when a tet of
 /// it would not be positively oriented or would be larger than `max_volume`.
@@ -64,11 +64,17 @@ fn star_min(nodes: &[Point], cells: &[[u32; 4]], star: &[u32], v: u32, at: Point
 }
 
 /// The quality smoothing raises: the smallest dihedral angle, or the supplement
-/// of the largest when that is smaller (a tet with an angle near 180 deg is as
-/// bad as one with an angle near 0) [deg].
+/// of the largest times [`MAX_ANGLE_WEIGHT`] when that is smaller (a tet with an
+/// angle near 180 deg is as bad as one with an angle near 0) [deg].
 pub(crate) fn angle_quality(min_deg: f64, max_deg: f64) -> f64 {
-    min_deg.min(180.0 - max_deg)
+    min_deg.min(MAX_ANGLE_WEIGHT * (180.0 - max_deg))
 }
+
+/// The weight of the largest dihedral angle's supplement in [`angle_quality`]:
+/// with the default sliver bound of 10 deg, tets with an angle over 165 deg are
+/// smoothed too (TetGen's meshes of the CAD models reach 165 deg; with a weight
+/// of 1, smoothing left tets at 166 to 170 deg on fandisk and hinge).
+pub const MAX_ANGLE_WEIGHT: f64 = 0.5;
 
 /// `at` moved within what `freedom` allows from `here`: the displacement
 /// projected on its plane or line (`None` when the vertex is fixed).
