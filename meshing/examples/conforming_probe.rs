@@ -7,7 +7,8 @@
 //! cargo run --release -p wagashi-meshing --example conforming_probe -- /usr/share/doc/netgen/examples/hinge.stl 2.0
 //! ```
 //!
-//! OBJ (read with `tobj`), OFF and ASCII STL files are read.
+//! OBJ (read with `tobj`), OFF and ASCII STL files are read. `PROBE_WORST=N`
+//! also prints where the N worst tets are (see `diagnose`).
 //!
 //! ```text
 //! ```
@@ -96,6 +97,9 @@ fn main() {
         match conforming_mesh(&s, &o) {
             Ok(m) => {
                 let t = clock.elapsed().as_secs_f64();
+                if let Some(n) = std::env::var("PROBE_WORST").ok().and_then(|x| x.parse().ok()) {
+                    diagnose(&m.mesh, &s, n);
+                }
                 let r = report(&m.mesh, &s, t);
                 println!(
                     "h {h:?} q {q} sliver {sliver}: {} tets, dihedral {:.2}..{:.2}, <10deg {:.3} %, r-e max {:.2} p99.9 {:.3}, \
@@ -113,5 +117,129 @@ fn main() {
             }
             Err(e) => println!("h {h:?}: {e}"),
         }
+    }
+}
+
+fn seg_dist(p: [f64; 3], a: [f64; 3], b: [f64; 3]) -> f64 {
+    let d = sub(b, a);
+    let t = (dot(sub(p, a), d) / dot(d, d)).clamp(0.0, 1.0);
+    let q = [a[0] + t * d[0], a[1] + t * d[1], a[2] + t * d[2]];
+    dot(sub(p, q), sub(p, q)).sqrt()
+}
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+fn tri_dist(p: [f64; 3], t: [[f64; 3]; 3]) -> f64 {
+    let n = cross(sub(t[1], t[0]), sub(t[2], t[0]));
+    let nn = dot(n, n);
+    let inside = (0..3).all(|i| dot(cross(sub(t[(i + 1) % 3], t[i]), sub(p, t[i])), n) >= 0.0);
+    if inside && nn > 0.0 {
+        return (dot(sub(p, t[0]), n) / nn.sqrt()).abs();
+    }
+    (0..3).map(|i| seg_dist(p, t[i], t[(i + 1) % 3])).fold(f64::INFINITY, f64::min)
+}
+/// Where the bad tets are: boundary points off the input surface (over 1e-9 mm;
+/// brute force), the shortest edge, and the `n` worst tets by
+/// min(smallest dihedral angle, 180 - largest) (`PROBE_SORT=max`: by the
+/// largest angle, `PROBE_SORT=re`: by radius-edge ratio) with their corners'
+/// input vertex indices and how many of their faces are on the boundary.
+fn diagnose(mesh: &fem_core::mesh::TetMesh, s: &Surface, n: usize) {
+    let faces = mesh.boundary_facets();
+    let tris: Vec<[[f64; 3]; 3]> = s.triangles.iter().map(|t| t.map(|v| s.vertices[v as usize])).collect();
+    let mut bad = 0;
+    for f in &faces {
+        let q = f.map(|v| mesh.nodes[v as usize]);
+        for p in [q[0], q[1], q[2], [0, 1, 2].map(|k| (q[0][k] + q[1][k] + q[2][k]) / 3.0)] {
+            let d = tris.iter().map(|t| tri_dist(p, *t)).fold(f64::INFINITY, f64::min);
+            if d > 1e-9 {
+                bad += 1;
+                if bad < 20 {
+                    println!("off surface by {d:.3e}: face {f:?} point {p:?}");
+                }
+            }
+        }
+    }
+    println!("{} boundary faces, {bad} points off the surface", faces.len());
+    let shortest = mesh
+        .cells
+        .iter()
+        .flat_map(|c| (0..4).flat_map(move |a| (a + 1..4).map(move |b| (c[a], c[b]))))
+        .map(|(a, b)| {
+            dot(
+                sub(mesh.nodes[a as usize], mesh.nodes[b as usize]),
+                sub(mesh.nodes[a as usize], mesh.nodes[b as usize]),
+            )
+            .sqrt()
+        })
+        .fold(f64::INFINITY, f64::min);
+    println!("shortest edge {shortest:.3e} mm");
+    // worst tets
+    let mut worst: Vec<(f64, usize)> = mesh
+        .cells
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let q = meshing::quality::tet_quality(&c.map(|v| mesh.nodes[v as usize]));
+            (
+                match std::env::var("PROBE_SORT").as_deref() {
+                    Ok("re") => -q.radius_edge,
+                    Ok("max") => 180.0 - q.max_dihedral_deg,
+                    _ => q.min_dihedral_deg.min(180.0 - q.max_dihedral_deg),
+                },
+                i,
+            )
+        })
+        .collect();
+    worst.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let on_bnd: std::collections::HashSet<u32> = faces.iter().flatten().copied().collect();
+    for &(qv, i) in worst.iter().take(n) {
+        let c = mesh.cells[i];
+        let q = meshing::quality::tet_quality(&c.map(|v| mesh.nodes[v as usize]));
+        let nb = c.iter().filter(|v| on_bnd.contains(v)).count();
+        let inp: Vec<usize> =
+            c.iter().map(|&v| s.vertices.iter().position(|p| *p == mesh.nodes[v as usize]).map_or(0, |_| 1)).collect();
+        let edges: Vec<f64> = (0..4)
+            .flat_map(|a| (a + 1..4).map(move |b| (a, b)))
+            .map(|(a, b)| {
+                dot(
+                    sub(mesh.nodes[c[a] as usize], mesh.nodes[c[b] as usize]),
+                    sub(mesh.nodes[c[a] as usize], mesh.nodes[c[b] as usize]),
+                )
+                .sqrt()
+            })
+            .collect();
+        let fs: std::collections::HashSet<[u32; 3]> = faces
+            .iter()
+            .map(|f| {
+                let mut k = *f;
+                k.sort_unstable();
+                k
+            })
+            .collect();
+        let nbf = [[1, 3, 2], [0, 2, 3], [0, 3, 1], [0, 1, 2]]
+            .iter()
+            .filter(|f| {
+                let mut k = f.map(|j: usize| c[j]);
+                k.sort_unstable();
+                fs.contains(&k)
+            })
+            .count();
+        let idx: Vec<Option<usize>> =
+            c.iter().map(|&v| s.vertices.iter().position(|p| *p == mesh.nodes[v as usize])).collect();
+        println!("bnd faces {nbf} input idx {idx:?}");
+        println!(
+            "re {:.2} q {qv:.2} min {:.2} max {:.2} bnd verts {nb} input verts {inp:?} at {:?} edges {:?}",
+            q.radius_edge,
+            q.min_dihedral_deg,
+            q.max_dihedral_deg,
+            mesh.nodes[c[0] as usize],
+            edges.iter().map(|e| format!("{e:.4}")).collect::<Vec<_>>()
+        );
     }
 }

@@ -11,17 +11,29 @@
 //! 2. **Boundary recovery** (`recover.rs`, `facet.rs`) by *conforming Delaunay*
 //!    refinement: the tetrahedralization stays Delaunay throughout, and Steiner
 //!    points are added on the input until every input edge and triangle is a
-//!    union of its edges and faces:
+//!    union of its edges and faces. First, input triangles that are coplanar
+//!    with a neighbour (the far corner within 1e-12 of the bounding-box
+//!    diagonal of its plane, across an edge that only those two share) merge
+//!    into one planar polygon, a *facet*; the *segments* are the input edges
+//!    between facets, and the edges inside a facet are dropped. A CAD model's
+//!    planes are cut into needle triangles (the hinge's 1 212 triangles have
+//!    488 with an angle under 5 deg): kept as they were, every needle edge had
+//!    to appear in the mesh, and it was split into runs of tiny subsegments
+//!    wherever another feature passed near it (boundary recovery and
+//!    refinement of the hinge had not finished after 7 min; merged, they take
+//!    5 s). Then:
 //!    - a subsegment (piece of an input edge) that is not an edge of the
 //!      tetrahedralization is split, at its midpoint or, next to an input vertex,
 //!      at a power-of-two distance from it (Ruppert's concentric shells, which
 //!      keep segments meeting at small angles from splitting each other forever);
-//!    - each input triangle keeps its own 2D Delaunay triangulation of the points
-//!      on it (built combinatorially, so a point on an edge stays on that edge
-//!      whatever the rounding of its coordinates); a subfacet that is not a face
-//!      of the tetrahedralization gets its circumcentre inserted, unless that
-//!      point encroaches a subsegment of the triangle (lies in its diametral
-//!      ball), which is then split instead.
+//!    - each facet keeps its own 2D constrained Delaunay triangulation of the
+//!      points on it (built combinatorially, so a point on a segment stays on
+//!      it whatever the rounding of its coordinates); a subfacet that is not a
+//!      face of the tetrahedralization gets its circumcentre (computed in the
+//!      facet's plane: a skinny subfacet's own normal is too inaccurate)
+//!      inserted when that lies inside it, else its centroid, unless the point
+//!      encroaches a subsegment of the facet (lies in its diametral ball),
+//!      which is then split instead.
 //!
 //!    Then the tets reachable from outside the hull without crossing an input
 //!    triangle are removed, and the rest is split into the components the input
@@ -61,9 +73,13 @@
 //!      at a nearly flat hinge (the tet's angle there over 150 deg), gets that
 //!      hinge's subsegment split; that is what removes most slivers of a
 //!      curved surface (on the bunny 643 of 749 slivers were caps);
+//!    - a tet on four input vertices (which smoothing cannot move) refines the
+//!      subfacet its circumcentre encroaches: on fandisk those were slivers
+//!      under a curved strip of the surface, spanning two rows of its grid,
+//!      down to 0.15 deg;
 //!    - other tets that are bad for quality alone are left.
-//! 4. **Flat caps** (`drop_flat_caps`): tets whose corners are coplanar within
-//!    rounding with a face on the boundary (on coplanar input triangles, where
+//! 4. **Flat caps** (`drop_flat_caps`): tets whose smallest height is under
+//!    1e-12 of the diagonal, with a face on the boundary (on coplanar input triangles, where
 //!    the symbolic perturbation of stage 1 makes zero-volume tets legal) are
 //!    removed: the boundary becomes their other faces, the same piece of plane.
 //! 5. **Smoothing** (`smooth.rs`): Steiner vertices of bad tets (smallest
@@ -80,18 +96,20 @@
 //! ## What is not done, and why
 //!
 //! Refining subfacets for quality alone (a bad radius-edge ratio or a sliver
-//! next to the boundary that is no cap) does not converge yet: repeated
-//! subfacet refinements on an input triangle with a 150 deg angle of the bunny
-//! left its 2D triangulation inconsistent (a point located in the wrong
-//! triangle), and boundary recovery then failed on a duplicate point. Those
-//! tets stay; on the shared models they are few enough, once smoothing has
-//! moved boundary Steiner points too, that the gates hold on the
-//! bunny, the layered bunny and two boxes; not on CAD models with needle
-//! triangles (`tests/tetgen_golden.rs` lists which hold): there input edges
-//! near other input features are split into runs of tiny subsegments, which
-//! conforming Delaunay needs and constrained Delaunay does not. No 2-3/3-2 flips are done: the
-//! refinement keeps the tetrahedralization Delaunay, which boundary recovery
-//! relies on.
+//! next to the boundary that is no cap), beyond tets on four input vertices,
+//! does not converge: measured with the merged facets, refining the subfacet
+//! encroached by any radius-edge-bad tet doubled fandisk's count and stopped at
+//! the pass limit with 468 bad tets left, and on the hinge raised the p99.9
+//! radius-edge ratio from 4.1 to 9.5; restricted to subfacets of circumradius
+//! at least h / 2 it lowered the hinge's to 2.8 but its dihedral angles fell to
+//! 2.99..174 deg. Those tets stay; on the shared models and fandisk they are
+//! few enough, once smoothing has moved boundary Steiner points too, that all
+//! the gates hold; on the hinge (short input edges, 0.44 mm at h =
+//! 2 mm, next to large facets) the p99.9 radius-edge ratio misses
+//! (`tests/tetgen_golden.rs` lists which gates hold where). TetGen's
+//! constrained Delaunay needs no subfacet to be Delaunay and refines there
+//! freely. No 2-3/3-2 flips are done: the refinement keeps the
+//! tetrahedralization Delaunay, which boundary recovery relies on.
 //!
 //! Quality refinement runs on a copy of the state, each boundary recovery it
 //! triggers bounded (20 000 points) and its cap splits bounded (as many as the
@@ -102,9 +120,13 @@
 //! under 10 deg, 7 s); at the size of the TetGen comparison (0.3 mm) it does
 //! not (0.012 %, 4.4 s).
 //!
-//! Termination is not proven for input with very sharp angles between input
-//! triangles (the theory needs protecting balls around such edges); a budget of
-//! Steiner points turns a run that does not converge into a typed error.
+//! Termination is not proven for input with very sharp angles between facets
+//! (the theory needs protecting balls around such edges); a budget of Steiner
+//! points turns a run that does not converge into a typed error. Merging
+//! coplanar triangles removes the small angles that only the triangulation of
+//! a plane made (needle triangles), which is what made the hinge run away
+//! (merged, its shortest mesh edge is 0.135 mm at h = 2 mm; the
+//! `conforming_probe` example's `PROBE_WORST` prints it).
 
 mod delaunay;
 mod facet;

@@ -95,8 +95,10 @@ impl Recovery {
             .iter()
             .enumerate()
             .map(|(g, members)| {
-                let sides: Vec<(u32, u32)> =
-                    facet_segments[g].iter().map(|&s| (segment_ends[s as usize][0], segment_ends[s as usize][1])).collect();
+                let sides: Vec<(u32, u32)> = facet_segments[g]
+                    .iter()
+                    .map(|&s| (segment_ends[s as usize][0], segment_ends[s as usize][1]))
+                    .collect();
                 Facet::new(members.iter().map(|&f| triangles[f]).collect(), &sides, vertices)
             })
             .collect();

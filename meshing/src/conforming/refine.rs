@@ -21,8 +21,9 @@
 //! bound refines the subfacet that `c` encroaches most deeply (see
 //! `Recovery::refine_subfacet`); a *cap* (two faces on input triangles meeting
 //! at a hinge flatter than [`CAP_HINGE_DEG`]) gets the hinge's subsegment
-//! split; any other tet is left (module docs of `conforming`, "What is not
-//! done"). The facets whose subfacets went missing are recovered before going
+//! split; a tet on four input vertices refines the subfacet its circumcentre
+//! blocks on (smoothing cannot move its corners, so nothing else would fix it);
+//! any other tet is left (module docs of `conforming`, "What is not done"). The facets whose subfacets went missing are recovered before going
 //! on. A tet that is bad only as a sliver is also left when no free
 //! candidate's star is better than it (it then waits for `smooth.rs`); a tet
 //! left is not tried again.
