@@ -93,8 +93,8 @@ const MODELS: [Model; 5] = [
     // CGAL's fandisk (CAD, 12 946 triangles): all hold since coplanar input
     // triangles merge into facets, bad tets on four input vertices refine the
     // subfacet their circumcentre encroaches and smoothing counts angles over
-    // 165 deg (measured: 46 365 tets, 10.02..160.29 deg, 0 % under 10 deg,
-    // p99.9 radius-edge 2.13).
+    // 160 deg (measured: 45 530 tets, 10.06..160.29 deg, 0 % under 10 deg,
+    // p99.9 radius-edge 2.08).
     Model {
         name: "fandisk",
         source: Source::Debian { package: "libcgal-demo", path: CGAL_DATA, member: Some("data/meshes/fandisk.off") },
@@ -102,8 +102,8 @@ const MODELS: [Model; 5] = [
         gates: Some(ALL),
     },
     // Netgen's hinge (CAD STL, 1 212 triangles, needle-heavy, coordinates with
-    // 7 digits): the p99.9 radius-edge ratio misses (measured: 4.10 against
-    // TetGen's 1.41; 23 719 tets, 7.27..164.74 deg, 0.12 % under 10 deg).
+    // 7 digits): the p99.9 radius-edge ratio misses (measured: 3.95 against
+    // TetGen's 1.41; 23 949 tets, 7.77..164.46 deg, 0.092 % under 10 deg).
     // Tets next to the boundary that are bad only by radius-edge are left when
     // their circumcentre encroaches a subfacet (module docs of `conforming`,
     // "What is not done").

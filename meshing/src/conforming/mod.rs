@@ -97,7 +97,8 @@
 //!
 //! Refining subfacets for quality alone (a bad radius-edge ratio or a sliver
 //! next to the boundary that is no cap), beyond tets on four input vertices,
-//! does not converge: measured with the merged facets, refining the subfacet
+//! does not converge: measured with the merged facets (before the off-centres
+//! of `refine.rs`), refining the subfacet
 //! encroached by any radius-edge-bad tet doubled fandisk's count and stopped at
 //! the pass limit with 468 bad tets left, and on the hinge raised the p99.9
 //! radius-edge ratio from 4.1 to 9.5; restricted to subfacets of circumradius

@@ -74,7 +74,7 @@ pub(crate) fn angle_quality(min_deg: f64, max_deg: f64) -> f64 {
 /// with the default sliver bound of 10 deg, tets with an angle over 160 deg are
 /// smoothed too. With a weight of 1 (angles over 170 deg only), tets at 166 to
 /// 170 deg stayed on fandisk and hinge, whose TetGen meshes stop at 165 deg;
-/// with 1/2 they do not (fandisk 160.3, hinge 164.7 deg), and the bunnies' and
+/// with 1/2 they do not (fandisk 160.3, hinge 164.5 deg), and the bunnies' and
 /// two boxes' gates still hold.
 pub const MAX_ANGLE_WEIGHT: f64 = 0.5;
 
