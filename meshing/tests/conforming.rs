@@ -275,6 +275,106 @@ fn a_cube_is_meshed_with_its_exact_boundary() {
     eprintln!("cube: {:?}", out.stats);
 }
 
+/// A 10 x 20 x 5 mm box whose faces are each cut into needle triangles: a fan
+/// from one corner of each face to `n` points along each of its two far sides
+/// (the three faces at one corner of the box fan from it, the other three from
+/// the opposite corner, so every edge of the box is split alike on both its
+/// faces; `n` a power of two keeps the points exact).
+fn needle_box(n: usize) -> Surface {
+    let mut s = Surface { region_names: vec!["box".into()], ..Surface::default() };
+    let mut index = std::collections::HashMap::new();
+    // Each face: fan corner and two edge vectors, u x v pointing outwards.
+    let faces: [(P, P, P); 6] = [
+        ([0.0, 0.0, 0.0], [0.0, 20.0, 0.0], [10.0, 0.0, 0.0]),
+        ([0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [0.0, 0.0, 5.0]),
+        ([0.0, 0.0, 0.0], [0.0, 0.0, 5.0], [0.0, 20.0, 0.0]),
+        ([10.0, 20.0, 5.0], [-10.0, 0.0, 0.0], [0.0, -20.0, 0.0]),
+        ([10.0, 20.0, 5.0], [0.0, 0.0, -5.0], [-10.0, 0.0, 0.0]),
+        ([10.0, 20.0, 5.0], [0.0, -20.0, 0.0], [0.0, 0.0, -5.0]),
+    ];
+    for (o, u, v) in faces {
+        let at = |a: f64, b: f64| [0, 1, 2].map(|k| o[k] + a * u[k] + b * v[k]);
+        // The far sides (a = 1, then b = 1) as one chain of 2n + 1 points.
+        let chain: Vec<P> = (0..=n)
+            .map(|i| at(1.0, i as f64 / n as f64))
+            .chain((0..n).rev().map(|i| at(i as f64 / n as f64, 1.0)))
+            .collect();
+        let mut vertex = |p: P| -> u32 {
+            *index.entry(p.map(f64::to_bits)).or_insert_with(|| {
+                s.vertices.push(p);
+                s.vertices.len() as u32 - 1
+            })
+        };
+        let c0 = vertex(at(0.0, 0.0));
+        let ids: Vec<u32> = chain.into_iter().map(&mut vertex).collect();
+        for w in ids.windows(2) {
+            s.triangles.push([c0, w[0], w[1]]);
+            s.triangle_regions.push(0);
+        }
+    }
+    s
+}
+
+#[test]
+fn coplanar_needle_triangles_merge_into_one_facet_per_face() {
+    // 32 points per side: fan triangles with angles down to about 1 deg.
+    let s = needle_box(32);
+    s.require_valid().unwrap();
+    let out = conforming_mesh(&s, &ConformingOptions::new(2.0)).unwrap();
+    assert_eq!(out.stats.input_triangles, 6 * 64);
+    assert_eq!(out.stats.facets, 6, "one facet per face of the box");
+    let r = check_conforming(&out.mesh, &s);
+    assert!((r.volume_mm3 - 1000.0).abs() < 1e-9, "volume {}", r.volume_mm3);
+    // The fans' edges inside the faces need not appear, so the mesh is not
+    // tied to the needles: measured 5.67..166.37 deg (the box's edges keep
+    // their 32 fixed input points each).
+    assert!(r.min_dihedral_deg > 5.0, "dihedral {}..{}", r.min_dihedral_deg, r.max_dihedral_deg);
+    eprintln!("needle box: {:?}, dihedral {:.2}..{:.2}", out.stats, r.min_dihedral_deg, r.max_dihedral_deg);
+}
+
+#[test]
+fn nearly_coplanar_triangles_stay_apart() {
+    // A box whose top is a tent over its centre raised by 1e-6 mm (4e-8 of the
+    // diagonal: far above the 1e-12 merging tolerance, invisible): the four
+    // tent triangles are not coplanar and stay four facets, and the boundary
+    // follows the tent exactly (volume and Hausdorff within 1e-9).
+    let c = |x: f64, y: f64, z: f64| [x, y, z];
+    let mut s = Surface { region_names: vec!["box".into()], ..Surface::default() };
+    let quads = [
+        [c(0.0, 0.0, 0.0), c(0.0, 20.0, 0.0), c(10.0, 20.0, 0.0), c(10.0, 0.0, 0.0)],
+        [c(0.0, 0.0, 0.0), c(10.0, 0.0, 0.0), c(10.0, 0.0, 5.0), c(0.0, 0.0, 5.0)],
+        [c(0.0, 20.0, 0.0), c(0.0, 20.0, 5.0), c(10.0, 20.0, 5.0), c(10.0, 20.0, 0.0)],
+        [c(0.0, 0.0, 0.0), c(0.0, 0.0, 5.0), c(0.0, 20.0, 5.0), c(0.0, 20.0, 0.0)],
+        [c(10.0, 0.0, 0.0), c(10.0, 20.0, 0.0), c(10.0, 20.0, 5.0), c(10.0, 0.0, 5.0)],
+    ];
+    let mut index = std::collections::HashMap::new();
+    let mut vertex = |s: &mut Surface, p: P| -> u32 {
+        *index.entry(p.map(f64::to_bits)).or_insert_with(|| {
+            s.vertices.push(p);
+            s.vertices.len() as u32 - 1
+        })
+    };
+    let mut tri = |s: &mut Surface, t: [P; 3]| {
+        let t = t.map(|p| vertex(s, p));
+        s.triangles.push(t);
+        s.triangle_regions.push(0);
+    };
+    for q in quads {
+        tri(&mut s, [q[0], q[1], q[2]]);
+        tri(&mut s, [q[0], q[2], q[3]]);
+    }
+    let top = [c(0.0, 0.0, 5.0), c(10.0, 0.0, 5.0), c(10.0, 20.0, 5.0), c(0.0, 20.0, 5.0)];
+    for i in 0..4 {
+        tri(&mut s, [top[i], top[(i + 1) % 4], c(5.0, 10.0, 5.0 + 1e-6)]);
+    }
+    s.require_valid().unwrap();
+    let out = conforming_mesh(&s, &ConformingOptions::new(2.0)).unwrap();
+    assert_eq!(out.stats.input_triangles, 14);
+    // Five flat faces of two triangles each merge; the four tent triangles do not.
+    assert_eq!(out.stats.facets, 5 + 4);
+    check_conforming(&out.mesh, &s);
+}
+
 #[test]
 fn the_bunny_is_meshed_with_its_exact_boundary() {
     let s = read_obj("meshes/npm_bunny.obj");

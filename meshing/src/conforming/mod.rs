@@ -239,8 +239,10 @@ impl From<InvalidSurface> for ConformingError {
 pub struct ConformingStats {
     /// Input vertices.
     pub input_vertices: usize,
-    /// Input triangles (facets).
+    /// Input triangles.
     pub input_triangles: usize,
+    /// Facets: the planar polygons the coplanar input triangles merge into.
+    pub facets: usize,
     /// Steiner points added on input edges.
     pub steiner_on_edges: usize,
     /// Steiner points added inside input triangles.
@@ -399,6 +401,7 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
     let stats = ConformingStats {
         input_vertices: vertices.len(),
         input_triangles: facets.len(),
+        facets: rec.facets.len(),
         steiner_on_edges: rec.steiner_on_segments,
         steiner_on_triangles: rec.steiner_on_facets,
         subfacets: rec.face_owner.len(),
