@@ -158,6 +158,12 @@ fn key(a: u32, b: u32) -> (u32, u32) {
 }
 
 impl Facet {
+    /// How many input triangles the facet is made of (more than one: a plane
+    /// of the input, merged).
+    pub fn num_inputs(&self) -> usize {
+        self.inputs.len()
+    }
+
     /// The facet made of the input triangles `inputs` (coplanar, consistently
     /// oriented, not degenerate) whose sides are the edges `sides`: its
     /// triangulation is made constrained Delaunay at once.

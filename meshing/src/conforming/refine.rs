@@ -45,6 +45,18 @@ pub const CANDIDATES: usize = 8;
 /// as a fraction of the circumradius.
 pub const OFF_CENTRE: f64 = 0.3;
 
+/// A tet whose radius-edge ratio exceeds this, and all of whose candidates
+/// are blocked by a subfacet of a merged plane of the input (a facet of more
+/// than one input triangle) with circumradius at least the tet's shortest
+/// edge, refines that subfacet. The theory of Delaunay refinement wants a
+/// bound over 2 for boundary refinement to terminate; measured on the hinge
+/// (p99.9 radius-edge ratio, smallest dihedral angle): 2.0 gave 2.08 but
+/// 5.00 deg, 2.1 gave 2.31, 2.2 gave 2.18 and 9.03 deg, 2.3 gave 2.23 and
+/// 10.01 deg, 2.5 gave 2.42, 3 gave 2.59; 1.5 and 1.8 made it worse (8.5 and
+/// 2.66, slivers down to 1.8 deg). 2.3: the smallest that keeps every tet
+/// of the hinge over 10 deg.
+pub const PLANE_RADIUS_EDGE: f64 = 2.3;
+
 /// A sliver with two faces on the boundary whose dihedral angle at their shared
 /// edge exceeds this [deg] is a *cap* over a nearly flat hinge of the input.
 pub const CAP_HINGE_DEG: f64 = 150.0;
@@ -117,7 +129,7 @@ impl Recovery {
             stats.passes += 1;
             let (inside, _) = interior_components(&self.dt, &self.face_owner);
             let pts = self.dt.points();
-            let mut bad: Vec<(f64, u32, [u32; 4], bool, bool)> = inside
+            let mut bad: Vec<(f64, u32, [u32; 4], bool, bool, f64)> = inside
                 .iter()
                 .filter_map(|&(t, v, _)| {
                     let q = v.map(|i| pts[i as usize]);
@@ -139,7 +151,7 @@ impl Recovery {
                         return None;
                     }
                     let badness = size.max(sliver);
-                    (badness > 1.0).then_some((badness, t, v, only_sliver, too_big > 1.0))
+                    (badness > 1.0).then_some((badness, t, v, only_sliver, too_big > 1.0, re))
                 })
                 .collect();
             stats.bad_left = bad.len();
@@ -147,7 +159,7 @@ impl Recovery {
                 break;
             }
             bad.sort_by(|x, y| y.0.total_cmp(&x.0).then(x.2.cmp(&y.2)));
-            for (_, t, v, only_sliver, too_big) in bad {
+            for (_, t, v, only_sliver, too_big, re) in bad {
                 if self.dt.points().len() - start_points >= budget {
                     return Ok(stats);
                 }
@@ -225,6 +237,30 @@ impl Recovery {
                             Err(e) => return Err(e),
                         }
                     }
+                    // A tet of radius-edge ratio over PLANE_RADIUS_EDGE whose
+                    // circumcentre encroaches a subfacet of a merged plane of
+                    // the input (CAD; a scan's triangles are rarely coplanar)
+                    // at least as large as the tet's shortest edge: refine
+                    // that subfacet (Shewchuk's rule, restricted; module docs).
+                    (None, Some(face))
+                        if !too_big
+                            && re > PLANE_RADIUS_EDGE
+                            && caps_left > 0
+                            && self.boundary_room()
+                            && self.plane_subfacet_larger(face, v) =>
+                    {
+                        caps_left -= 1;
+                        match self.refine_face(face) {
+                            Ok(()) => stats.boundary_splits += 1,
+                            Err(_) if self.last_duplicate => {
+                                self.last_duplicate = false;
+                                skipped.insert(v);
+                                stats.slivers_skipped += 1;
+                                continue;
+                            }
+                            Err(e) => return Err(e),
+                        }
+                    }
                     // A cap: two of its faces are subfacets (on two input
                     // triangles meeting at a flat angle); split the
                     // subsegment they share.
@@ -282,6 +318,27 @@ impl Recovery {
             })
             .unwrap_or(face);
         self.refine_subfacet_pub(f, tri)
+    }
+
+    /// Whether subfacet `face` lies on a merged plane of the input and its
+    /// circumradius is at least the shortest edge of tet `v`.
+    fn plane_subfacet_larger(&self, face: [u32; 3], v: [u32; 4]) -> bool {
+        let f = self.face_owner[&face] as usize;
+        if self.facets[f].num_inputs() < 2 {
+            return false;
+        }
+        let pts = self.dt.points();
+        let q = face.map(|x| pts[x as usize]);
+        let cc = super::recover::circumcentre(q);
+        let r = dot(sub(q[0], cc), sub(q[0], cc)).sqrt();
+        let mut lmin = f64::INFINITY;
+        for i in 0..4 {
+            for j in i + 1..4 {
+                let d = sub(pts[v[j] as usize], pts[v[i] as usize]);
+                lmin = lmin.min(dot(d, d).sqrt());
+            }
+        }
+        r >= lmin
     }
 
     /// The edge shared by two subfacet faces of tet `v`, if it has two and is
