@@ -120,7 +120,9 @@
 //! adopted (stage 3); lower bounds make it worse on the hinge (p99.9 2.08
 //! but 5.00 deg at 2.0; 2.66 and 2.90 deg at 1.8 with subfacets at least 1.5
 //! shortest edges; 8.5 and 1.84 deg at 1.5), and extending it to facets of a
-//! single input triangle did not help (2.45 at 2.5). The other tets stay; on
+//! single input triangle did not help (2.45 at 2.5), nor did a second bound
+//! of 1.5 for tets whose shortest edge joins two input vertices (3.34, 2.74
+//! deg) or two Steiner points (2.71, 2.78 deg). The other tets stay; on
 //! the shared models and fandisk they are few enough, once smoothing has
 //! moved boundary Steiner points too, that all the gates hold; on
 //! the hinge (short input edges, 0.44 mm at h = 2 mm, next to large facets)
