@@ -655,7 +655,8 @@ fn noise_free_model(
     for (t, &s) in model.trials.iter_mut().zip(sigmas) {
         t.force_sigma_n = s;
     }
-    let x0 = campaign
+    model.sample_scale_sd = options.sample_scale_sd.max(0.0);
+    let mut x0: Vec<f64> = campaign
         .unknowns
         .iter()
         .zip(campaign.values())
@@ -666,6 +667,7 @@ fn noise_free_model(
             _ => v,
         })
         .collect();
+    x0.resize(model.num_theta(), 0.0);
     Ok((model, x0))
 }
 
@@ -1195,3 +1197,4 @@ mod tests {
         assert!(d.variability >= 0.03 && d.variability <= 0.10);
     }
 }
+

@@ -115,6 +115,9 @@ pub struct DiagnosisOptions {
     pub marker_sigma_mm: f64,
     /// Levenberg-Marquardt settings (baseline and refits).
     pub lsq: Options,
+    /// Prior standard deviation `omega` of the per-sample (per-trial) log-scales
+    /// on the moduli and on the viscosities (0: no scales; module docs).
+    pub sample_scale_sd: f64,
 }
 
 impl Default for DiagnosisOptions {
@@ -130,6 +133,7 @@ impl Default for DiagnosisOptions {
             axisymmetric: false,
             marker_sigma_mm: 0.05,
             lsq: Options { max_iterations: 60, ..Options::default() },
+            sample_scale_sd: 0.1,
         }
     }
 }
@@ -332,6 +336,8 @@ fn validation_heldout(
     candidate: Option<(&Candidate, &[f64])>,
 ) -> Result<Vec<f64>, EvalError> {
     let kinds = vm.scale_kind();
+    // Validation trials carry no fitted scales: anchoring re-estimates them.
+    let theta = &theta[..vm.unknowns.len()];
     let p = theta.len();
     let parts: Vec<Vec<f64>> = (0..vm.num_trials())
         .into_par_iter()
@@ -382,7 +388,7 @@ pub fn diagnose(
                 .into(),
         ));
     }
-    let model = Model::new(
+    let mut model = Model::new(
         calibration,
         &campaign.materials,
         campaign.unknowns.clone(),
@@ -390,6 +396,7 @@ pub fn diagnose(
         options.axisymmetric,
         options.marker_sigma_mm,
     )?;
+    model.sample_scale_sd = options.sample_scale_sd.max(0.0);
     let vmodel = if validation.is_empty() {
         None
     } else {
@@ -409,7 +416,9 @@ pub fn diagnose(
     let specs = problem.specs();
     let ms_options = MultiStartOptions { num_starts: options.starts, seed: options.seed, fit: options.lsq.clone() };
     let report_start = |done: usize, total: usize| progress(Stage::Calibration, done, total);
-    let ms = multistart(&problem, &specs, &campaign.values(), &ms_options, Some(&report_start))?;
+    let mut x0 = campaign.values();
+    x0.resize(model.num_theta(), 0.0);
+    let ms = multistart(&problem, &specs, &x0, &ms_options, Some(&report_start))?;
     let base = ms.best().clone();
     if !base.stop.converged() {
         warnings.push(format!("the baseline calibration did not converge ({})", base.stop));
@@ -418,9 +427,9 @@ pub fn diagnose(
     let r0 = base.residuals.clone();
     let j0 = base.jacobian.clone();
     let phi0 = base.objective;
-    let n = r0.len();
+    let n = model.num_residuals();
     let baseline = Baseline {
-        labels: model.unknowns.iter().map(|u| u.label()).collect(),
+        labels: model.unknowns.iter().map(|u| u.label()).chain(model.scale_labels()).collect(),
         values: theta.clone(),
         objective: phi0,
         rms_noise_units: (2.0 * phi0 / n as f64).sqrt(),

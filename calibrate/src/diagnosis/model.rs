@@ -287,6 +287,9 @@ pub struct Model {
     pub observations: Vec<Observation>,
     /// First residual of each trial, and the total at the end.
     pub offsets: Vec<usize>,
+    /// Prior standard deviation of the per-sample log-scales (0: the calibration
+    /// has none; module docs, "Per-sample scales").
+    pub sample_scale_sd: f64,
 }
 
 /// Phase of a time inside the protocol (`t` within the segment `(t_i, t_i+1]`).
@@ -418,7 +421,79 @@ impl Model {
             marker_sigma_mm,
             observations,
             offsets,
+            sample_scale_sd: 0.0,
         })
+    }
+
+    /// The scale groups present among the unknowns, in order: moduli (`true`),
+    /// viscosities (`false`).
+    fn scale_groups(&self) -> Vec<bool> {
+        let kinds = self.scale_kind();
+        [true, false].into_iter().filter(|g| kinds.contains(&Some(*g))).collect()
+    }
+
+    /// The number of per-sample log-scales `b` (trials times groups; 0 without a prior).
+    pub fn num_scales(&self) -> usize {
+        if self.sample_scale_sd > 0.0 {
+            self.trials.len() * self.scale_groups().len()
+        } else {
+            0
+        }
+    }
+
+    /// The length of `theta` in every call with scales: the unknowns, then `b`.
+    pub fn num_theta(&self) -> usize {
+        self.unknowns.len() + self.num_scales()
+    }
+
+    /// Labels of the per-sample log-scales (`scale.<trial>.moduli` / `.viscosities`).
+    pub fn scale_labels(&self) -> Vec<String> {
+        if self.num_scales() == 0 {
+            return Vec::new();
+        }
+        let groups = self.scale_groups();
+        let mut out = Vec::new();
+        for t in &self.trials {
+            for &g in &groups {
+                out.push(format!("scale.{}.{}", t.name, if g { "moduli" } else { "viscosities" }));
+            }
+        }
+        out
+    }
+
+    /// The factor `exp(b)` of trial `k`'s scale of kind `modulus` (1 when `theta`
+    /// carries no scales or the kind has none).
+    fn scale_factor(&self, k: usize, theta: &[f64], modulus: bool) -> f64 {
+        let p = self.unknowns.len();
+        if theta.len() <= p || self.num_scales() == 0 {
+            return 1.0;
+        }
+        let groups = self.scale_groups();
+        match groups.iter().position(|&g| g == modulus) {
+            Some(gi) => theta[p + k * groups.len() + gi].exp(),
+            None => 1.0,
+        }
+    }
+
+    /// The unknowns as trial `k` sees them: scaled by its sample scales when
+    /// `theta` carries them.
+    fn trial_theta(&self, k: usize, theta: &[f64]) -> Vec<f64> {
+        let kinds = self.scale_kind();
+        (0..self.unknowns.len())
+            .map(|i| match kinds[i] {
+                Some(g) => theta[i] * self.scale_factor(k, theta, g),
+                None => theta[i],
+            })
+            .collect()
+    }
+
+    /// The prior rows `b / omega` of the scales in `theta` (none without).
+    fn prior_rows(&self, theta: &[f64]) -> Vec<f64> {
+        let p = self.unknowns.len();
+        if theta.len() <= p || self.num_scales() == 0 {
+            return Vec::new();
+        }
+        theta[p..p + self.num_scales()].iter().map(|b| b / self.sample_scale_sd).collect()
     }
 
     /// The number of trials.
@@ -461,7 +536,7 @@ impl Model {
     /// registry order) on top of the bundle's own effects.
     fn problem(&self, k: usize, theta: &[f64], effect: Option<(EffectId, &[f64])>) -> Result<AnyPress, EvalError> {
         let trial = &self.trials[k];
-        let table = self.table_with(theta);
+        let table = self.table_with(&self.trial_theta(k, theta));
         let materials: Vec<Material> = trial
             .region_material
             .iter()
@@ -551,6 +626,7 @@ impl Model {
             r.extend(rk);
             ends.push(e);
         }
+        r.extend(self.prior_rows(theta));
         Ok((r, ends))
     }
 
@@ -593,8 +669,11 @@ impl Model {
             let (result, sens) = simulate_any_with_sensitivities(&problem, &self.settings, &params, &mut |_| {})
                 .map_err(|e| EvalError::with_source(format!("trial {}", self.trials[k].name), e))?;
             let trial = &self.trials[k];
+            let kinds = self.scale_kind();
             let mut cols = vec![vec![0.0; 0]; p];
             for (q, (col, _)) in acting.iter().enumerate() {
+                // The engine's derivative is by the trial's scaled value.
+                let factor = kinds[*col].map_or(1.0, |g| self.scale_factor(k, theta, g));
                 let mut c: Vec<f64> =
                     trial.force.iter().map(|&(t, _)| sens.bottom_force_at(t)[q] / trial.force_sigma_n).collect();
                 for (m, i, position) in &trial.markers {
@@ -602,6 +681,7 @@ impl Model {
                         c.push(sens.markers[*m][*i][q][comp] / self.marker_sigma_mm);
                     }
                 }
+                c.iter_mut().for_each(|v| *v *= factor);
                 cols[*col] = c;
             }
             let steps: Vec<f64> = result.steps.iter().map(|s| s.t_s).collect();
@@ -689,7 +769,10 @@ impl Model {
 
     /// Parameter specs of the unknowns.
     pub fn theta_specs(&self) -> Vec<ParameterSpec> {
-        self.unknowns.iter().map(Unknown::spec).collect()
+        let mut s: Vec<ParameterSpec> = self.unknowns.iter().map(Unknown::spec).collect();
+        let w = self.sample_scale_sd;
+        s.extend(self.scale_labels().into_iter().map(|l| ParameterSpec::linear(l, -3.0 * w, 3.0 * w)));
+        s
     }
 
     /// Which unknowns are moduli (`true`) or viscosities (`false`), `None` for others.
@@ -734,12 +817,13 @@ impl Fitting<'_> {
 
 impl LeastSquares for Fitting<'_> {
     fn num_parameters(&self) -> usize {
-        self.model.unknowns.len() + self.candidate.map_or(0, Candidate::dim)
+        self.model.num_theta() + self.candidate.map_or(0, Candidate::dim)
     }
 
     fn evaluate(&self, x: &[f64], want_jacobian: bool) -> Result<Evaluation, EvalError> {
+        let pt = self.model.num_theta();
         let p = self.model.unknowns.len();
-        let (theta, u) = x.split_at(p);
+        let (theta, u) = x.split_at(pt);
         let model = self.model;
         if !want_jacobian {
             let values = self.candidate.map(|c| (c.effect, c.values(u)));
@@ -750,19 +834,42 @@ impl LeastSquares for Fitting<'_> {
             .into_par_iter()
             .map(|k| model.trial_jacobian(k, theta, self.candidate.map(|c| (c, u)), true))
             .collect::<Result<_, _>>()?;
-        let n = model.num_residuals();
+        let prior = model.prior_rows(theta);
+        let n = model.num_residuals() + prior.len();
         let cols = self.num_parameters();
         let mut residuals = Vec::with_capacity(n);
         let mut jac = DMatrix::zeros(n, cols);
         let mut row = 0;
-        for (r, c) in parts {
+        let kinds = model.scale_kind();
+        let groups = model.scale_groups();
+        let nb = model.num_scales();
+        for (k, (r, c)) in parts.into_iter().enumerate() {
             for (j, col) in c.iter().enumerate() {
+                // Unknowns, then (past the scales) the effect's coordinates.
+                let target = if j < p { j } else { j - p + pt };
                 for (i, v) in col.iter().enumerate() {
-                    jac[(row + i, j)] = *v;
+                    jac[(row + i, target)] = *v;
+                }
+            }
+            // d r / d b = sum over the kind's unknowns of theta_i d r / d theta_i.
+            if nb > 0 {
+                for (gi, &g) in groups.iter().enumerate() {
+                    let target = p + k * groups.len() + gi;
+                    for (j, col) in c.iter().enumerate().take(p) {
+                        if kinds[j] == Some(g) {
+                            for (i, v) in col.iter().enumerate() {
+                                jac[(row + i, target)] += theta[j] * v;
+                            }
+                        }
+                    }
                 }
             }
             row += r.len();
             residuals.extend(r);
+        }
+        for (m, b) in prior.into_iter().enumerate() {
+            residuals.push(b);
+            jac[(row + m, p + m)] = 1.0 / model.sample_scale_sd;
         }
         Ok(Evaluation { residuals, jacobian: Some(jac) })
     }
