@@ -585,6 +585,7 @@ pub fn blind_json(
                 "geometry_errors": g.geometry_errors,
                 "force_rho": g.force_rho,
                 "force_sigma_hat_N": g.force_sigma_hat_n,
+                "force_rho_hat": g.force_rho_hat,
                 "verdict": o.label,
                 "named": o.named.iter().map(|e| e.id()).collect::<Vec<_>>(),
                 "column": o.column,

@@ -101,7 +101,7 @@ use super::model::{Candidate, Fitting, Model};
 use super::{diagnose, Diagnosis, DiagnosisError, DiagnosisOptions};
 use crate::lsq::levenberg_marquardt;
 use crate::rng::SplitMix64;
-use crate::trial::{force_noise, Campaign};
+use crate::trial::Campaign;
 
 /// One trial of the campaign design.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -143,6 +143,9 @@ const FORCE_DT_S: f64 = 0.1;
 /// Marker noise and quantum [mm].
 pub const MARKER_SIGMA_MM: f64 = 0.03;
 const MARKER_QUANTUM_MM: f64 = 0.01;
+/// The generator's element size relative to the diagnoser's `size_mm`: a
+/// quarter, finer than the diagnoser's own mesh-correction run (half).
+pub const TRUTH_REFINEMENT: f64 = 0.25;
 /// Evaluations of lambda_eff allowed per strength calibration.
 pub const MAX_STRENGTH_EVALS: usize = 12;
 /// Accepted relative distance of the realised lambda_eff from its target.
@@ -280,8 +283,10 @@ pub struct Generated {
     pub geometry_errors: Vec<[f64; 3]>,
     /// Per trial: the force noise's lag-1 correlation.
     pub force_rho: Vec<f64>,
-    /// Per trial: the diagnoser's force sigma (difference method) [N].
+    /// Per trial: the diagnoser's force sigma [N] ([`super::model::force_noise_model`]).
     pub force_sigma_hat_n: Vec<f64>,
+    /// Per trial: the diagnoser's lag-1 force-noise correlation.
+    pub force_rho_hat: Vec<f64>,
     /// The withheld effect's bundle keys and values (in-library), or the second
     /// mode's `E1/E2` (out-of-library); empty for a null campaign.
     pub strength: Vec<(String, f64)>,
@@ -637,12 +642,13 @@ fn measured(draws: &Draws, runs: &[TruthRun], noisy: bool) -> Result<Vec<Bundle>
         .collect()
 }
 
-/// The diagnoser's model of `bundles` with the force sigmas fixed to `sigmas`.
+/// The diagnoser's model of `bundles` with the force noise fixed to `noise`
+/// (`(sigma, rho)` per trial).
 fn noise_free_model(
     bundles: &[Bundle],
-    sigmas: &[f64],
+    noise: &[(f64, f64)],
     options: &DiagnosisOptions,
-) -> Result<(Model, Vec<f64>), DiagnosisError> {
+) -> Result<(Model, Vec<f64>, Option<Model>), DiagnosisError> {
     let campaign = Campaign::new(bundles, &BTreeMap::new(), options.size_mm, options.axisymmetric)?;
     let mut model = Model::new(
         bundles,
@@ -652,8 +658,9 @@ fn noise_free_model(
         options.axisymmetric,
         options.marker_sigma_mm,
     )?;
-    for (t, &s) in model.trials.iter_mut().zip(sigmas) {
+    for (t, &(s, rho)) in model.trials.iter_mut().zip(noise) {
         t.force_sigma_n = s;
+        t.force_rho = rho;
     }
     model.sample_scale_sd = options.sample_scale_sd.max(0.0);
     let mut x0: Vec<f64> = campaign
@@ -668,18 +675,41 @@ fn noise_free_model(
         })
         .collect();
     x0.resize(model.num_theta(), 0.0);
-    Ok((model, x0))
+    let fine = if options.mesh_correction {
+        let mut f = Model::with_refinement(
+            bundles,
+            &campaign.materials,
+            campaign.unknowns.clone(),
+            options.size_mm,
+            options.axisymmetric,
+            options.marker_sigma_mm,
+            0.5,
+        )?;
+        model.set_mesh_correction(&mut f, &x0)?;
+        Some(f)
+    } else {
+        None
+    };
+    Ok((model, x0, fine))
 }
 
 /// `2 min Phi` of the baseline on noise-free `bundles`, and the fitted parameters.
 fn baseline_misfit(
     bundles: &[Bundle],
-    sigmas: &[f64],
+    noise: &[(f64, f64)],
     options: &DiagnosisOptions,
 ) -> Result<(f64, Vec<f64>), DiagnosisError> {
-    let (model, x0) = noise_free_model(bundles, sigmas, options)?;
-    let problem = Fitting { model: &model, candidate: None };
-    let fit = levenberg_marquardt(&problem, &problem.specs(), &x0, &options.lsq)?;
+    let (mut model, x0, fine) = noise_free_model(bundles, noise, options)?;
+    let mut fit = {
+        let problem = Fitting { model: &model, candidate: None };
+        levenberg_marquardt(&problem, &problem.specs(), &x0, &options.lsq)?
+    };
+    // As the diagnoser: the mesh correction again at the fit, and a polish.
+    if let Some(mut f) = fine {
+        model.set_mesh_correction(&mut f, &fit.x)?;
+        let problem = Fitting { model: &model, candidate: None };
+        fit = levenberg_marquardt(&problem, &problem.specs(), &fit.x, &options.lsq)?;
+    }
     Ok((2.0 * fit.objective, fit.x))
 }
 
@@ -758,25 +788,21 @@ pub fn generate(
     options: &DiagnosisOptions,
 ) -> Result<Generated, DiagnosisError> {
     let size = options.size_mm.ok_or_else(|| DiagnosisError::Input("the blind check needs an element size".into()))?;
-    let truth_size = 0.5 * size;
+    let truth_size = TRUTH_REFINEMENT * size;
     let draws = draws(case, seed, scatter);
     let null_runs = truth_runs(&draws, &Strength::None, truth_size)?;
     let noisy_null = measured(&draws, &null_runs, true)?;
-    let sigmas: Vec<f64> = noisy_null
+    let noise: Vec<(f64, f64)> = noisy_null
         .iter()
         .map(|b| {
-            let f: Vec<(f64, f64)> = b
-                .force
-                .as_ref()
-                .map(|s| s.samples.iter().filter(|x| x.t_s > 0.0).map(|x| (x.t_s, x.force_n)).collect())
-                .unwrap_or_default();
-            force_noise(&f)
+            let (_, sigma, rho) = super::model::force_noise_model(b);
+            (sigma, rho)
         })
         .collect();
-    let (lambda_null, _) = baseline_misfit(&measured(&draws, &null_runs, false)?, &sigmas, options)?;
+    let (lambda_null, _) = baseline_misfit(&measured(&draws, &null_runs, false)?, &noise, options)?;
     let lambda_of = |a: f64| -> Result<(f64, Vec<TruthRun>), DiagnosisError> {
         let runs = truth_runs(&draws, &Strength::of(case, &draws.direction, a), truth_size)?;
-        let (raw, _) = baseline_misfit(&measured(&draws, &runs, false)?, &sigmas, options)?;
+        let (raw, _) = baseline_misfit(&measured(&draws, &runs, false)?, &noise, options)?;
         Ok((raw, runs))
     };
     let (amplitude, lambda_raw, evals, reached, runs) = if matches!(case.truth, Truth::Null) {
@@ -794,7 +820,8 @@ pub fn generate(
         sample_scales: draws.scales.clone(),
         geometry_errors: draws.geometry.clone(),
         force_rho: draws.rho.clone(),
-        force_sigma_hat_n: sigmas,
+        force_sigma_hat_n: noise.iter().map(|n| n.0).collect(),
+        force_rho_hat: noise.iter().map(|n| n.1).collect(),
         strength: strength.record(),
         amplitude,
         lambda_eff: lambda_raw - lambda_null,
@@ -820,9 +847,10 @@ fn true_closure(
     let size = options.size_mm.unwrap_or(5.0);
     let draws = draws(case, seed, scatter);
     let strength = Strength::of(case, &draws.direction, gen.amplitude);
-    let runs = truth_runs(&draws, &strength, 0.5 * size)?;
+    let runs = truth_runs(&draws, &strength, TRUTH_REFINEMENT * size)?;
     let bundles = measured(&draws, &runs, false)?;
-    let (model, x0) = noise_free_model(&bundles, &gen.force_sigma_hat_n, options)?;
+    let noise: Vec<(f64, f64)> = gen.force_sigma_hat_n.iter().copied().zip(gen.force_rho_hat.iter().copied()).collect();
+    let (model, x0, _) = noise_free_model(&bundles, &noise, options)?;
     let candidate = Candidate::new(effect);
     let problem = Fitting { model: &model, candidate: Some(&candidate) };
     let mut x = x0;
@@ -1197,4 +1225,5 @@ mod tests {
         assert!(d.variability >= 0.03 && d.variability <= 0.10);
     }
 }
+
 

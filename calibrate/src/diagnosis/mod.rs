@@ -118,6 +118,9 @@ pub struct DiagnosisOptions {
     /// Prior standard deviation `omega` of the per-sample (per-trial) log-scales
     /// on the moduli and on the viscosities (0: no scales; module docs).
     pub sample_scale_sd: f64,
+    /// Correct the predictions by a run on a mesh of half the element size
+    /// (module docs, step 0).
+    pub mesh_correction: bool,
 }
 
 impl Default for DiagnosisOptions {
@@ -134,6 +137,7 @@ impl Default for DiagnosisOptions {
             marker_sigma_mm: 0.05,
             lsq: Options { max_iterations: 60, ..Options::default() },
             sample_scale_sd: 0.1,
+            mesh_correction: true,
         }
     }
 }
@@ -180,6 +184,12 @@ pub struct NumericalError {
     pub max_abs_noise_units: f64,
     /// `LM_num` per evaluated candidate.
     pub per_candidate: Vec<(EffectId, f64)>,
+    /// The mesh correction at the fit, `|d|^2` [noise units squared, whitened]
+    /// (0 without; module docs, step 0).
+    pub mesh_chi2: f64,
+    /// The part of `|d|^2` the unknowns and the sample scales cannot absorb,
+    /// `|(I - P_theta,b) d|^2`: what the gap would have been made of without it.
+    pub mesh_chi2_unabsorbed: f64,
 }
 
 /// A fitted effect parameter.
@@ -397,6 +407,19 @@ pub fn diagnose(
         options.marker_sigma_mm,
     )?;
     model.sample_scale_sd = options.sample_scale_sd.max(0.0);
+    let mut fine = if options.mesh_correction {
+        Some(Model::with_refinement(
+            calibration,
+            &campaign.materials,
+            campaign.unknowns.clone(),
+            options.size_mm,
+            options.axisymmetric,
+            options.marker_sigma_mm,
+            0.5,
+        )?)
+    } else {
+        None
+    };
     let vmodel = if validation.is_empty() {
         None
     } else {
@@ -411,15 +434,26 @@ pub fn diagnose(
     };
     let mut warnings = Vec::new();
 
-    // Step 1: the baseline.
-    let problem = model::Fitting { model: &model, candidate: None };
-    let specs = problem.specs();
-    let ms_options = MultiStartOptions { num_starts: options.starts, seed: options.seed, fit: options.lsq.clone() };
-    let report_start = |done: usize, total: usize| progress(Stage::Calibration, done, total);
+    // Step 1: the baseline (on the mesh-corrected model: the correction at the
+    // start values, then at the fit and a polish).
     let mut x0 = campaign.values();
     x0.resize(model.num_theta(), 0.0);
-    let ms = multistart(&problem, &specs, &x0, &ms_options, Some(&report_start))?;
-    let base = ms.best().clone();
+    if let Some(f) = fine.as_mut() {
+        model.set_mesh_correction(f, &x0)?;
+    }
+    let ms_options = MultiStartOptions { num_starts: options.starts, seed: options.seed, fit: options.lsq.clone() };
+    let report_start = |done: usize, total: usize| progress(Stage::Calibration, done, total);
+    let mut base = {
+        let problem = model::Fitting { model: &model, candidate: None };
+        let ms = multistart(&problem, &problem.specs(), &x0, &ms_options, Some(&report_start))?;
+        ms.best().clone()
+    };
+    let mut mesh_d = Vec::new();
+    if let Some(f) = fine.as_mut() {
+        mesh_d = model.set_mesh_correction(f, &base.x)?;
+        let problem = model::Fitting { model: &model, candidate: None };
+        base = crate::lsq::levenberg_marquardt(&problem, &problem.specs(), &base.x, &options.lsq)?;
+    }
     if !base.stop.converged() {
         warnings.push(format!("the baseline calibration did not converge ({})", base.stop));
     }
@@ -527,8 +561,25 @@ pub fn diagnose(
         e.report.combined = e.report.lr + gain - 2.0 * d as f64;
     }
 
+    let (mesh_chi2, mesh_chi2_unabsorbed) = if mesh_d.is_empty() {
+        (0.0, 0.0)
+    } else {
+        let mut d = mesh_d.clone();
+        d.resize(r0.len(), 0.0);
+        let q = heldout::range_basis(&j0.columns(0, theta.len()).into_owned());
+        let dv = DVector::from_vec(d);
+        (dv.norm_squared(), heldout::project_out(&q, &dv).norm_squared())
+    };
     let numerical_error = NumericalError {
-        refinement: "time steps halved (every step of the baseline's adaptive sequence split in two)".into(),
+        refinement: if mesh_d.is_empty() {
+            "time steps halved (every step of the baseline's adaptive sequence split in two); mesh not refined".into()
+        } else {
+            "mesh: predictions corrected by a run on half the element size (at the start values, then at the fit); \
+             time steps halved (every step of the baseline's adaptive sequence split in two)"
+                .into()
+        },
+        mesh_chi2,
+        mesh_chi2_unabsorbed,
         chi2: chi2_num,
         rms_noise_units: (chi2_num / n.max(1) as f64).sqrt(),
         max_abs_noise_units: e_num.iter().map(|e| e.abs()).fold(0.0, f64::max),
@@ -852,13 +903,18 @@ fn force_curves(model: &Model, r0: &[f64], r1: &[f64]) -> Vec<ForceCurves> {
         .map(|(k, t)| {
             let start = model.offsets[k];
             let sigma = t.force_sigma_n;
+            let nf = t.force.len();
+            let mut base = r0[start..start + nf].to_vec();
+            let mut with = r1[start..start + nf].to_vec();
+            model::unwhiten(&mut base, t.force_rho);
+            model::unwhiten(&mut with, t.force_rho);
             let times = t.force.iter().enumerate().map(|(i, f)| (f.0, model.observations[start + i].phase)).collect();
             ForceCurves {
                 trial: t.name.clone(),
                 times,
                 measured: t.force.iter().map(|f| f.1).collect(),
-                baseline: t.force.iter().enumerate().map(|(i, f)| f.1 + sigma * r0[start + i]).collect(),
-                with_effect: t.force.iter().enumerate().map(|(i, f)| f.1 + sigma * r1[start + i]).collect(),
+                baseline: t.force.iter().enumerate().map(|(i, f)| f.1 + sigma * base[i]).collect(),
+                with_effect: t.force.iter().enumerate().map(|(i, f)| f.1 + sigma * with[i]).collect(),
             }
         })
         .collect()

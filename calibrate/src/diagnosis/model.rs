@@ -266,9 +266,18 @@ pub(crate) struct TrialModel {
     problem: AnyPress,
     region_material: Vec<String>,
     pub force: Vec<(f64, f64)>,
+    /// Marginal force noise [N].
     pub force_sigma_n: f64,
+    /// Lag-1 correlation of the force noise between consecutive samples (0: white).
+    pub force_rho: f64,
     /// (marker, sample, measured position).
     markers: Vec<(usize, usize, Vec<f64>)>,
+    /// The discretisation correction added to the raw residuals [noise units,
+    /// before whitening] (empty: none; module docs, "Mesh").
+    mesh_correction: Vec<f64>,
+    /// Per marker coordinate: its entries in the trial's residuals (whitened
+    /// together, module docs "Marker noise").
+    marker_groups: Vec<Vec<usize>>,
 }
 
 /// A campaign as the diagnoser runs it (module docs).
@@ -325,6 +334,109 @@ fn phase_at(waypoints: &[[f64; 2]], release_s: f64, t: f64) -> Phase {
     }
 }
 
+/// Fewest no-contact force samples from which the AR(1) noise is estimated.
+pub const MIN_QUIET_SAMPLES: usize = 20;
+
+/// A bundle's force samples as the diagnoser uses them (`0 < t <= end`, thinned)
+/// and their noise model `(sigma [N], rho)` (module docs, "Force noise"): from
+/// the no-contact segments (pre-contact and recovery phases), each detrended by
+/// a straight line, when they hold at least [`MIN_QUIET_SAMPLES`] samples;
+/// otherwise the difference-method sigma of the whole series, white.
+pub fn force_noise_model(b: &Bundle) -> (Vec<(f64, f64)>, f64, f64) {
+    let (force, sigma_diff) = measured_force(b);
+    let protocol = &b.experiment.protocol;
+    let quiet: Vec<bool> = force
+        .iter()
+        .map(|&(t, _)| matches!(phase_at(&protocol.waypoints, protocol.release_s, t), Phase::PreContact | Phase::Recovery))
+        .collect();
+    match ar1_estimate(&force, &quiet) {
+        Some((sigma, rho)) => (force, sigma.max(1e-12), rho),
+        None => (force, sigma_diff, 0.0),
+    }
+}
+
+/// `(sigma, rho)` of the samples flagged `quiet`, pooled over their contiguous
+/// runs (of at least four samples) after a least-squares line is removed from
+/// each; `None` with fewer than [`MIN_QUIET_SAMPLES`] samples. `rho` is clipped
+/// to `[0, 0.95]`.
+pub fn ar1_estimate(series: &[(f64, f64)], quiet: &[bool]) -> Option<(f64, f64)> {
+    let mut runs: Vec<Vec<(f64, f64)>> = Vec::new();
+    let mut current: Vec<(f64, f64)> = Vec::new();
+    for (x, &q) in series.iter().zip(quiet) {
+        if q {
+            current.push(*x);
+        } else if !current.is_empty() {
+            runs.push(std::mem::take(&mut current));
+        }
+    }
+    runs.push(current);
+    runs.retain(|r| r.len() >= 4);
+    let total: usize = runs.iter().map(Vec::len).sum();
+    if total < MIN_QUIET_SAMPLES {
+        return None;
+    }
+    let (mut g0, mut n0, mut g1, mut n1) = (0.0, 0usize, 0.0, 0usize);
+    for run in &runs {
+        let n = run.len() as f64;
+        let (mt, mf) = (run.iter().map(|x| x.0).sum::<f64>() / n, run.iter().map(|x| x.1).sum::<f64>() / n);
+        let stt: f64 = run.iter().map(|x| (x.0 - mt).powi(2)).sum();
+        let slope = if stt > 0.0 { run.iter().map(|x| (x.0 - mt) * (x.1 - mf)).sum::<f64>() / stt } else { 0.0 };
+        let e: Vec<f64> = run.iter().map(|x| x.1 - mf - slope * (x.0 - mt)).collect();
+        g0 += e.iter().map(|v| v * v).sum::<f64>();
+        n0 += e.len() - 2;
+        g1 += e.windows(2).map(|w| w[0] * w[1]).sum::<f64>();
+        n1 += e.len() - 1;
+    }
+    let var = g0 / n0 as f64;
+    if var <= 0.0 {
+        return None;
+    }
+    let rho = ((g1 / n1 as f64) / var).clamp(0.0, 0.95);
+    Some((var.sqrt(), rho))
+}
+
+/// Prais-Winsten whitening of an AR(1) series in noise units, in place:
+/// `w_0 = r_0`, `w_i = (r_i - rho r_(i-1)) / sqrt(1 - rho^2)`.
+pub fn whiten(r: &mut [f64], rho: f64) {
+    if rho == 0.0 {
+        return;
+    }
+    let c = (1.0 - rho * rho).sqrt();
+    for i in (1..r.len()).rev() {
+        r[i] = (r[i] - rho * r[i - 1]) / c;
+    }
+}
+
+/// Whitening of the marker coordinates: a marker's track starts from its
+/// measured initial position, which carries the same noise as every later
+/// sample, so the residuals of one coordinate share that error: covariance
+/// `sigma^2 (I + 1 1^T)` over its `m` samples, whose inverse square root is
+/// `I - (1 - 1/sqrt(1 + m)) 1 1^T / m` (module docs, "Marker noise").
+pub fn whiten_markers(r: &mut [f64], groups: &[Vec<usize>]) {
+    for g in groups {
+        if g.is_empty() {
+            continue;
+        }
+        let m = g.len() as f64;
+        let mean = g.iter().map(|&i| r[i]).sum::<f64>() / m;
+        let shift = (1.0 - 1.0 / (1.0 + m).sqrt()) * mean;
+        for &i in g {
+            r[i] -= shift;
+        }
+    }
+}
+
+/// The inverse of [`whiten`].
+pub fn unwhiten(w: &mut [f64], rho: f64) {
+    if rho == 0.0 {
+        return;
+    }
+    let c = (1.0 - rho * rho).sqrt();
+    for i in 1..w.len() {
+        w[i] = rho * w[i - 1] + c * w[i];
+    }
+}
+
 impl Model {
     /// The model of `bundles` with the materials of `table` (every material the
     /// bundles name), elements of `size_mm` (default: each bundle's own), the
@@ -336,6 +448,20 @@ impl Model {
         size_mm: Option<f64>,
         axisymmetric: bool,
         marker_sigma_mm: f64,
+    ) -> Result<Self, DiagnosisError> {
+        Self::with_refinement(bundles, table, unknowns, size_mm, axisymmetric, marker_sigma_mm, 1.0)
+    }
+
+    /// [`Model::new`] with every element size multiplied by `factor` (0.5: the
+    /// mesh-halving run of step 0); the observation layout is the same.
+    pub fn with_refinement(
+        bundles: &[Bundle],
+        table: &BTreeMap<String, MaterialSpec>,
+        unknowns: Vec<Unknown>,
+        size_mm: Option<f64>,
+        axisymmetric: bool,
+        marker_sigma_mm: f64,
+        factor: f64,
     ) -> Result<Self, DiagnosisError> {
         let mut trials = Vec::new();
         let mut observations = Vec::new();
@@ -353,12 +479,12 @@ impl Model {
             }
             let size = size_mm.or_else(|| b.default_size_mm()).ok_or_else(|| {
                 DiagnosisError::Input(format!("{file}: give an element size (--size-mm) for this specimen"))
-            })?;
+            })? * factor;
             let problem = if axisymmetric { filled.to_press_axisymmetric(size)? } else { filled.to_press(size)? };
             let region_material = region_names(&problem);
             let protocol = &b.experiment.protocol;
             let (release_s, end_s, last_push_s) = (protocol.release_s, protocol.end_s, protocol.last_push_s());
-            let (force, force_sigma_n) = measured_force(b);
+            let (force, force_sigma_n, force_rho) = force_noise_model(b);
             for &(t, _) in &force {
                 observations.push(Observation {
                     trial: k,
@@ -403,6 +529,16 @@ impl Model {
                     markers.push((m, i, position));
                 }
             }
+            // Entries of each marker coordinate in the trial's residuals.
+            let mut marker_groups: BTreeMap<(usize, usize), Vec<usize>> = BTreeMap::new();
+            let mut at = force.len();
+            for (m, _, position) in &markers {
+                for c in 0..position.len() {
+                    marker_groups.entry((*m, c)).or_default().push(at);
+                    at += 1;
+                }
+            }
+            let marker_groups: Vec<Vec<usize>> = marker_groups.into_values().collect();
             offsets.push(observations.len());
             trials.push(TrialModel {
                 name: b.experiment.name.clone(),
@@ -410,7 +546,10 @@ impl Model {
                 region_material,
                 force,
                 force_sigma_n,
+                force_rho,
                 markers,
+                mesh_correction: Vec::new(),
+                marker_groups,
             });
         }
         Ok(Self {
@@ -581,8 +720,9 @@ impl Model {
             .map_err(|e| EvalError::with_source(format!("trial {}", self.trials[k].name), e))
     }
 
-    /// Trial `k`'s residuals in a run's result.
-    fn residuals_of(&self, k: usize, result: &PressResult) -> Vec<f64> {
+    /// Trial `k`'s residuals in a run's result, in noise units, neither
+    /// corrected nor whitened.
+    fn raw_residuals_of(&self, k: usize, result: &PressResult) -> Vec<f64> {
         let trial = &self.trials[k];
         let mut r: Vec<f64> =
             trial.force.iter().map(|&(t, f)| (result.bottom_force_at(t) - f) / trial.force_sigma_n).collect();
@@ -591,6 +731,50 @@ impl Model {
             r.extend(sim.iter().zip(position).map(|(s, p)| (s - p) / self.marker_sigma_mm));
         }
         r
+    }
+
+    /// Trial `k`'s residuals in a run's result: raw, plus the mesh correction,
+    /// the force whitened.
+    fn residuals_of(&self, k: usize, result: &PressResult) -> Vec<f64> {
+        let trial = &self.trials[k];
+        let mut r = self.raw_residuals_of(k, result);
+        if trial.mesh_correction.len() == r.len() {
+            r.iter_mut().zip(&trial.mesh_correction).for_each(|(a, c)| *a += c);
+        }
+        whiten(&mut r[..trial.force.len()], trial.force_rho);
+        whiten_markers(&mut r, &trial.marker_groups);
+        r
+    }
+
+    /// Sets every trial's mesh correction to the difference between `fine`'s
+    /// run (the same trials on a refined mesh) and this model's, both at
+    /// `theta` without candidate (module docs, "Mesh"). Returns the correction,
+    /// whitened, in residual order (observation rows).
+    pub fn set_mesh_correction(&mut self, fine: &mut Model, theta: &[f64]) -> Result<Vec<f64>, EvalError> {
+        fine.sample_scale_sd = self.sample_scale_sd;
+        fine.marker_sigma_mm = self.marker_sigma_mm;
+        fine.settings = self.settings.clone();
+        for (f, t) in fine.trials.iter_mut().zip(&self.trials) {
+            f.force_sigma_n = t.force_sigma_n;
+            f.force_rho = t.force_rho;
+        }
+        let fine = &*fine;
+        let parts: Vec<Vec<f64>> = (0..self.trials.len())
+            .into_par_iter()
+            .map(|k| {
+                let coarse = self.raw_residuals_of(k, &self.run(k, &self.problem(k, theta, None)?, None)?);
+                let refined = fine.raw_residuals_of(k, &fine.run(k, &fine.problem(k, theta, None)?, None)?);
+                Ok(refined.iter().zip(&coarse).map(|(a, b)| a - b).collect())
+            })
+            .collect::<Result<_, EvalError>>()?;
+        let mut out = Vec::new();
+        for (t, d) in self.trials.iter_mut().zip(parts) {
+            let mut w = d.clone();
+            whiten(&mut w[..t.force.len()], t.force_rho);
+            out.extend(w);
+            t.mesh_correction = d;
+        }
+        Ok(out)
     }
 
     /// Trial `k`'s residuals at `theta` and `effect`, and the run's step ends; on
@@ -682,6 +866,8 @@ impl Model {
                     }
                 }
                 c.iter_mut().for_each(|v| *v *= factor);
+                whiten(&mut c[..trial.force.len()], trial.force_rho);
+                whiten_markers(&mut c, &trial.marker_groups);
                 cols[*col] = c;
             }
             let steps: Vec<f64> = result.steps.iter().map(|s| s.t_s).collect();
