@@ -306,6 +306,8 @@ pub fn diagnosis_json(d: &Diagnosis) -> Value {
             "chi2_noise_units": d.numerical_error.chi2,
             "rms_noise_units": d.numerical_error.rms_noise_units,
             "max_abs_noise_units": d.numerical_error.max_abs_noise_units,
+            "mesh_correction_chi2_noise_units": d.numerical_error.mesh_chi2,
+            "mesh_unabsorbed_chi2_noise_units": d.numerical_error.mesh_chi2_unabsorbed,
             "lm_num": lm_num,
         },
         "baseline": {

@@ -17,27 +17,27 @@
 //!
 //! | | diagnoser | generator (the "real" trials) |
 //! |---|---|---|
-//! | mesh | `size_mm` (default 5 mm) | half of it |
+//! | mesh | `size_mm` (default 5 mm), corrected by its own half-size run (mod.rs, step 0) | a quarter of it ([`TRUTH_REFINEMENT`]) |
 //! | time steps | adaptive, `rtol` 1e-3 | adaptive, `rtol` 1e-5, at most 0.2 s |
 //! | material | one parameter set | per trial (sample) log-scales on the moduli and on the viscosities, N(0, s^2) with s drawn per campaign in [0.03, 0.10] |
 //! | geometry | nominal W, H, T | each x (1 + 0.005 N(0,1)), clipped to +-1.5 % (0.1 mm on 20 mm: a calliper on a soft gel); markers at the same relative places of the true block |
-//! | force | white noise estimated by the difference method | AR(1) noise, sigma 3 mN, lag-1 correlation drawn per trial in [0.3, 0.7], sampled at 10 Hz, quantised to 1 mN |
+//! | force | AR(1) noise estimated on the no-contact segments, whitened | AR(1) noise, sigma 3 mN, lag-1 correlation drawn per trial in [0.3, 0.7], sampled at 10 Hz, quantised to 1 mN |
 //! | markers | `marker_sigma_mm` (set to the generator's 0.03 mm, as static frames would give) | five markers (three on the free side, two on the top), Gaussian noise 0.03 mm, quantised to 0.01 mm |
 //!
 //! The sample scatter (variability and geometry errors) is a [`Scatter`]:
 //! [`Scatter::ISSUE`] as above, or [`Scatter::IDEAL`] (none), with the same
-//! random stream otherwise. **Measured on the development seeds:** with the
-//! issue's scatter the baseline's noise-free misfit is already of order 1e5
-//! noise units on a null campaign (a 5 % modulus scale moves every force sample
-//! by about 15 noise units), because the diagnoser's calibration has no
-//! per-sample scales yet (diagnosis-details.md §5.0; mod.rs "Not done here"); no
-//! lambda of 12 to 100 is then detectable and every null campaign shows a gap.
-//! The ideal setting checks everything else. There (development seed 101, 23
-//! campaigns) the baseline's noise-free misfit of a null campaign is still 333
-//! to 626 noise units with the diagnoser's 5 mm elements against the
-//! generator's 2.5 mm (77 to 117 with 2.5 mm against 1.25 mm): the diagnoser's
-//! own mesh error, which its step 0 does not measure (it halves the time steps
-//! only), is a gap far above the noise, and every null campaign came out `tie`.
+//! random stream otherwise. **Measured** (the noise-free misfit of the best
+//! baseline on a null campaign, `lambda_null`, in noise units; development seed
+//! 101, first three null campaigns): with the issue's scatter it was 2.6e5 to
+//! 5.5e5 while the diagnoser had no per-sample scales (a 5 % modulus scale moves
+//! every force sample by about 15 noise units); with ideal samples 445 to 580
+//! (the diagnoser's 5 mm mesh against the generator's 2.5 mm: its step 0 halved
+//! time steps only). Per-sample scales with the 0.1 prior brought both to 29 to
+//! 39 (all of it marker error of the coarse mesh); the mesh correction of step
+//! 0, with the generator moved to a quarter of the element size, to about 7;
+//! whitening the markers for their shared initial-position error (the
+//! diagnoser starts every track at the measured, noisy, t = 0 position) left
+//! about 1 noise unit, and the null campaigns of the frozen set came out `none`.
 //! `plate-friction` truths on the fine mesh sometimes stop with a contact that
 //! does not settle; such a campaign is listed as a failure, not scored.
 //!
@@ -1225,5 +1225,3 @@ mod tests {
         assert!(d.variability >= 0.03 && d.variability <= 0.10);
     }
 }
-
-

@@ -347,7 +347,9 @@ pub fn force_noise_model(b: &Bundle) -> (Vec<(f64, f64)>, f64, f64) {
     let protocol = &b.experiment.protocol;
     let quiet: Vec<bool> = force
         .iter()
-        .map(|&(t, _)| matches!(phase_at(&protocol.waypoints, protocol.release_s, t), Phase::PreContact | Phase::Recovery))
+        .map(|&(t, _)| {
+            matches!(phase_at(&protocol.waypoints, protocol.release_s, t), Phase::PreContact | Phase::Recovery)
+        })
         .collect();
     match ar1_estimate(&force, &quiet) {
         Some((sigma, rho)) => (force, sigma.max(1e-12), rho),

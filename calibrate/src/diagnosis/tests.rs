@@ -169,17 +169,20 @@ fn the_blind_generator_does_not_depend_on_the_number_of_threads() {
 }
 
 /// The frozen blind CI set (seed 20261121, never used while tuning; the
-/// development seeds are 101 and 102, see blind.rs): eight campaigns with ideal
-/// samples ([`super::blind::Scatter::IDEAL`]; with the issue's scatter nothing
-/// can be attributed until the calibration has per-sample scales). Checks that
-/// every campaign is generated at its strength (lambda_eff within 20 % of its
-/// target), that the scores add up, and the targets of issue 6 that hold on this
-/// set ([`HOLDING`]); the others are printed with their values and reported as
-/// misses (not asserted, not loosened).
+/// development seeds are 101 to 104, see blind.rs): eight campaigns with ideal
+/// samples ([`super::blind::Scatter::IDEAL`], kept from before the per-sample
+/// scales so that the before/after figures in BENCHMARKS.md compare like with
+/// like). Checks that every campaign is generated at its strength (lambda_eff
+/// within 20 % of its target), that the scores add up, and the targets of issue 6
+/// that hold on this set ([`HOLDING`]); the others are printed with their values
+/// and reported as misses (not asserted, not loosened). Measured (session 13):
+/// no false attribution on the two null campaigns (both `none`) and a closure
+/// error of 0.063 on the one scoreable campaign hold; top-1 (1/5, three ties
+/// and a misattribution) and the out-of-library flag (0/1) miss.
 #[test]
 fn frozen_blind_ci_set() {
     use super::blind::{default_options, run_blind, summarise, Case, OutOfLibrary, Scatter, Truth};
-    const HOLDING: &[&str] = &[];
+    const HOLDING: &[&str] = &["false attribution on null campaigns", "median gap-closure error, lambda >= 30"];
     let inlib = |e, lambda| Case { truth: Truth::InLibrary(e), lambda };
     let cases = [
         Case { truth: Truth::Null, lambda: 0.0 },
