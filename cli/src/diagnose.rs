@@ -301,6 +301,7 @@ pub fn diagnosis_json(d: &Diagnosis) -> Value {
         "where": cells,
         "candidates": candidates,
         "not_evaluated": not_evaluated,
+        "force_noise": d.force_noise.iter().map(|(t, s, r)| json!({"trial": t, "sigma_N": s, "lag1_correlation": r})).collect::<Vec<_>>(),
         "numerical_error": {
             "refinement": d.numerical_error.refinement,
             "chi2_noise_units": d.numerical_error.chi2,

@@ -343,6 +343,8 @@ pub struct Diagnosis {
     pub warnings: Vec<String>,
     /// Forces for the report.
     pub curves: Vec<ForceCurves>,
+    /// The force noise model per calibration trial: (trial, sigma [N], lag-1 correlation).
+    pub force_noise: Vec<(String, f64, f64)>,
 }
 
 impl Diagnosis {
@@ -670,6 +672,7 @@ pub fn diagnose(
         verdict,
         warnings,
         curves,
+        force_noise: model.trials.iter().map(|t| (t.name.clone(), t.force_sigma_n, t.force_rho)).collect(),
     })
 }
 
