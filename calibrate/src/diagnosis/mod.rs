@@ -71,9 +71,13 @@
 //! LR is significant. Then: no eligible candidate gives `unexplained`; else
 //! the best `C_j` is named, as `tie` (with the runner-up and the experiment
 //! that separates them, diagnosis-details.md §4.3 and §5.7) when
-//! `C_1 - C_2 < 2 SE` (paired bootstrap over segments) or when the two refits
-//! change the residuals in nearly the same way (cosine > 0.9), and as
-//! `partial: <id>` when a cell stays flagged after its refit. No gap: `none`.
+//! `C_1 - C_2 < 2 SE` (paired bootstrap over segments, calibration and
+//! held-out) or when the two refits change the residuals in nearly the same
+//! way (cosine > 0.9), and as `partial: <id>` when a cell stays flagged after
+//! its refit. No gap: `none`. (Tried on the development seeds in session 13
+//! and not kept: ranking by `LR - 2d`, the calibration SE alone and a cosine
+//! of 0.95; on seed 101 it turned one correct attribution into a tie and
+//! resolved none.)
 //!
 //! **Not done here** (reported, not hidden): an estimate of `Omega` from
 //! replicates (it is fixed by `sample_scale_sd`), replicate ANOVA, the
