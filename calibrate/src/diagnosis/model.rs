@@ -1080,6 +1080,61 @@ mod tests {
     }
 
     #[test]
+    fn whitening_is_inverted_exactly() {
+        let r: Vec<f64> = (0..50).map(|i| (i as f64 * 0.37).sin() + 0.1 * i as f64).collect();
+        let mut w = r.clone();
+        whiten(&mut w, 0.6);
+        unwhiten(&mut w, 0.6);
+        for (a, b) in r.iter().zip(&w) {
+            assert!((a - b).abs() < 1e-12, "{a} {b}");
+        }
+    }
+
+    #[test]
+    fn ar1_noise_is_recovered_from_detrended_quiet_segments() {
+        // sigma 2, rho 0.6, an offset and a drift on top; two quiet runs split by a loud one.
+        let mut rng = crate::rng::SplitMix64::new(9);
+        let (sigma, rho) = (2.0, 0.6);
+        let mut e = sigma * rng.next_gaussian();
+        let series: Vec<(f64, f64)> = (0..6000)
+            .map(|i| {
+                if i > 0 {
+                    e = rho * e + (1.0 - rho * rho).sqrt() * sigma * rng.next_gaussian();
+                }
+                let t = i as f64 * 0.1;
+                (t, 5.0 + 0.3 * t + e)
+            })
+            .collect();
+        let quiet: Vec<bool> = (0..6000).map(|i| !(2000..2500).contains(&i)).collect();
+        let (s, r) = ar1_estimate(&series, &quiet).unwrap();
+        // About 5500 samples: sigma within 5 %, rho within 0.04.
+        assert!((s / sigma - 1.0).abs() < 0.05, "{s}");
+        assert!((r - rho).abs() < 0.04, "{r}");
+        assert!(ar1_estimate(&series[..10], &quiet[..10]).is_none());
+    }
+
+    #[test]
+    fn marker_whitening_whitens_a_shared_initial_error() {
+        // Covariance I + 1 1^T over m samples: W (I + 1 1^T) W^T = I.
+        let m = 7;
+        let group = vec![(0..m).collect::<Vec<usize>>()];
+        let w = DMatrix::from_fn(m, m, |i, j| {
+            let mut e = vec![0.0; m];
+            e[j] = 1.0;
+            whiten_markers(&mut e, &group);
+            e[i]
+        });
+        let cov = DMatrix::from_fn(m, m, |i, j| if i == j { 2.0 } else { 1.0 });
+        let out = &w * cov * w.transpose();
+        for i in 0..m {
+            for j in 0..m {
+                let want = if i == j { 1.0 } else { 0.0 };
+                assert!((out[(i, j)] - want).abs() < 1e-12, "{i} {j}: {}", out[(i, j)]);
+            }
+        }
+    }
+
+    #[test]
     fn infinite_nulls_are_fitted_by_their_inverse() {
         let c = Candidate::new(EffectId::PlasticSlider);
         assert_eq!(c.dim(), 1);
