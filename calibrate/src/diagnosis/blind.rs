@@ -40,13 +40,14 @@
 //! about 1 noise unit, and the null campaigns of the frozen set came out `none`.
 //! **Development seeds with the scatter** (session 13, `wagashi
 //! diagnose --blind 24 --seed S` for S = 101, 102, 103; 69 campaigns scored,
-//! three `plate-friction` truths at lambda 100 failed to run): top-1 at lambda
-//! >= 30 15/28 (0.54; per seed 3/8, 6/9, 6/11), at lambda = 12 3/16 (0.19);
+//! three `plate-friction` truths at lambda 100 failed to run): top-1 at
+//! lambda >= 30 15/28 (0.54; per seed 3/8, 6/9, 6/11), at lambda = 12 3/16
+//! (0.19);
 //! false attribution on nulls 2/19 (both `force-offset`, LR 14 to 16, on seed
 //! 101, whose noise-free null misfit is 1.4 to 3.9: the noise model's
 //! low-frequency calibration is the suspect, not settled); out-of-library
-//! flagged 2/7; median gap-closure error 0.37 over 7. Most misses at lambda >=
-//! 30 are ties between confusable pairs (bingham-dashpot / stress-thinning,
+//! flagged 2/7; median gap-closure error 0.37 over 7. Most misses at lambda
+//! of 30 and more are ties between confusable pairs (bingham-dashpot / stress-thinning,
 //! strain-stiffening / finite-strain, force-offset / gravity), whose separating
 //! experiments (a hold of 5x the c3 time, two strain levels at one aspect
 //! ratio, a tared no-contact record) this four-trial design lacks; the others
