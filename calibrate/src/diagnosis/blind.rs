@@ -39,20 +39,20 @@
 //! diagnoser starts every track at the measured, noisy, t = 0 position) left
 //! about 1 noise unit, and the null campaigns of the frozen set came out `none`.
 //! **Development seeds with the scatter** (session 13, `wagashi
-//! diagnose --blind 24 --seed S` for S = 101, 102, 103; 69 campaigns scored,
-//! three `plate-friction` truths at lambda 100 failed to run): top-1 at
-//! lambda >= 30 15/28 (0.54; per seed 3/8, 6/9, 6/11), at lambda = 12 3/16
-//! (0.19);
-//! false attribution on nulls 2/19 (both `force-offset`, LR 14 to 16, on seed
-//! 101, whose noise-free null misfit is 1.4 to 3.9: the noise model's
-//! low-frequency calibration is the suspect, not settled); out-of-library
-//! flagged 2/7; median gap-closure error 0.37 over 7. Most misses at lambda
-//! of 30 and more are ties between confusable pairs (bingham-dashpot / stress-thinning,
+//! diagnose --blind 24 --seed S` for S = 101 to 104; 93 campaigns scored,
+//! three `plate-friction` truths failed to run): top-1 at lambda of 30 and
+//! more 22/40 (0.55; per seed 3/8, 6/9, 6/11, 7/12), at lambda = 12 5/21
+//! (0.24); false attribution on nulls 3/24 (0.13: two `force-offset` with LR
+//! 14 to 16 on seed 101, whose noise-free null misfit is 1.4 to 3.9, and one
+//! `strain-stiffening` on seed 104: the noise model's low-frequency
+//! calibration is the suspect, not settled); out-of-library flagged 2/8;
+//! median gap-closure error 0.37 over 13. Most misses at lambda of 30 and more
+//! are ties between confusable pairs (bingham-dashpot / stress-thinning,
 //! strain-stiffening / finite-strain, force-offset / gravity), whose separating
 //! experiments (a hold of 5x the c3 time, two strain levels at one aspect
 //! ratio, a tared no-contact record) this four-trial design lacks; the others
-//! are `machine-compliance` refits that stop short (LR about a sixth of
-//! lambda_eff). Seed 104 was not run.
+//! are refits that stop short (`machine-compliance`, LR about a sixth of
+//! lambda_eff on seed 101) and effects left at `none`.
 //! `plate-friction` truths on the fine mesh sometimes stop with a contact that
 //! does not settle; such a campaign is listed as a failure, not scored.
 //!
