@@ -301,11 +301,14 @@ pub fn diagnosis_json(d: &Diagnosis) -> Value {
         "where": cells,
         "candidates": candidates,
         "not_evaluated": not_evaluated,
+        "force_noise": d.force_noise.iter().map(|(t, s, r)| json!({"trial": t, "sigma_N": s, "lag1_correlation": r})).collect::<Vec<_>>(),
         "numerical_error": {
             "refinement": d.numerical_error.refinement,
             "chi2_noise_units": d.numerical_error.chi2,
             "rms_noise_units": d.numerical_error.rms_noise_units,
             "max_abs_noise_units": d.numerical_error.max_abs_noise_units,
+            "mesh_correction_chi2_noise_units": d.numerical_error.mesh_chi2,
+            "mesh_unabsorbed_chi2_noise_units": d.numerical_error.mesh_chi2_unabsorbed,
             "lm_num": lm_num,
         },
         "baseline": {
@@ -585,6 +588,7 @@ pub fn blind_json(
                 "geometry_errors": g.geometry_errors,
                 "force_rho": g.force_rho,
                 "force_sigma_hat_N": g.force_sigma_hat_n,
+                "force_rho_hat": g.force_rho_hat,
                 "verdict": o.label,
                 "named": o.named.iter().map(|e| e.id()).collect::<Vec<_>>(),
                 "column": o.column,

@@ -266,9 +266,18 @@ pub(crate) struct TrialModel {
     problem: AnyPress,
     region_material: Vec<String>,
     pub force: Vec<(f64, f64)>,
+    /// Marginal force noise [N].
     pub force_sigma_n: f64,
+    /// Lag-1 correlation of the force noise between consecutive samples (0: white).
+    pub force_rho: f64,
     /// (marker, sample, measured position).
     markers: Vec<(usize, usize, Vec<f64>)>,
+    /// The discretisation correction added to the raw residuals [noise units,
+    /// before whitening] (empty: none; module docs, "Mesh").
+    mesh_correction: Vec<f64>,
+    /// Per marker coordinate: its entries in the trial's residuals (whitened
+    /// together, module docs "Marker noise").
+    marker_groups: Vec<Vec<usize>>,
 }
 
 /// A campaign as the diagnoser runs it (module docs).
@@ -287,6 +296,9 @@ pub struct Model {
     pub observations: Vec<Observation>,
     /// First residual of each trial, and the total at the end.
     pub offsets: Vec<usize>,
+    /// Prior standard deviation of the per-sample log-scales (0: the calibration
+    /// has none; module docs, "Per-sample scales").
+    pub sample_scale_sd: f64,
 }
 
 /// Phase of a time inside the protocol (`t` within the segment `(t_i, t_i+1]`).
@@ -322,6 +334,111 @@ fn phase_at(waypoints: &[[f64; 2]], release_s: f64, t: f64) -> Phase {
     }
 }
 
+/// Fewest no-contact force samples from which the AR(1) noise is estimated.
+pub const MIN_QUIET_SAMPLES: usize = 20;
+
+/// A bundle's force samples as the diagnoser uses them (`0 < t <= end`, thinned)
+/// and their noise model `(sigma [N], rho)` (module docs, "Force noise"): from
+/// the no-contact segments (pre-contact and recovery phases), each detrended by
+/// a straight line, when they hold at least [`MIN_QUIET_SAMPLES`] samples;
+/// otherwise the difference-method sigma of the whole series, white.
+pub fn force_noise_model(b: &Bundle) -> (Vec<(f64, f64)>, f64, f64) {
+    let (force, sigma_diff) = measured_force(b);
+    let protocol = &b.experiment.protocol;
+    let quiet: Vec<bool> = force
+        .iter()
+        .map(|&(t, _)| {
+            matches!(phase_at(&protocol.waypoints, protocol.release_s, t), Phase::PreContact | Phase::Recovery)
+        })
+        .collect();
+    match ar1_estimate(&force, &quiet) {
+        Some((sigma, rho)) => (force, sigma.max(1e-12), rho),
+        None => (force, sigma_diff, 0.0),
+    }
+}
+
+/// `(sigma, rho)` of the samples flagged `quiet`, pooled over their contiguous
+/// runs (of at least four samples) after a least-squares line is removed from
+/// each; `None` with fewer than [`MIN_QUIET_SAMPLES`] samples. `rho` is clipped
+/// to `[0, 0.95]`.
+pub fn ar1_estimate(series: &[(f64, f64)], quiet: &[bool]) -> Option<(f64, f64)> {
+    let mut runs: Vec<Vec<(f64, f64)>> = Vec::new();
+    let mut current: Vec<(f64, f64)> = Vec::new();
+    for (x, &q) in series.iter().zip(quiet) {
+        if q {
+            current.push(*x);
+        } else if !current.is_empty() {
+            runs.push(std::mem::take(&mut current));
+        }
+    }
+    runs.push(current);
+    runs.retain(|r| r.len() >= 4);
+    let total: usize = runs.iter().map(Vec::len).sum();
+    if total < MIN_QUIET_SAMPLES {
+        return None;
+    }
+    let (mut g0, mut n0, mut g1, mut n1) = (0.0, 0usize, 0.0, 0usize);
+    for run in &runs {
+        let n = run.len() as f64;
+        let (mt, mf) = (run.iter().map(|x| x.0).sum::<f64>() / n, run.iter().map(|x| x.1).sum::<f64>() / n);
+        let stt: f64 = run.iter().map(|x| (x.0 - mt).powi(2)).sum();
+        let slope = if stt > 0.0 { run.iter().map(|x| (x.0 - mt) * (x.1 - mf)).sum::<f64>() / stt } else { 0.0 };
+        let e: Vec<f64> = run.iter().map(|x| x.1 - mf - slope * (x.0 - mt)).collect();
+        g0 += e.iter().map(|v| v * v).sum::<f64>();
+        n0 += e.len() - 2;
+        g1 += e.windows(2).map(|w| w[0] * w[1]).sum::<f64>();
+        n1 += e.len() - 1;
+    }
+    let var = g0 / n0 as f64;
+    if var <= 0.0 {
+        return None;
+    }
+    let rho = ((g1 / n1 as f64) / var).clamp(0.0, 0.95);
+    Some((var.sqrt(), rho))
+}
+
+/// Prais-Winsten whitening of an AR(1) series in noise units, in place:
+/// `w_0 = r_0`, `w_i = (r_i - rho r_(i-1)) / sqrt(1 - rho^2)`.
+pub fn whiten(r: &mut [f64], rho: f64) {
+    if rho == 0.0 {
+        return;
+    }
+    let c = (1.0 - rho * rho).sqrt();
+    for i in (1..r.len()).rev() {
+        r[i] = (r[i] - rho * r[i - 1]) / c;
+    }
+}
+
+/// Whitening of the marker coordinates: a marker's track starts from its
+/// measured initial position, which carries the same noise as every later
+/// sample, so the residuals of one coordinate share that error: covariance
+/// `sigma^2 (I + 1 1^T)` over its `m` samples, whose inverse square root is
+/// `I - (1 - 1/sqrt(1 + m)) 1 1^T / m` (module docs, "Marker noise").
+pub fn whiten_markers(r: &mut [f64], groups: &[Vec<usize>]) {
+    for g in groups {
+        if g.is_empty() {
+            continue;
+        }
+        let m = g.len() as f64;
+        let mean = g.iter().map(|&i| r[i]).sum::<f64>() / m;
+        let shift = (1.0 - 1.0 / (1.0 + m).sqrt()) * mean;
+        for &i in g {
+            r[i] -= shift;
+        }
+    }
+}
+
+/// The inverse of [`whiten`].
+pub fn unwhiten(w: &mut [f64], rho: f64) {
+    if rho == 0.0 {
+        return;
+    }
+    let c = (1.0 - rho * rho).sqrt();
+    for i in 1..w.len() {
+        w[i] = rho * w[i - 1] + c * w[i];
+    }
+}
+
 impl Model {
     /// The model of `bundles` with the materials of `table` (every material the
     /// bundles name), elements of `size_mm` (default: each bundle's own), the
@@ -333,6 +450,20 @@ impl Model {
         size_mm: Option<f64>,
         axisymmetric: bool,
         marker_sigma_mm: f64,
+    ) -> Result<Self, DiagnosisError> {
+        Self::with_refinement(bundles, table, unknowns, size_mm, axisymmetric, marker_sigma_mm, 1.0)
+    }
+
+    /// [`Model::new`] with every element size multiplied by `factor` (0.5: the
+    /// mesh-halving run of step 0); the observation layout is the same.
+    pub fn with_refinement(
+        bundles: &[Bundle],
+        table: &BTreeMap<String, MaterialSpec>,
+        unknowns: Vec<Unknown>,
+        size_mm: Option<f64>,
+        axisymmetric: bool,
+        marker_sigma_mm: f64,
+        factor: f64,
     ) -> Result<Self, DiagnosisError> {
         let mut trials = Vec::new();
         let mut observations = Vec::new();
@@ -350,12 +481,12 @@ impl Model {
             }
             let size = size_mm.or_else(|| b.default_size_mm()).ok_or_else(|| {
                 DiagnosisError::Input(format!("{file}: give an element size (--size-mm) for this specimen"))
-            })?;
+            })? * factor;
             let problem = if axisymmetric { filled.to_press_axisymmetric(size)? } else { filled.to_press(size)? };
             let region_material = region_names(&problem);
             let protocol = &b.experiment.protocol;
             let (release_s, end_s, last_push_s) = (protocol.release_s, protocol.end_s, protocol.last_push_s());
-            let (force, force_sigma_n) = measured_force(b);
+            let (force, force_sigma_n, force_rho) = force_noise_model(b);
             for &(t, _) in &force {
                 observations.push(Observation {
                     trial: k,
@@ -400,6 +531,16 @@ impl Model {
                     markers.push((m, i, position));
                 }
             }
+            // Entries of each marker coordinate in the trial's residuals.
+            let mut marker_groups: BTreeMap<(usize, usize), Vec<usize>> = BTreeMap::new();
+            let mut at = force.len();
+            for (m, _, position) in &markers {
+                for c in 0..position.len() {
+                    marker_groups.entry((*m, c)).or_default().push(at);
+                    at += 1;
+                }
+            }
+            let marker_groups: Vec<Vec<usize>> = marker_groups.into_values().collect();
             offsets.push(observations.len());
             trials.push(TrialModel {
                 name: b.experiment.name.clone(),
@@ -407,7 +548,10 @@ impl Model {
                 region_material,
                 force,
                 force_sigma_n,
+                force_rho,
                 markers,
+                mesh_correction: Vec::new(),
+                marker_groups,
             });
         }
         Ok(Self {
@@ -418,7 +562,79 @@ impl Model {
             marker_sigma_mm,
             observations,
             offsets,
+            sample_scale_sd: 0.0,
         })
+    }
+
+    /// The scale groups present among the unknowns, in order: moduli (`true`),
+    /// viscosities (`false`).
+    fn scale_groups(&self) -> Vec<bool> {
+        let kinds = self.scale_kind();
+        [true, false].into_iter().filter(|g| kinds.contains(&Some(*g))).collect()
+    }
+
+    /// The number of per-sample log-scales `b` (trials times groups; 0 without a prior).
+    pub fn num_scales(&self) -> usize {
+        if self.sample_scale_sd > 0.0 {
+            self.trials.len() * self.scale_groups().len()
+        } else {
+            0
+        }
+    }
+
+    /// The length of `theta` in every call with scales: the unknowns, then `b`.
+    pub fn num_theta(&self) -> usize {
+        self.unknowns.len() + self.num_scales()
+    }
+
+    /// Labels of the per-sample log-scales (`scale.<trial>.moduli` / `.viscosities`).
+    pub fn scale_labels(&self) -> Vec<String> {
+        if self.num_scales() == 0 {
+            return Vec::new();
+        }
+        let groups = self.scale_groups();
+        let mut out = Vec::new();
+        for t in &self.trials {
+            for &g in &groups {
+                out.push(format!("scale.{}.{}", t.name, if g { "moduli" } else { "viscosities" }));
+            }
+        }
+        out
+    }
+
+    /// The factor `exp(b)` of trial `k`'s scale of kind `modulus` (1 when `theta`
+    /// carries no scales or the kind has none).
+    fn scale_factor(&self, k: usize, theta: &[f64], modulus: bool) -> f64 {
+        let p = self.unknowns.len();
+        if theta.len() <= p || self.num_scales() == 0 {
+            return 1.0;
+        }
+        let groups = self.scale_groups();
+        match groups.iter().position(|&g| g == modulus) {
+            Some(gi) => theta[p + k * groups.len() + gi].exp(),
+            None => 1.0,
+        }
+    }
+
+    /// The unknowns as trial `k` sees them: scaled by its sample scales when
+    /// `theta` carries them.
+    fn trial_theta(&self, k: usize, theta: &[f64]) -> Vec<f64> {
+        let kinds = self.scale_kind();
+        (0..self.unknowns.len())
+            .map(|i| match kinds[i] {
+                Some(g) => theta[i] * self.scale_factor(k, theta, g),
+                None => theta[i],
+            })
+            .collect()
+    }
+
+    /// The prior rows `b / omega` of the scales in `theta` (none without).
+    fn prior_rows(&self, theta: &[f64]) -> Vec<f64> {
+        let p = self.unknowns.len();
+        if theta.len() <= p || self.num_scales() == 0 {
+            return Vec::new();
+        }
+        theta[p..p + self.num_scales()].iter().map(|b| b / self.sample_scale_sd).collect()
     }
 
     /// The number of trials.
@@ -461,7 +677,7 @@ impl Model {
     /// registry order) on top of the bundle's own effects.
     fn problem(&self, k: usize, theta: &[f64], effect: Option<(EffectId, &[f64])>) -> Result<AnyPress, EvalError> {
         let trial = &self.trials[k];
-        let table = self.table_with(theta);
+        let table = self.table_with(&self.trial_theta(k, theta));
         let materials: Vec<Material> = trial
             .region_material
             .iter()
@@ -506,8 +722,9 @@ impl Model {
             .map_err(|e| EvalError::with_source(format!("trial {}", self.trials[k].name), e))
     }
 
-    /// Trial `k`'s residuals in a run's result.
-    fn residuals_of(&self, k: usize, result: &PressResult) -> Vec<f64> {
+    /// Trial `k`'s residuals in a run's result, in noise units, neither
+    /// corrected nor whitened.
+    fn raw_residuals_of(&self, k: usize, result: &PressResult) -> Vec<f64> {
         let trial = &self.trials[k];
         let mut r: Vec<f64> =
             trial.force.iter().map(|&(t, f)| (result.bottom_force_at(t) - f) / trial.force_sigma_n).collect();
@@ -516,6 +733,50 @@ impl Model {
             r.extend(sim.iter().zip(position).map(|(s, p)| (s - p) / self.marker_sigma_mm));
         }
         r
+    }
+
+    /// Trial `k`'s residuals in a run's result: raw, plus the mesh correction,
+    /// the force whitened.
+    fn residuals_of(&self, k: usize, result: &PressResult) -> Vec<f64> {
+        let trial = &self.trials[k];
+        let mut r = self.raw_residuals_of(k, result);
+        if trial.mesh_correction.len() == r.len() {
+            r.iter_mut().zip(&trial.mesh_correction).for_each(|(a, c)| *a += c);
+        }
+        whiten(&mut r[..trial.force.len()], trial.force_rho);
+        whiten_markers(&mut r, &trial.marker_groups);
+        r
+    }
+
+    /// Sets every trial's mesh correction to the difference between `fine`'s
+    /// run (the same trials on a refined mesh) and this model's, both at
+    /// `theta` without candidate (module docs, "Mesh"). Returns the correction,
+    /// whitened, in residual order (observation rows).
+    pub fn set_mesh_correction(&mut self, fine: &mut Model, theta: &[f64]) -> Result<Vec<f64>, EvalError> {
+        fine.sample_scale_sd = self.sample_scale_sd;
+        fine.marker_sigma_mm = self.marker_sigma_mm;
+        fine.settings = self.settings.clone();
+        for (f, t) in fine.trials.iter_mut().zip(&self.trials) {
+            f.force_sigma_n = t.force_sigma_n;
+            f.force_rho = t.force_rho;
+        }
+        let fine = &*fine;
+        let parts: Vec<Vec<f64>> = (0..self.trials.len())
+            .into_par_iter()
+            .map(|k| {
+                let coarse = self.raw_residuals_of(k, &self.run(k, &self.problem(k, theta, None)?, None)?);
+                let refined = fine.raw_residuals_of(k, &fine.run(k, &fine.problem(k, theta, None)?, None)?);
+                Ok(refined.iter().zip(&coarse).map(|(a, b)| a - b).collect())
+            })
+            .collect::<Result<_, EvalError>>()?;
+        let mut out = Vec::new();
+        for (t, d) in self.trials.iter_mut().zip(parts) {
+            let mut w = d.clone();
+            whiten(&mut w[..t.force.len()], t.force_rho);
+            out.extend(w);
+            t.mesh_correction = d;
+        }
+        Ok(out)
     }
 
     /// Trial `k`'s residuals at `theta` and `effect`, and the run's step ends; on
@@ -551,6 +812,7 @@ impl Model {
             r.extend(rk);
             ends.push(e);
         }
+        r.extend(self.prior_rows(theta));
         Ok((r, ends))
     }
 
@@ -593,8 +855,11 @@ impl Model {
             let (result, sens) = simulate_any_with_sensitivities(&problem, &self.settings, &params, &mut |_| {})
                 .map_err(|e| EvalError::with_source(format!("trial {}", self.trials[k].name), e))?;
             let trial = &self.trials[k];
+            let kinds = self.scale_kind();
             let mut cols = vec![vec![0.0; 0]; p];
             for (q, (col, _)) in acting.iter().enumerate() {
+                // The engine's derivative is by the trial's scaled value.
+                let factor = kinds[*col].map_or(1.0, |g| self.scale_factor(k, theta, g));
                 let mut c: Vec<f64> =
                     trial.force.iter().map(|&(t, _)| sens.bottom_force_at(t)[q] / trial.force_sigma_n).collect();
                 for (m, i, position) in &trial.markers {
@@ -602,6 +867,9 @@ impl Model {
                         c.push(sens.markers[*m][*i][q][comp] / self.marker_sigma_mm);
                     }
                 }
+                c.iter_mut().for_each(|v| *v *= factor);
+                whiten(&mut c[..trial.force.len()], trial.force_rho);
+                whiten_markers(&mut c, &trial.marker_groups);
                 cols[*col] = c;
             }
             let steps: Vec<f64> = result.steps.iter().map(|s| s.t_s).collect();
@@ -689,7 +957,10 @@ impl Model {
 
     /// Parameter specs of the unknowns.
     pub fn theta_specs(&self) -> Vec<ParameterSpec> {
-        self.unknowns.iter().map(Unknown::spec).collect()
+        let mut s: Vec<ParameterSpec> = self.unknowns.iter().map(Unknown::spec).collect();
+        let w = self.sample_scale_sd;
+        s.extend(self.scale_labels().into_iter().map(|l| ParameterSpec::linear(l, -3.0 * w, 3.0 * w)));
+        s
     }
 
     /// Which unknowns are moduli (`true`) or viscosities (`false`), `None` for others.
@@ -734,12 +1005,13 @@ impl Fitting<'_> {
 
 impl LeastSquares for Fitting<'_> {
     fn num_parameters(&self) -> usize {
-        self.model.unknowns.len() + self.candidate.map_or(0, Candidate::dim)
+        self.model.num_theta() + self.candidate.map_or(0, Candidate::dim)
     }
 
     fn evaluate(&self, x: &[f64], want_jacobian: bool) -> Result<Evaluation, EvalError> {
+        let pt = self.model.num_theta();
         let p = self.model.unknowns.len();
-        let (theta, u) = x.split_at(p);
+        let (theta, u) = x.split_at(pt);
         let model = self.model;
         if !want_jacobian {
             let values = self.candidate.map(|c| (c.effect, c.values(u)));
@@ -750,19 +1022,42 @@ impl LeastSquares for Fitting<'_> {
             .into_par_iter()
             .map(|k| model.trial_jacobian(k, theta, self.candidate.map(|c| (c, u)), true))
             .collect::<Result<_, _>>()?;
-        let n = model.num_residuals();
+        let prior = model.prior_rows(theta);
+        let n = model.num_residuals() + prior.len();
         let cols = self.num_parameters();
         let mut residuals = Vec::with_capacity(n);
         let mut jac = DMatrix::zeros(n, cols);
         let mut row = 0;
-        for (r, c) in parts {
+        let kinds = model.scale_kind();
+        let groups = model.scale_groups();
+        let nb = model.num_scales();
+        for (k, (r, c)) in parts.into_iter().enumerate() {
             for (j, col) in c.iter().enumerate() {
+                // Unknowns, then (past the scales) the effect's coordinates.
+                let target = if j < p { j } else { j - p + pt };
                 for (i, v) in col.iter().enumerate() {
-                    jac[(row + i, j)] = *v;
+                    jac[(row + i, target)] = *v;
+                }
+            }
+            // d r / d b = sum over the kind's unknowns of theta_i d r / d theta_i.
+            if nb > 0 {
+                for (gi, &g) in groups.iter().enumerate() {
+                    let target = p + k * groups.len() + gi;
+                    for (j, col) in c.iter().enumerate().take(p) {
+                        if kinds[j] == Some(g) {
+                            for (i, v) in col.iter().enumerate() {
+                                jac[(row + i, target)] += theta[j] * v;
+                            }
+                        }
+                    }
                 }
             }
             row += r.len();
             residuals.extend(r);
+        }
+        for (m, b) in prior.into_iter().enumerate() {
+            residuals.push(b);
+            jac[(row + m, p + m)] = 1.0 / model.sample_scale_sd;
         }
         Ok(Evaluation { residuals, jacobian: Some(jac) })
     }
@@ -782,6 +1077,61 @@ mod tests {
         assert_eq!(phase_at(&w, 30.0, 22.0), Phase::Release);
         assert_eq!(phase_at(&w, 30.0, 28.0), Phase::Hold);
         assert_eq!(phase_at(&w, 30.0, 31.0), Phase::Recovery);
+    }
+
+    #[test]
+    fn whitening_is_inverted_exactly() {
+        let r: Vec<f64> = (0..50).map(|i| (i as f64 * 0.37).sin() + 0.1 * i as f64).collect();
+        let mut w = r.clone();
+        whiten(&mut w, 0.6);
+        unwhiten(&mut w, 0.6);
+        for (a, b) in r.iter().zip(&w) {
+            assert!((a - b).abs() < 1e-12, "{a} {b}");
+        }
+    }
+
+    #[test]
+    fn ar1_noise_is_recovered_from_detrended_quiet_segments() {
+        // sigma 2, rho 0.6, an offset and a drift on top; two quiet runs split by a loud one.
+        let mut rng = crate::rng::SplitMix64::new(9);
+        let (sigma, rho) = (2.0, 0.6);
+        let mut e = sigma * rng.next_gaussian();
+        let series: Vec<(f64, f64)> = (0..6000)
+            .map(|i| {
+                if i > 0 {
+                    e = rho * e + (1.0 - rho * rho).sqrt() * sigma * rng.next_gaussian();
+                }
+                let t = i as f64 * 0.1;
+                (t, 5.0 + 0.3 * t + e)
+            })
+            .collect();
+        let quiet: Vec<bool> = (0..6000).map(|i| !(2000..2500).contains(&i)).collect();
+        let (s, r) = ar1_estimate(&series, &quiet).unwrap();
+        // About 5500 samples: sigma within 5 %, rho within 0.04.
+        assert!((s / sigma - 1.0).abs() < 0.05, "{s}");
+        assert!((r - rho).abs() < 0.04, "{r}");
+        assert!(ar1_estimate(&series[..10], &quiet[..10]).is_none());
+    }
+
+    #[test]
+    fn marker_whitening_whitens_a_shared_initial_error() {
+        // Covariance I + 1 1^T over m samples: W (I + 1 1^T) W^T = I.
+        let m = 7;
+        let group = vec![(0..m).collect::<Vec<usize>>()];
+        let w = DMatrix::from_fn(m, m, |i, j| {
+            let mut e = vec![0.0; m];
+            e[j] = 1.0;
+            whiten_markers(&mut e, &group);
+            e[i]
+        });
+        let cov = DMatrix::from_fn(m, m, |i, j| if i == j { 2.0 } else { 1.0 });
+        let out = &w * cov * w.transpose();
+        for i in 0..m {
+            for j in 0..m {
+                let want = if i == j { 1.0 } else { 0.0 };
+                assert!((out[(i, j)] - want).abs() < 1e-12, "{i} {j}: {}", out[(i, j)]);
+            }
+        }
     }
 
     #[test]

@@ -169,17 +169,20 @@ fn the_blind_generator_does_not_depend_on_the_number_of_threads() {
 }
 
 /// The frozen blind CI set (seed 20261121, never used while tuning; the
-/// development seeds are 101 and 102, see blind.rs): eight campaigns with ideal
-/// samples ([`super::blind::Scatter::IDEAL`]; with the issue's scatter nothing
-/// can be attributed until the calibration has per-sample scales). Checks that
-/// every campaign is generated at its strength (lambda_eff within 20 % of its
-/// target), that the scores add up, and the targets of issue 6 that hold on this
-/// set ([`HOLDING`]); the others are printed with their values and reported as
-/// misses (not asserted, not loosened).
+/// development seeds are 101 to 104, see blind.rs): eight campaigns with ideal
+/// samples ([`super::blind::Scatter::IDEAL`], kept from before the per-sample
+/// scales so that the before/after figures in BENCHMARKS.md compare like with
+/// like). Checks that every campaign is generated at its strength (lambda_eff
+/// within 20 % of its target), that the scores add up, and the targets of issue 6
+/// that hold on this set ([`HOLDING`]); the others are printed with their values
+/// and reported as misses (not asserted, not loosened). Measured (session 13):
+/// no false attribution on the two null campaigns (both `none`) and a closure
+/// error of 0.063 on the one scoreable campaign hold; top-1 (1/5, three ties
+/// and a misattribution) and the out-of-library flag (0/1) miss.
 #[test]
 fn frozen_blind_ci_set() {
     use super::blind::{default_options, run_blind, summarise, Case, OutOfLibrary, Scatter, Truth};
-    const HOLDING: &[&str] = &[];
+    const HOLDING: &[&str] = &["false attribution on null campaigns", "median gap-closure error, lambda >= 30"];
     let inlib = |e, lambda| Case { truth: Truth::InLibrary(e), lambda };
     let cases = [
         Case { truth: Truth::Null, lambda: 0.0 },
@@ -225,5 +228,44 @@ fn frozen_blind_ci_set() {
         if HOLDING.contains(&t.metric) {
             assert!(t.holds, "{t:?}");
         }
+    }
+}
+
+/// The per-sample scales' Jacobian columns (built from the unknowns' columns,
+/// `sum theta_i dr/dtheta_i` per trial and kind) agree with central differences
+/// of the residuals within 1e-3 of the column norm, and their prior rows are
+/// `b / omega`.
+#[test]
+fn per_sample_scale_columns_match_finite_differences() {
+    use crate::lsq::LeastSquares;
+    let bundles = campaign("", 3e-3, 15);
+    let c = crate::trial::Campaign::new(&bundles, &BTreeMap::new(), Some(5.0), false).unwrap();
+    let mut model = Model::new(&bundles, &c.materials, c.unknowns.clone(), Some(5.0), false, 0.05).unwrap();
+    model.sample_scale_sd = 0.1;
+    let p = model.unknowns.len();
+    assert_eq!(model.num_scales(), 2 * bundles.len());
+    let mut x = c.values();
+    x.resize(model.num_theta(), 0.0);
+    for (m, b) in x[p..].iter_mut().enumerate() {
+        *b = 0.02 * (m as f64 - 2.5);
+    }
+    let problem = model::Fitting { model: &model, candidate: None };
+    let e = problem.evaluate(&x, true).unwrap();
+    let j = e.jacobian.unwrap();
+    let n_obs = model.num_residuals();
+    assert_eq!(e.residuals.len(), n_obs + model.num_scales());
+    for m in 0..model.num_scales() {
+        assert!((e.residuals[n_obs + m] - x[p + m] / 0.1).abs() < 1e-12);
+        let h = 1e-4;
+        let (mut xp, mut xm) = (x.clone(), x.clone());
+        xp[p + m] += h;
+        xm[p + m] -= h;
+        let rp = problem.evaluate(&xp, false).unwrap().residuals;
+        let rm = problem.evaluate(&xm, false).unwrap().residuals;
+        let fd: Vec<f64> = rp.iter().zip(&rm).map(|(a, b)| (a - b) / (2.0 * h)).collect();
+        let col: Vec<f64> = (0..fd.len()).map(|i| j[(i, p + m)]).collect();
+        let norm = col.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let err = col.iter().zip(&fd).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt();
+        assert!(norm > 0.0 && err < 1e-3 * norm, "scale {m}: |J - FD| = {err:e}, |J| = {norm:e}");
     }
 }
