@@ -173,3 +173,78 @@ fn null_adhesion_is_the_baseline_bit_for_bit() {
         }
     }
 }
+
+/// The signature (diagnosis-details.md E8): a five-element block pressed 10 %,
+/// held, and then left by a plate that rises 1 mm above the unloaded height at
+/// 0.5 mm/s (the withdrawal) before it lets go. Against the same trial without
+/// adhesion (the frictionless plate as a unilateral contact tool, adhesion's limit
+/// at strength 0), adhesion pulls on the plate during the withdrawal (a negative
+/// force, at most the strength `sigma_a A`), the top separates later, and the final
+/// height is larger (the viscous chain was stretched while held).
+#[test]
+fn withdrawal_pulls_and_leaves_a_taller_specimen() {
+    let mut protocol = Protocol::ramp_hold_release(0.15, 10.0, 40.0, 80.0);
+    protocol.waypoints = vec![[0.0, 0.0], [10.0, 1.5], [40.0, 1.5], [45.0, -1.0]];
+    protocol.release_s = 45.0;
+    protocol.plate = Attachment::Frictionless;
+    protocol.support = Attachment::Frictionless;
+    let mut base = plane(Material::seed_mat1_force(), protocol);
+    base.markers =
+        vec![MarkerRequest { name: "top".into(), position: vec![W / 2.0, H], times: vec![40.0, 42.0, 80.0] }];
+    let pr = &base.protocol;
+    base.tools =
+        vec![Tool::plate_above("plate", [0.0; 3], [W, H, 0.0], &pr.waypoints, ToolContact::Frictionless, 45.0)];
+    let settings = Settings::default();
+    let reference = press::simulate(&base, &settings, &mut |_| {}).unwrap();
+    let (sigma_a, opening) = (0.002, 0.1);
+    let mut p = base.clone();
+    p.effects = Effects::none().with(EffectId::Adhesion, &[sigma_a, opening]).unwrap();
+    let r = press::simulate(&p, &settings, &mut |_| {}).unwrap();
+    let min = |r: &PressResult| r.steps.iter().filter(|s| s.t_s > 40.0).map(|s| s.plate_force_n).fold(0.0, f64::min);
+    // The last step end at which the plate carries a force (1e-6 N).
+    let last_touch = |r: &PressResult| {
+        r.steps.iter().filter(|s| s.t_s <= 45.0 && s.plate_force_n.abs() > 1e-6).map(|s| s.t_s).fold(0.0, f64::max)
+    };
+    let height = |r: &PressResult| r.markers[0].samples.last().unwrap().1[1];
+    println!(
+        "min force {:.4} N (baseline {:.4}), last pull at {:.3} s (baseline {:.3}), final height {:.5} mm (baseline {:.5})",
+        min(&r),
+        min(&reference),
+        last_touch(&r),
+        last_touch(&reference),
+        height(&r),
+        height(&reference)
+    );
+    let strength = sigma_a * W * T;
+    assert!(min(&reference) >= -1e-9 * strength, "the unilateral plate never pulls: {}", min(&reference));
+    assert!(min(&r) < -0.1 * strength && min(&r) >= -strength * (1.0 + 1e-9), "{}", min(&r));
+    assert!(last_touch(&r) > last_touch(&reference));
+    assert!(height(&r) > height(&reference) + 1e-3, "{} vs {}", height(&r), height(&reference));
+}
+
+/// Refused where it does not extend the baseline (a glued plate, tools that are
+/// all glued) and with the material-point effects (constrained plate only), each
+/// naming the key.
+#[test]
+fn adhesion_refusals_name_the_key() {
+    let settings = Settings { fixed_dt_s: Some(0.25), ..Settings::default() };
+    let adhesion = Effects::none().with(EffectId::Adhesion, &[0.002, 0.1]).unwrap();
+    let mut glued = plane(elastic(), push_pull(0.15, 0.5));
+    glued.protocol.plate = Attachment::Glued;
+    glued.effects = adhesion.clone();
+    let err = press::simulate(&glued, &settings, &mut |_| {}).unwrap_err();
+    assert!(err.to_string().starts_with("effects: adhesion_strength_MPa:"), "{err}");
+    let mut glued_tools = plane(elastic(), push_pull(0.15, 0.5));
+    let pr = &glued_tools.protocol;
+    glued_tools.tools =
+        vec![Tool::plate_above("plate", [0.0; 3], [W, H, 0.0], &pr.waypoints, ToolContact::Glued, pr.release_s)];
+    glued_tools.effects = adhesion.clone();
+    let err = press::simulate(&glued_tools, &settings, &mut |_| {}).unwrap_err();
+    assert!(err.to_string().contains("adhesion_strength_MPa"), "{err}");
+    let mut slider = plane(elastic(), push_pull(0.15, 0.5));
+    slider.effects = adhesion.with(EffectId::PlasticSlider, &[0.01, 0.01]).unwrap();
+    let err = press::simulate(&slider, &settings, &mut |_| {}).unwrap_err();
+    assert!(err.to_string().contains("plastic_yield_stress_MPa"), "{err}");
+    let err = Effects::none().with(EffectId::Adhesion, &[-1e-3, 0.1]).unwrap_err();
+    assert!(err.to_string().starts_with("adhesion_strength_MPa = -0.001 is outside"), "{err}");
+}
