@@ -164,10 +164,11 @@ fn fit_holds_effects_or_refuses_them() {
 /// `wagashi press` simulates adhesion: the trial's plate rises 1 mm above the
 /// unloaded height before it lets go; without adhesion the frictionless plate
 /// holds the top bilaterally until release (the constrained baseline), with
-/// adhesion it is a contact tool that pulls at most `sigma_a A` = 0.4 N (1e-9) and
-/// lets go of the stretched top before the plate stops, after which the force is
-/// zero. An opening out of bounds and adhesion on a glued plate are refused in one
-/// line naming the file, the line and the key, with no output written.
+/// adhesion (delta_c = 2 mm, a softening 0.2 N/mm below the block's 0.7 N/mm) it
+/// is a contact tool that pulls at most `sigma_a A` = 0.4 N (1e-9) and softens
+/// before the plate stops. An opening out of bounds and adhesion on a glued plate
+/// are refused in one line naming the file, the line and the key, with no output
+/// written.
 #[test]
 fn press_simulates_adhesion() {
     let tmp = tempfile::tempdir().unwrap();
@@ -180,7 +181,7 @@ fn press_simulates_adhesion() {
         std::fs::write(cwd.join(name).join("experiment.toml"), text).unwrap();
     };
     write("base", lift(TRIAL));
-    write("sticky", format!("{}\n[effects]\nadhesion_strength_MPa = 0.002\nadhesion_opening_mm = 0.5\n", lift(TRIAL)));
+    write("sticky", format!("{}\n[effects]\nadhesion_strength_MPa = 0.002\nadhesion_opening_mm = 2.0\n", lift(TRIAL)));
     for name in ["base", "sticky"] {
         assert_success(&wagashi_in(cwd, ["press", name, "-o", &format!("out-{name}"), "--size-mm", "2.5"]));
     }
@@ -193,7 +194,8 @@ fn press_simulates_adhesion() {
     // and no weight: the pull shows there too.
     assert!(min(&sticky) < -0.5 * strength && min(&sticky) >= -strength * (1.0 + 1e-9), "{}", min(&sticky));
     assert!(min(&base) < -strength, "the constrained plate pulls without limit: {}", min(&base));
-    assert!(sticky.iter().filter(|x| x.0 > 23.9).all(|x| x.1.abs() < 1e-9), "separated before the plate stops");
+    let last_pull = sticky.iter().filter(|x| x.0 <= 24.0).last().unwrap().1;
+    assert!(last_pull < 0.0 && last_pull > min(&sticky) + 0.05 * strength, "softened: {last_pull}");
     for (effects, key, cause) in [
         ("adhesion_strength_MPa = 0.002\nadhesion_opening_mm = -1.0", "adhesion_opening_mm", "outside [0, inf]"),
         ("adhesion_strength_MPa = 0.002", "adhesion_strength_MPa", "not frictionless"),

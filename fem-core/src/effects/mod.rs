@@ -258,7 +258,7 @@
 //! increment in the first pass. The softening branch is non-convex: its
 //! traction is *explicit* in the iteration (matrix block 0: the negative tangent
 //! could make the step matrix indefinite for the Cholesky factor), and the step
-//! ends only when no cohesive force moved in the last solve by more than 1e-12 of
+//! ends only when no cohesive force moved in the last solve by more than 1e-10 of
 //! the node's strength; the iteration then contracts at the ratio of the
 //! softening stiffness `sigma_a A/delta_c` to the specimen's, and where that
 //! ratio exceeds 1 (a snap-back under displacement control) the explicit

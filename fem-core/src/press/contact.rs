@@ -90,6 +90,17 @@
 //! ## Glued
 //! A node that touches a glued tool sticks to it in every direction (tension
 //! too) until the tool's `release_s`.
+//!
+//! ## Adhesion
+//! With the `adhesion` effect, the normal law of the pressing tools that are not
+//! glued carries a rigid-linear cohesive zone (design, history and measured
+//! accuracy in [`crate::effects`], "Adhesion"): a *bonded* pair (in contact at
+//! the last step end) is a normal pair whose multiplier may pull down to its
+//! strength and tears off on its updated multiplier; an adhered pair off the tool
+//! is [`Status::Cohesive`], its softening traction explicit in the iteration
+//! (settled to 1e-10 of the strength, [`COHESIVE_TOLERANCE`], in at most
+//! [`ADHESION_ITERATIONS`] solves) and its secant unloading implicit. Adhesive
+//! tools skip the exact elimination path.
 
 use std::collections::HashMap;
 use std::sync::Mutex;
@@ -119,8 +130,10 @@ const MAX_ITERATIONS: usize = 100;
 /// The same with adhesion (its explicit softening tractions converge linearly).
 const ADHESION_ITERATIONS: usize = 400;
 /// Allowed change of a cohesive force in the last solve, relative to the node's
-/// full strength `sigma_a A` (the softening traction is explicit in the iteration).
-const COHESIVE_TOLERANCE: f64 = 1e-12;
+/// full strength `sigma_a A` (the softening traction is explicit in the
+/// iteration). At 1e-12 the changes of a peeling front's nodes stalled at the
+/// solves' rounding (measured 1e-12 of the strength) and the step did not settle.
+const COHESIVE_TOLERANCE: f64 = 1e-10;
 /// The rounding of a node's position, relative to its size, that decides
 /// friction statuses at the cone's edge (see [`law`]).
 const ROUNDING: f64 = 8.0 * f64::EPSILON;
@@ -167,6 +180,10 @@ pub(crate) struct Pair {
     /// Adhesion: the largest opening since the node last touched the tool, at the
     /// state's time [mm] (`INFINITY`: not adhered, or fully separated).
     opening_max: f64,
+    /// Adhesion: `opening_max` within the step's iteration: it also grows with the
+    /// iterates' openings (monotone damage within a step, so that an iteration
+    /// that overshoots cannot swing between torn and bonded), committed at the end.
+    opening_trial: f64,
     /// Adhesion: the tension the pair may carry in contact in the last pass [N]
     /// (its full strength while bonded, else 0).
     tension_cap: f64,
@@ -189,6 +206,7 @@ impl Default for Pair {
             slip_force: [0.0; 3],
             slip_scale: 0.0,
             opening_max: f64::INFINITY,
+            opening_trial: f64::INFINITY,
             tension_cap: 0.0,
             cohesive_n: 0.0,
             cohesive_stiffness: 0.0,
@@ -594,6 +612,7 @@ impl<'t> ContactModel<'t> {
                     p.anchor = Some(carried);
                 }
                 p.slip_direction = [0.0; 3];
+                p.opening_trial = p.opening_max;
             }
         }
         // Adhesion: a bonded pair starts the step on its tool, moved along the
@@ -1181,8 +1200,13 @@ impl<'t> ContactModel<'t> {
                 && self.nodes.iter().enumerate().any(|(j, &i)| {
                     let p = &state.pairs[c][j];
                     matches!(p.status, Status::Normal | Status::Stuck) && {
-                        let prox = placed.proximity(self.position(input, u, i), t1, self.planar);
-                        p.lambda_n - penalty[j] * prox.gap < -p.tension_cap
+                        let x = self.position(input, u, i);
+                        let prox = placed.proximity(x, t1, self.planar);
+                        // A bonded pair pulls past its strength beyond the rounding
+                        // band within which it keeps its status (see `law`).
+                        let limit =
+                            if p.tension_cap > 0.0 { -p.tension_cap - penalty[j] * ROUNDING * norm(x) } else { 0.0 };
+                        p.lambda_n - penalty[j] * prox.gap < limit
                     }
                 })
         })
@@ -1312,6 +1336,7 @@ impl<'t> ContactModel<'t> {
                     pair.lambda_t = [0.0; 3];
                     pair.matrix_normal = [0.0; 3];
                     pair.opening_max = f64::INFINITY;
+                    pair.opening_trial = f64::INFINITY;
                     continue;
                 }
                 let x = self.position(input, &u, i);
@@ -1342,9 +1367,10 @@ impl<'t> ContactModel<'t> {
                 // keeps its largest opening.
                 if self.adheres[c] {
                     pair.opening_max = match pair.status {
-                        Status::Cohesive => pair.opening_max.max(prox.gap.max(0.0)),
+                        Status::Cohesive => pair.opening_trial.max(prox.gap.max(0.0)),
                         _ => 0.0,
                     };
+                    pair.opening_trial = pair.opening_max;
                 }
                 // The force on the specimen is f_n n + f_t; on the tool its opposite.
                 for k in 0..3 {
@@ -1395,7 +1421,7 @@ fn law(
     // Adhesion: a bonded pair (in contact at the last step end) holds the tool in
     // tension down to its strength.
     let cap = match cohesion {
-        Some(c) if pair.opening_max == 0.0 => c.strength_n,
+        Some(c) if pair.opening_trial == 0.0 => c.strength_n,
         _ => 0.0,
     };
     pair.tension_cap = cap;
@@ -1502,7 +1528,8 @@ fn torn(pair: &Pair, cap: f64, band: f64, rounding: f64) -> bool {
 fn detached(pair: &mut Pair, cohesion: Option<Cohesion>, prox: &super::tools::Proximity) -> (Status, [f64; 3]) {
     pair.tension_cap = 0.0;
     if let Some(c) = cohesion {
-        let (delta, d0) = (prox.gap.max(0.0), pair.opening_max);
+        let (delta, d0) = (prox.gap.max(0.0), pair.opening_trial);
+        pair.opening_trial = d0.max(delta);
         if d0.max(delta) < c.opening_mm {
             let (f, s) = if delta >= d0 {
                 (-c.strength_n * (1.0 - delta / c.opening_mm), 0.0)
