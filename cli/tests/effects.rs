@@ -194,7 +194,7 @@ fn press_simulates_adhesion() {
     // and no weight: the pull shows there too.
     assert!(min(&sticky) < -0.5 * strength && min(&sticky) >= -strength * (1.0 + 1e-9), "{}", min(&sticky));
     assert!(min(&base) < -strength, "the constrained plate pulls without limit: {}", min(&base));
-    let last_pull = sticky.iter().filter(|x| x.0 <= 24.0).last().unwrap().1;
+    let last_pull = sticky.iter().rfind(|x| x.0 <= 24.0).unwrap().1;
     assert!(last_pull < 0.0 && last_pull > min(&sticky) + 0.05 * strength, "softened: {last_pull}");
     for (effects, key, cause) in [
         ("adhesion_strength_MPa = 0.002\nadhesion_opening_mm = -1.0", "adhesion_opening_mm", "outside [0, inf]"),

@@ -96,8 +96,7 @@
 //! the slider's stresses and the Bingham threshold >= 0,
 //! `thinning_inverse_stress_1_per_MPa` >= 0, `thinning_exponent` in [0.2, 4],
 //! `dual_viscosity_log_ratio` in [-10, 10], `strain_stiffening` in [-4, 50],
-//! `finite_strain` in [0, 1], `adhesion_strength_MPa` and `adhesion_opening_mm`
-//! >= 0); two
+//! `finite_strain` in [0, 1], both adhesion keys `>= 0`); two
 //! material-point effects at once;
 //! a dashpot effect on an `elastic` material; a negative `age_h`; ageing rates without
 //! `age_h`; `gravity` together with `[protocol] gravity = true` (the factor 1
