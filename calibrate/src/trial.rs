@@ -40,7 +40,7 @@
 //! (`Settings::step_ends_s`) and so is each perturbed run, so the adaptive step
 //! choice does not enter the difference (the diagnosis's rule,
 //! diagnosis-details.md §5.1.3). Step: [`FD_STEP`] of a log-scaled unknown's value,
-//! of a linear one's range. `plate-friction` is still refused by
+//! of a linear one's range. `plate-friction` and `adhesion` are still refused by
 //! [`Campaign::new`], naming the key: a contact step may not be subdivided on a
 //! replay, so its differences would need adaptive runs, whose step choice moves
 //! the force by about the step tolerance.

@@ -82,8 +82,10 @@ fn press_simulates_effects() {
 /// with the same effects in place; with ageing or compliance added to the
 /// bundle `wagashi fit` fits with forward differences (ageing by `exp(0.01 * 2)`
 /// absorbs into E: E = 0.05 exp(-0.02) to 1e-4; a compliance needs a stiffer E);
-/// with plate friction it refuses in one line naming the key; an effect key the
-/// engine does not implement is refused by `press` with the file, line and key.
+/// with plate friction or adhesion it refuses in one line naming the key (no
+/// sensitivities through contact, and a contact step may not be subdivided on a
+/// frozen replay); a bad adhesion strength is refused by `press` with the file,
+/// line and key.
 #[test]
 fn fit_holds_effects_or_refuses_them() {
     let tmp = tempfile::tempdir().unwrap();
@@ -105,8 +107,9 @@ fn fit_holds_effects_or_refuses_them() {
         ("ageing_E_rate_per_h = 0.01\nage_h = 2.0", "ageing_E_rate_per_h"),
         ("machine_compliance_mm_per_N = 0.01", "machine_compliance_mm_per_N"),
         ("plate_friction = 0.3", "plate_friction"),
+        ("adhesion_strength_MPa = 0.002", "adhesion_strength_MPa"),
     ] {
-        let fitted = key != "plate_friction";
+        let fitted = !matches!(key, "plate_friction" | "adhesion_strength_MPa");
         let measured = cwd.join("measured/experiment.toml");
         let text = std::fs::read_to_string(&measured).unwrap();
         let dir = cwd.join(format!("with-{key}"));
@@ -148,13 +151,68 @@ fn fit_holds_effects_or_refuses_them() {
         }
     }
 
-    write_trial(&cwd.join("sticky"), "\n[effects]\nadhesion_strength_MPa = 0.01\n");
+    write_trial(&cwd.join("sticky"), "\n[effects]\nadhesion_strength_MPa = -0.01\n");
     let o = wagashi_in(cwd, ["press", "sticky", "-o", "x"]);
     let line = assert_one_line_error(&o);
     assert!(
-        line.contains("experiment.toml:25: effects.adhesion_strength_MPa:") && line.contains("not implemented"),
+        line.contains("experiment.toml:25: effects.adhesion_strength_MPa:") && line.contains("outside [0, inf]"),
         "{line}"
     );
+    assert!(!cwd.join("x").exists());
+}
+
+/// `wagashi press` simulates adhesion: the trial's plate rises 1 mm above the
+/// unloaded height before it lets go; without adhesion the frictionless plate
+/// holds the top bilaterally until release (the constrained baseline), with
+/// adhesion (delta_c = 2 mm, a softening 0.2 N/mm below the block's 0.7 N/mm) it
+/// is a contact tool that pulls at most `sigma_a A` = 0.4 N (1e-9) and softens
+/// before the plate stops. An opening out of bounds and adhesion on a glued plate
+/// are refused in one line naming the file, the line and the key, with no output
+/// written.
+#[test]
+fn press_simulates_adhesion() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cwd = tmp.path();
+    let lift = |t: &str| {
+        t.replace("[20.0, 1.5]]", "[20.0, 1.5], [24.0, -1.0]]").replace("release_s = 20.0", "release_s = 25.0")
+    };
+    let write = |name: &str, text: String| {
+        std::fs::create_dir_all(cwd.join(name)).unwrap();
+        std::fs::write(cwd.join(name).join("experiment.toml"), text).unwrap();
+    };
+    write("base", lift(TRIAL));
+    write("sticky", format!("{}\n[effects]\nadhesion_strength_MPa = 0.002\nadhesion_opening_mm = 2.0\n", lift(TRIAL)));
+    for name in ["base", "sticky"] {
+        assert_success(&wagashi_in(cwd, ["press", name, "-o", &format!("out-{name}"), "--size-mm", "2.5"]));
+    }
+    let base = force_csv(&cwd.join("out-base/force.csv"));
+    let sticky = force_csv(&cwd.join("out-sticky/force.csv"));
+    let min = |f: &[(f64, f64)]| f.iter().map(|x| x.1).fold(f64::INFINITY, f64::min);
+    let strength = 0.002 * 20.0 * 10.0;
+    println!("min force: baseline {:.4} N, adhesion {:.4} N", min(&base), min(&sticky));
+    // The bottom force (what force.csv holds) equals the plate's with a glued floor
+    // and no weight: the pull shows there too.
+    assert!(min(&sticky) < -0.5 * strength && min(&sticky) >= -strength * (1.0 + 1e-9), "{}", min(&sticky));
+    assert!(min(&base) < -strength, "the constrained plate pulls without limit: {}", min(&base));
+    let last_pull = sticky.iter().rfind(|x| x.0 <= 24.0).unwrap().1;
+    assert!(last_pull < 0.0 && last_pull > min(&sticky) + 0.05 * strength, "softened: {last_pull}");
+    for (effects, key, cause) in [
+        ("adhesion_strength_MPa = 0.002\nadhesion_opening_mm = -1.0", "adhesion_opening_mm", "outside [0, inf]"),
+        ("adhesion_strength_MPa = 0.002", "adhesion_strength_MPa", "not frictionless"),
+    ] {
+        let mut text = format!("{}\n[effects]\n{effects}\n", lift(TRIAL));
+        if cause == "not frictionless" {
+            text = text.replace("tool_contact = \"frictionless\"", "tool_contact = \"glued\"");
+        }
+        write("bad", text);
+        let o = wagashi_in(cwd, ["press", "bad", "-o", "out-bad", "--size-mm", "2.5"]);
+        let line = assert_one_line_error(&o);
+        assert!(
+            line.contains("experiment.toml:") && line.contains(&format!("effects.{key}")) && line.contains(cause),
+            "{line}"
+        );
+        assert!(!cwd.join("out-bad").exists());
+    }
 }
 
 /// The material-point effects in `wagashi press`: a slider (yield stress below

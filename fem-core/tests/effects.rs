@@ -151,6 +151,7 @@ fn unimplemented_effects_are_refused_by_key() {
             "strain-stiffening",
             "finite-strain",
             "plate-friction",
+            "adhesion",
             "machine-compliance",
             "gravity",
             "force-offset",

@@ -66,13 +66,14 @@ fn effect_keys_reach_the_engine() {
     assert!(effects_of(&read_bundle(&b.dir).unwrap().to_press(2.5).unwrap()).is_null());
 }
 
-/// Unknown keys, effects not implemented yet, values out of bounds and ageing
+/// Unknown keys, values out of bounds and ageing
 /// without its age are refused at reading, naming the file, the line and the key.
 #[test]
 fn bad_effect_keys_are_refused_by_line() {
     let cases = [
         ("force_ofset_N = 0.1", "effects.force_ofset_N", "unknown key"),
-        ("adhesion_strength_MPa = 0.01", "effects.adhesion_strength_MPa", "not implemented"),
+        ("adhesion_strength_MPa = -0.01", "effects.adhesion_strength_MPa", "outside [0, inf]"),
+        ("adhesion_opening_mm = -0.1", "effects.adhesion_opening_mm", "outside [0, inf]"),
         ("strain_stiffening = 60.0", "effects.strain_stiffening", "outside [-4, 50]"),
         ("finite_strain = 1.5", "effects.finite_strain", "outside [0, 1]"),
         ("plastic_yield_stress_MPa = -0.01", "effects.plastic_yield_stress_MPa", "outside [0, inf]"),

@@ -34,6 +34,7 @@
 //! | `machine-compliance` | load path | `machine_compliance_mm_per_N` 1/k_m | the plate's displacement is `d = d_cmd - F/k_m` with `F` the plate force at the step's end, found exactly per step (below) |
 //! | `ageing` | trial covariate | `ageing_E_rate_per_h` gamma_E, `ageing_c_rate_per_h` gamma_c; covariate `age_h` tau | `E_i -> E_i exp(gamma_E tau)`, `c_i -> c_i exp(gamma_c tau)` in every material before the run |
 //! | `plate-friction` | contact | `plate_friction` mu | the frictionless constrained plate (and a frictionless floor) become rigid contact tools with Coulomb friction mu ([`crate::press::Tool::plate_above`], [`crate::press::Tool::floor_below`]); a glued floor stays glued |
+//! | `adhesion` | contact | `adhesion_strength_MPa` sigma_a (null 0), `adhesion_opening_mm` delta_c (nuisance) | a rigid-linear cohesive zone in the normal law of the pressing tools that are not glued (not the floor): a node that touched holds the tool in tension down to `-sigma_a A`, softening linearly to zero at the opening `delta_c` (below); a frictionless constrained plate becomes a frictionless contact tool ([`crate::press::Tool::plate_above`]) |
 //! | `plastic-slider` | material point | `plastic_yield_stress_MPa` sigma_y (null inf), `plastic_hardening_MPa` H | a slider in series with the chain, `|tau - H e_p|_C <= sigma_y`, associative flow, radial return (below) |
 //! | `bingham-dashpot` | material point | `bingham_threshold_MPa` sigma_B (null 0) | the dashpot c3 flows at `<|tau|_C - sigma_B>/|tau|_C tau/c3` |
 //! | `stress-thinning` | material point | `thinning_inverse_stress_1_per_MPa` 1/sigma_c (null 0), `thinning_exponent` m | the dashpot's viscosity is `c3/(1 + (|tau|_C/sigma_c)^m)` (Cross) |
@@ -65,7 +66,9 @@
 //! (E1 to E6) are refused the same way: their tangent equation needs the
 //! consistent tangent and the internal variables' derivatives (design below).
 //! `wagashi fit` (`wagashi_calibrate::trial`) differences the effects without
-//! sensitivities on frozen step ends instead, except `plate-friction`.
+//! sensitivities on frozen step ends instead, except the contact ones
+//! (`plate-friction`, `adhesion`): a contact step may not be subdivided on a
+//! replay. `adhesion` is refused with sensitivities as friction is.
 //!
 //! ## The material-point path (E1 to E6, built)
 //!
@@ -220,10 +223,86 @@
 //! the closed-form hereditary integral: second order in dt (orders 2.00, 2e-7 of
 //! the peak at 0.125 s). Null with the path forced: equal to the baseline.
 //!
-//! ## Not implemented yet
+//! ## Adhesion (E8, built)
 //!
-//! `adhesion` (a cohesive law, tension down to `-sigma_a` falling to zero at
-//! the opening `delta_c`, in the contact tools' normal law).
+//! **Law.** Rigid-linear cohesive zone on each boundary node against a pressing
+//! tool (diagnosis-details.md E8 with `delta_0 = 0`): in contact the node is held
+//! bilaterally while its normal force pulls less than its strength `sigma_a A`;
+//! past it, it opens with the traction `t = -sigma_a A (1 - delta/delta_c)`
+//! (`delta` the gap), zero from `delta_c` on (`G_c = sigma_a delta_c / 2` per
+//! unit area). `A` is the node's share `int N_a dA` of its boundary facets,
+//! projected on the tool's normal (`sum a_f max(0, -n_f . n_tool)`): a flat plate
+//! sees the top face whole and the sides not at all, and a uniform traction
+//! `sigma_a` over the face is exactly the nodes' strengths (axisymmetric: the
+//! shares carry the weight `2 pi r`, linear along an edge, not the tributary
+//! halves the contact's reported area uses).
+//!
+//! **History and irreversibility.** Per pair, the largest opening `delta_max`
+//! since the node last touched, committed at step ends (a failed step is retried
+//! from the old state; within a step's iteration it grows with the iterates'
+//! openings, so that an iteration that overshoots cannot swing between torn and
+//! bonded): a node in contact at a step end is *bonded*
+//! (`delta_max = 0`, full strength); an open one unloads along the secant to the
+//! origin, `t = -sigma_a A (1 - delta_max/delta_c) delta/delta_max`; once
+//! `delta_max >= delta_c` it is separated and carries nothing. A separated or
+//! damaged node **re-adheres with full strength when it touches the tool again**
+//! (a sticky food surface bonds wherever it touches; a second compression
+//! re-sticks). Nodes that never touched carry nothing; a tool that lets go at
+//! `release_s` drops every bond.
+//!
+//! **Solution** (`press/contact.rs`, inside the augmented-Lagrangian loop). A
+//! bonded pair is a normal-contact pair whose multiplier may pull down to
+//! `-sigma_a A`; it tears off on its *updated* multiplier, in the pass after the
+//! Uzawa update (the trial `lambda - k g` would count the gap twice there and
+//! make pairs near their strength tear off and touch again in turn), and it
+//! starts each step moved along the normal with its tool (as friction's stuck
+//! pairs): left behind by a retreating tool it would open by the tool's whole
+//! increment in the first pass. The softening branch is non-convex: its
+//! traction is *explicit* in the iteration (matrix block 0: the negative tangent
+//! could make the step matrix indefinite for the Cholesky factor), and the step
+//! ends only when no cohesive force moved in the last solve by more than 1e-10 of
+//! the node's strength; the iteration then contracts at the ratio of the
+//! softening stiffness `sigma_a A/delta_c` to the specimen's, and where that
+//! ratio exceeds 1 (a snap-back under displacement control) the explicit
+//! iteration runs on to the fully separated state, which is then the only
+//! equilibrium. The secant unloading branch is implicit (its stiffness in the
+//! node's block). A bond that lets go at once (a jump of the force) defeats the
+//! adaptive step control, which ends with `PressError::StepTooSmall` at the
+//! jump: such trials need fixed steps (`Settings::fixed_dt_s`). At the peak, tearing off and staying give the same force: the
+//! rounding of the position times the penalty decides there, as at friction's
+//! cone edge, and a pair keeps its status within it. A step that does not settle
+//! in 400 solves ends with `PressError::ContactNotSettled` naming the step, the
+//! time, the tool and the nodes, after three retries at a quarter of the step.
+//! The exact elimination path of flat frictionless plates (`settle_exact`) is
+//! bypassed for adhesive tools (a cohesive node is free, held by a traction).
+//!
+//! **Where it acts.** Every pressing tool that is not glued (glued tools hold
+//! tension already) and not a floor ("top region only"): the constrained
+//! frictionless plate, converted to a frictionless contact tool (a friction one
+//! with `plate-friction`), or the trial's own tools. Refused on a glued plate,
+//! on tools that are all glued or floors, with `machine-compliance` and the
+//! material-point effects (constrained plate only), with sensitivities, and with
+//! the dynamic and the seed's integrators (contact needs the quasi-static one).
+//! **Nesting caveat:** the constrained frictionless plate is bilateral until
+//! `release_s`; the converted plate is unilateral. Where a plate withdraws before
+//! its release faster than the specimen recovers, the baseline plate pulls on the
+//! specimen (an unlimited adhesion), and `sigma_a -> 0+` gives the unilateral
+//! plate, not that baseline (as `plate-friction`'s `mu -> 0+` does). At
+//! `sigma_a = 0` the effect is inactive and the baseline runs bit for bit.
+//!
+//! **Accuracy (measured, `tests/adhesion.rs`).** Elastic block in uniaxial stress
+//! pressed 0.15 mm and pulled 1.5 mm above its unloaded height (softening
+//! stiffness a quarter of `EA/h`), against the spring `EA/h` in series with the
+//! cohesive law: 8.5e-11 of `sigma_a A` at every step end (asserted 1e-9), the
+//! peak `-sigma_a A` and the separation at `delta_c` included (plane stress,
+//! converted plate and explicit tool bit for bit equal; axisymmetric 8.5e-11).
+//! Pulled into the softening branch, pushed back (secant to the origin), pressed
+//! again and pulled off again (re-adhered, full strength): 3.9e-11. Signature on
+//! the seed's five-element material pressed 10 %, held and withdrawn 1 mm above
+//! the unloaded height (sigma_a = 0.002 MPa, delta_c = 0.1 mm), against the
+//! unilateral plate: a pull of -0.3995 N (strength 0.4 N), the last pull 2.7 s
+//! later (43.79 s against 41.09 s), the final height 4.4e-3 mm larger. A bond
+//! softer than the block (glued floor) peels from the middle, corners last.
 //!
 //! ## Design of the material-point path for E5 and E6, and its sensitivities
 //!

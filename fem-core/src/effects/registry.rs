@@ -447,6 +447,7 @@ impl EffectId {
                 | EffectId::StrainStiffening
                 | EffectId::FiniteStrain
                 | EffectId::PlateFriction
+                | EffectId::Adhesion
                 | EffectId::MachineCompliance
                 | EffectId::Gravity
                 | EffectId::ForceOffset

@@ -190,6 +190,14 @@ impl Effects {
         self.is_active(EffectId::PlateFriction).then(|| self.values(EffectId::PlateFriction)[0])
     }
 
+    /// The adhesion at the plate `[strength sigma_a MPa, critical opening delta_c mm]`, when active.
+    pub fn adhesion(&self) -> Option<[f64; 2]> {
+        self.is_active(EffectId::Adhesion).then(|| {
+            let v = self.values(EffectId::Adhesion);
+            [v[0], v[1]]
+        })
+    }
+
     /// The ageing scales `[exp(gamma_E age), exp(gamma_c age)]` of the moduli and
     /// the viscosities, when active (an age of 0 when none is given).
     pub fn ageing_scales(&self) -> Option<[f64; 2]> {

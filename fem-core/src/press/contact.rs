@@ -90,6 +90,17 @@
 //! ## Glued
 //! A node that touches a glued tool sticks to it in every direction (tension
 //! too) until the tool's `release_s`.
+//!
+//! ## Adhesion
+//! With the `adhesion` effect, the normal law of the pressing tools that are not
+//! glued carries a rigid-linear cohesive zone (design, history and measured
+//! accuracy in [`crate::effects`], "Adhesion"): a *bonded* pair (in contact at
+//! the last step end) is a normal pair whose multiplier may pull down to its
+//! strength and tears off on its updated multiplier; an adhered pair off the tool
+//! is [`Status::Cohesive`], its softening traction explicit in the iteration
+//! (settled to 1e-10 of the strength, [`COHESIVE_TOLERANCE`], in at most
+//! [`ADHESION_ITERATIONS`] solves) and its secant unloading implicit. Adhesive
+//! tools skip the exact elimination path.
 
 use std::collections::HashMap;
 use std::sync::Mutex;
@@ -116,6 +127,13 @@ const FRICTION_TOLERANCE: f64 = 1e-8;
 const SLIP_TOLERANCE: f64 = 1e-8;
 /// Iterations before a step counts as not settling.
 const MAX_ITERATIONS: usize = 100;
+/// The same with adhesion (its explicit softening tractions converge linearly).
+const ADHESION_ITERATIONS: usize = 400;
+/// Allowed change of a cohesive force in the last solve, relative to the node's
+/// full strength `sigma_a A` (the softening traction is explicit in the
+/// iteration). At 1e-12 the changes of a peeling front's nodes stalled at the
+/// solves' rounding (measured 1e-12 of the strength) and the step did not settle.
+const COHESIVE_TOLERANCE: f64 = 1e-10;
 /// The rounding of a node's position, relative to its size, that decides
 /// friction statuses at the cone's edge (see [`law`]).
 const ROUNDING: f64 = 8.0 * f64::EPSILON;
@@ -136,6 +154,9 @@ pub(crate) enum Status {
     Normal,
     /// Stuck or glued: all directions held.
     Stuck,
+    /// Adhesion: off the tool but held by the cohesive traction (explicit on the
+    /// softening branch, a secant spring on the unloading one).
+    Cohesive,
 }
 
 /// A node against one tool.
@@ -156,6 +177,21 @@ pub(crate) struct Pair {
     slip_force: [f64; 3],
     /// Friction: `mu N / |trial|` of the last pass's slip (its tangent's factor).
     slip_scale: f64,
+    /// Adhesion: the largest opening since the node last touched the tool, at the
+    /// state's time [mm] (`INFINITY`: not adhered, or fully separated).
+    opening_max: f64,
+    /// Adhesion: `opening_max` within the step's iteration: it also grows with the
+    /// iterates' openings (monotone damage within a step, so that an iteration
+    /// that overshoots cannot swing between torn and bonded), committed at the end.
+    opening_trial: f64,
+    /// Adhesion: the tension the pair may carry in contact in the last pass [N]
+    /// (its full strength while bonded, else 0).
+    tension_cap: f64,
+    /// Adhesion: the cohesive normal force of the last pass [N] (negative: a pull).
+    cohesive_n: f64,
+    /// Adhesion: the secant stiffness of the unloading branch in the last pass
+    /// [N/mm] (0 on the softening branch, whose force is explicit).
+    cohesive_stiffness: f64,
 }
 
 impl Default for Pair {
@@ -169,6 +205,11 @@ impl Default for Pair {
             slip_direction: [0.0; 3],
             slip_force: [0.0; 3],
             slip_scale: 0.0,
+            opening_max: f64::INFINITY,
+            opening_trial: f64::INFINITY,
+            tension_cap: 0.0,
+            cohesive_n: 0.0,
+            cohesive_stiffness: 0.0,
         }
     }
 }
@@ -199,9 +240,10 @@ pub struct ToolSample {
     pub normal_n: f64,
     /// Magnitude of the summed tangential forces [N].
     pub tangential_n: f64,
-    /// Area in contact [mm^2]: the nodal tributary areas of the nodes in contact.
+    /// Area in contact [mm^2]: the nodal tributary areas of the nodes in contact
+    /// (or, with adhesion, held by the cohesive traction).
     pub area_mm2: f64,
-    /// Nodes in contact (only at snapshot times; empty otherwise).
+    /// Nodes in contact or held by adhesion (only at snapshot times; empty otherwise).
     pub nodes: Vec<u32>,
 }
 
@@ -259,6 +301,21 @@ pub(crate) struct ContactModel<'t> {
     held: Vec<[bool; 3]>,
     /// Columns of the unpenalized step matrix's inverse, for the low-rank path.
     columns: Mutex<ColumnCache>,
+    /// Adhesion `[sigma_a MPa, delta_c mm]` (the `adhesion` effect), if active.
+    adhesion: Option<[f64; 2]>,
+    /// Per canonical tool: whether adhesion acts on it (a pressing tool, not glued).
+    adheres: Vec<bool>,
+    /// Per candidate node, with adhesion: its boundary facets' outward unit normals
+    /// and the node's consistent share of each facet's area [mm^2] (`int N_a dA`).
+    facets: Vec<Vec<([f64; 3], f64)>>,
+}
+
+/// The adhesion of one pair: the node's strength `sigma_a A` [N] (`A` its facets'
+/// area facing the tool) and the critical opening [mm].
+#[derive(Debug, Clone, Copy)]
+struct Cohesion {
+    strength_n: f64,
+    opening_mm: f64,
 }
 
 /// Columns `A^{-1} e_dof` of the unpenalized step matrix at unit scale (see
@@ -348,7 +405,7 @@ impl<'t> ContactModel<'t> {
         let tools = order.iter().map(|&i| PlacedTool::new(&problem.tools[i])).collect::<Result<Vec<_>, _>>()?;
         let mesh = &problem.mesh;
         // Boundary facets: the facets of exactly one cell.
-        let mut count: HashMap<[u32; D], (u32, [u32; D])> = HashMap::new();
+        let mut count: HashMap<[u32; D], (u32, [u32; D], u32)> = HashMap::new();
         for cell in &mesh.cells {
             for skip in 0..N {
                 let mut f = [0u32; D];
@@ -361,16 +418,19 @@ impl<'t> ContactModel<'t> {
                 }
                 let mut key = f;
                 key.sort_unstable();
-                count.entry(key).and_modify(|e| e.0 += 1).or_insert((1, f));
+                count.entry(key).and_modify(|e| e.0 += 1).or_insert((1, f, cell[skip]));
             }
         }
-        let mut facets: Vec<[u32; D]> = count.into_values().filter(|e| e.0 == 1).map(|e| e.1).collect();
+        let mut facets: Vec<([u32; D], u32)> = count.into_values().filter(|e| e.0 == 1).map(|e| (e.1, e.2)).collect();
         facets.sort_unstable();
+        let adhesion = problem.effects.adhesion();
+        let mut node_facets: Vec<Vec<([f64; 3], f64)>> =
+            if adhesion.is_some() { vec![Vec::new(); mesh.num_nodes()] } else { Vec::new() };
         let nn = mesh.num_nodes();
         let mut area = vec![0.0; nn];
         let mut size = vec![0.0f64; nn];
         let mut on_boundary = vec![false; nn];
-        for f in &facets {
+        for (f, opposite) in &facets {
             let p: Vec<[f64; 3]> = f
                 .iter()
                 .map(|&v| {
@@ -401,6 +461,27 @@ impl<'t> ContactModel<'t> {
                 size[v as usize] = size[v as usize].max(edge);
                 on_boundary[v as usize] = true;
             }
+            if adhesion.is_some() {
+                // The outward unit normal (away from the cell's opposite vertex) and
+                // each node's share `int N_a dA` of the facet (axisymmetric: the
+                // weight 2 pi r is linear along the edge, so the shares differ).
+                let q = mesh.nodes[*opposite as usize];
+                let o = sub(p[0], [q[0], q[1], if D == 3 { q[2] } else { 0.0 }]);
+                let (u, v) = (sub(p[1], p[0]), if D == 3 { sub(p[2], p[0]) } else { [0.0, 0.0, 1.0] });
+                let c = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
+                let l = len(c);
+                let sign = if c[0] * o[0] + c[1] * o[1] + c[2] * o[2] < 0.0 { -1.0 } else { 1.0 };
+                let normal = c.map(|x| sign * x / l);
+                for (a, &vtx) in f.iter().enumerate() {
+                    let share = if problem.formulation == Formulation::Axisymmetric {
+                        let (ra, rb) = (p[a][0], p[1 - a][0]);
+                        std::f64::consts::TAU * edge * (2.0 * ra + rb) / 6.0
+                    } else {
+                        measure / D as f64
+                    };
+                    node_facets[vtx as usize].push((normal, share));
+                }
+            }
         }
         let nodes: Vec<u32> =
             (0..nn as u32).filter(|&i| on_boundary[i as usize] && (0..D).any(|k| !held[i as usize * D + k])).collect();
@@ -421,7 +502,17 @@ impl<'t> ContactModel<'t> {
             })
             .collect();
         let held = nodes.iter().map(|&i| std::array::from_fn(|k| k < D && held[i as usize * D + k])).collect();
+        let adheres =
+            tools.iter().map(|t| adhesion.is_some() && !t.tool.floor && t.tool.contact != ToolContact::Glued).collect();
+        let facets = if adhesion.is_some() {
+            nodes.iter().map(|&i| std::mem::take(&mut node_facets[i as usize])).collect()
+        } else {
+            Vec::new()
+        };
         Ok(Self {
+            adhesion,
+            adheres,
+            facets,
             held,
             tools,
             order,
@@ -456,6 +547,26 @@ impl<'t> ContactModel<'t> {
     /// Whether the tool `c` (canonical) holds at `t1`.
     fn engaged(&self, c: usize, t1: f64) -> bool {
         t1 <= self.tools[c].tool.release_s * (1.0 + 1e-12)
+    }
+
+    /// The adhesion of candidate `j` against tool `c` whose outward normal at the
+    /// node's closest point is `normal`: the strength `sigma_a A` with `A` the
+    /// node's facet shares projected on the tool's normal (`sum a_f max(0, -n_f .
+    /// normal)`: a flat plate sees the top face's facets whole and the sides not
+    /// at all), so that a uniform traction `sigma_a` over the face is exactly the
+    /// nodes' strengths.
+    fn cohesion(&self, c: usize, j: usize, normal: [f64; 3]) -> Option<Cohesion> {
+        let [sigma, opening_mm] = self.adhesion?;
+        if !self.adheres[c] {
+            return None;
+        }
+        let area: f64 = self.facets[j].iter().map(|(n, a)| a * (-dot(*n, normal)).max(0.0)).sum();
+        Some(Cohesion { strength_n: sigma * area, opening_mm })
+    }
+
+    /// Whether adhesion acts on a tool engaged at `t1`.
+    fn adhesive(&self, t1: f64) -> bool {
+        self.adheres.iter().enumerate().any(|(c, &a)| a && self.engaged(c, t1))
     }
 
     /// Solves one step with contact. `solve(hash, penalty, rhs_extra)` must solve the
@@ -501,6 +612,30 @@ impl<'t> ContactModel<'t> {
                     p.anchor = Some(carried);
                 }
                 p.slip_direction = [0.0; 3];
+                p.opening_trial = p.opening_max;
+            }
+        }
+        // Adhesion: a bonded pair starts the step on its tool, moved along the
+        // normal with it (as a stuck pair with its anchor). Left where it was, a
+        // retreating tool would open a gap of its whole increment in the first
+        // pass, far past the bond's strength, and every bonded pair would start
+        // the step torn off.
+        for (c, pairs) in state.pairs.iter().enumerate() {
+            if !(self.adheres[c] && self.engaged(c, t1)) {
+                continue;
+            }
+            for (j, p) in pairs.iter().enumerate() {
+                if moved[j] || p.status != Status::Normal || p.opening_max != 0.0 {
+                    continue;
+                }
+                moved[j] = true;
+                let i = self.nodes[j];
+                let prox = self.tools[c].proximity(self.position(input, &u, i), t1, self.planar);
+                for k in 0..d {
+                    if !self.held[j][k] {
+                        u[i as usize * d + k] -= prox.gap * prox.normal[k];
+                    }
+                }
             }
         }
         let penalty: Vec<f64> = self
@@ -525,7 +660,24 @@ impl<'t> ContactModel<'t> {
             .all(|(c, t)| !self.engaged(c, t1) || matches!(t.tool.shape, super::tools::ToolShape::Plate { .. }));
         let mut last_change = f64::INFINITY;
         let smallest_size = self.size.iter().copied().fold(f64::INFINITY, f64::min);
-        for iteration in 1..=MAX_ITERATIONS {
+        // The explicit cohesive tractions converge linearly (at the ratio of the
+        // softening stiffness to the specimen's): allow them more solves.
+        let max_iterations = if self.adhesive(t1) { ADHESION_ITERATIONS } else { MAX_ITERATIONS };
+        for iteration in 1..=max_iterations {
+            let cohesive_before: Vec<Vec<f64>> = state
+                .pairs
+                .iter()
+                .enumerate()
+                .map(
+                    |(c, pairs)| {
+                        if self.adheres[c] {
+                            pairs.iter().map(|p| p.cohesive_n).collect()
+                        } else {
+                            Vec::new()
+                        }
+                    },
+                )
+                .collect();
             // Only friction tools' slip tractions are read (see `slip_settled`).
             let slip_before: Vec<Vec<[f64; 3]>> = self
                 .tools
@@ -537,7 +689,8 @@ impl<'t> ContactModel<'t> {
                 })
                 .collect();
             let mut pass = self.assemble(&mut state, input, &u, t1, &penalty, true);
-            let slip_settled = self.slip_settled(&state, &slip_before, input, &u, &penalty);
+            let slip_settled = self.slip_settled(&state, &slip_before, input, &u, &penalty)
+                && self.cohesive_unsettled(&state, &cohesive_before, input, &u).is_none();
             let increment = u.iter().zip(input.u0).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
             // Done when a step changes the displacement by a millionth of the step's
             // increment, or by no more than the solves' rounding (1e-9 of the
@@ -562,13 +715,17 @@ impl<'t> ContactModel<'t> {
                     pass = self.assemble(&mut state, input, &u, t1, &penalty, false);
                 }
             }
-            if iteration == MAX_ITERATIONS {
+            if iteration == max_iterations {
                 let (_, mut c, mut nodes) = self.constraint_error(input, &u, &state, t1);
                 if nodes.is_empty() {
                     // The gaps hold: what did not settle are statuses flipping or
                     // slip tractions still moving; name those nodes.
                     (c, nodes) =
                         self.unsettled(used.as_deref(), &pass.statuses, &state, &slip_before, input, &u, &penalty);
+                }
+                if nodes.is_empty() {
+                    // Or cohesive tractions still moving.
+                    (c, nodes) = self.cohesive_unsettled(&state, &cohesive_before, input, &u).unwrap_or((c, nodes));
                 }
                 return Err(PressError::ContactNotSettled {
                     step: input.step,
@@ -626,7 +783,9 @@ impl<'t> ContactModel<'t> {
             !self.engaged(c, t1)
                 || (matches!(t.tool.shape, super::tools::ToolShape::Plate { .. })
                     && t.tool.keyframes.iter().all(|k| k.rotation_rad == [0.0; 3])
-                    && matches!(t.tool.contact, ToolContact::Glued | ToolContact::Frictionless))
+                    && matches!(t.tool.contact, ToolContact::Glued | ToolContact::Frictionless)
+                    // Adhesion's cohesive branch is a traction, not a held dof.
+                    && !self.adheres[c])
         });
         if !eligible {
             return Ok(None);
@@ -852,7 +1011,6 @@ impl<'t> ContactModel<'t> {
             let engaged = self.engaged(c, t1);
             let mut st = Vec::with_capacity(self.nodes.len());
             for (j, &i) in self.nodes.iter().enumerate() {
-                let pair = &mut state.pairs[c][j];
                 if !engaged {
                     st.push(Status::Open);
                     signature.push((Status::Open, [0; 3]));
@@ -863,8 +1021,10 @@ impl<'t> ContactModel<'t> {
                 let k = penalty[j];
                 let n = prox.normal;
                 let band = if band { OPEN_BAND * self.size[j] } else { 0.0 };
-                let (status, force) = law(placed.tool.contact, pair, &prox, x, k, band);
-                if status == Status::Open {
+                let cohesion = self.cohesion(c, j, n);
+                let pair = &mut state.pairs[c][j];
+                let (status, force) = law(placed.tool.contact, pair, &prox, x, k, band, cohesion);
+                if matches!(status, Status::Open | Status::Cohesive) {
                     pair.lambda_n = 0.0;
                     pair.lambda_t = [0.0; 3];
                 }
@@ -875,11 +1035,13 @@ impl<'t> ContactModel<'t> {
                     pair.matrix_normal = n;
                 }
                 let m = pair.matrix_normal;
-                // The matrix block: k I when stuck, k m m^T for normal contact.
+                // The matrix block: k I when stuck, k m m^T for normal contact, the
+                // secant s m m^T of an unloading cohesive pair (0 when softening).
                 let mut mblock = match status {
                     Status::Open => [[0.0; 3]; 3],
                     Status::Normal => outer(m, m, k),
                     Status::Stuck => diag(k),
+                    Status::Cohesive => outer(m, m, pair.cohesive_stiffness),
                 };
                 // A slipping pair in 3D: the return map's tangent across the slip,
                 // `k (mu N / |trial|) (I - n n^T - s s^T)`, which holds the slip's
@@ -907,6 +1069,9 @@ impl<'t> ContactModel<'t> {
                 st.push(status);
                 let q = |x: f64| (x / NORMAL_REUSE).round() as i64;
                 signature.push((status, if status == Status::Open { [0; 3] } else { m.map(q) }));
+                if status == Status::Cohesive {
+                    signature.push((status, [pair.cohesive_stiffness.to_bits() as i64, 0, 0]));
+                }
                 if across {
                     // The exact values: a stale tangent here stalls the iteration.
                     let bits = |x: f64| x.to_bits() as i64;
@@ -938,6 +1103,35 @@ impl<'t> ContactModel<'t> {
             self.nodes.iter().enumerate().all(|(j, &i)| {
                 !self.slip_moves(mu, state.pairs[c][j].slip_force, before[c][j], input, u, i, penalty[j])
             })
+        })
+    }
+
+    /// The first adhesive tool and its nodes whose cohesive force changed in the
+    /// last pass by more than [`COHESIVE_TOLERANCE`] of the node's strength (or the
+    /// rounding of the position times the softening stiffness); `None` when all
+    /// have settled.
+    fn cohesive_unsettled(
+        &self,
+        state: &ContactState,
+        before: &[Vec<f64>],
+        input: &StepInput<'_>,
+        u: &[f64],
+    ) -> Option<(usize, Vec<u32>)> {
+        let [sigma, opening] = self.adhesion?;
+        (0..self.tools.len()).filter(|&c| self.adheres[c]).find_map(|c| {
+            let nodes: Vec<u32> = self
+                .nodes
+                .iter()
+                .enumerate()
+                .filter(|&(j, &i)| {
+                    let strength = sigma * self.facets[j].iter().map(|f| f.1).sum::<f64>();
+                    let rounding = 64.0 * f64::EPSILON * norm(self.position(input, u, i)) * strength / opening;
+                    let change = (state.pairs[c][j].cohesive_n - before[c][j]).abs();
+                    change > (COHESIVE_TOLERANCE * strength).max(rounding)
+                })
+                .map(|(_, &i)| i)
+                .collect();
+            (!nodes.is_empty()).then_some((c, nodes))
         })
     }
 
@@ -1005,9 +1199,14 @@ impl<'t> ContactModel<'t> {
                 && self.engaged(c, t1)
                 && self.nodes.iter().enumerate().any(|(j, &i)| {
                     let p = &state.pairs[c][j];
-                    p.status != Status::Open && {
-                        let prox = placed.proximity(self.position(input, u, i), t1, self.planar);
-                        p.lambda_n - penalty[j] * prox.gap < 0.0
+                    matches!(p.status, Status::Normal | Status::Stuck) && {
+                        let x = self.position(input, u, i);
+                        let prox = placed.proximity(x, t1, self.planar);
+                        // A bonded pair pulls past its strength beyond the rounding
+                        // band within which it keeps its status (see `law`).
+                        let limit =
+                            if p.tension_cap > 0.0 { -p.tension_cap - penalty[j] * ROUNDING * norm(x) } else { 0.0 };
+                        p.lambda_n - penalty[j] * prox.gap < limit
                     }
                 })
         })
@@ -1023,13 +1222,14 @@ impl<'t> ContactModel<'t> {
     fn update_multipliers(&self, state: &mut ContactState, input: &StepInput<'_>, u: &[f64], t1: f64, k: &[f64]) {
         for (c, placed) in self.tools.iter().enumerate() {
             for (j, &i) in self.nodes.iter().enumerate() {
-                let pair = &mut state.pairs[c][j];
-                if pair.status == Status::Open {
+                if matches!(state.pairs[c][j].status, Status::Open | Status::Cohesive) {
                     continue;
                 }
                 let x = self.position(input, u, i);
                 let prox = placed.proximity(x, t1, self.planar);
-                let (_, force) = law(placed.tool.contact, pair, &prox, x, k[j], OPEN_BAND * self.size[j]);
+                let cohesion = self.cohesion(c, j, prox.normal);
+                let pair = &mut state.pairs[c][j];
+                let (_, force) = law(placed.tool.contact, pair, &prox, x, k[j], OPEN_BAND * self.size[j], cohesion);
                 set_multipliers(placed.tool.contact, pair, &prox, force);
             }
         }
@@ -1059,7 +1259,7 @@ impl<'t> ContactModel<'t> {
                 let x = self.position(input, u, i);
                 let prox = placed.proximity(x, t1, self.planar);
                 let mut e = match pair.status {
-                    Status::Open => (-prox.gap).max(0.0),
+                    Status::Open | Status::Cohesive => (-prox.gap).max(0.0),
                     _ => prox.gap.abs(),
                 };
                 if pair.status == Status::Stuck {
@@ -1135,24 +1335,43 @@ impl<'t> ContactModel<'t> {
                     pair.lambda_n = 0.0;
                     pair.lambda_t = [0.0; 3];
                     pair.matrix_normal = [0.0; 3];
+                    pair.opening_max = f64::INFINITY;
+                    pair.opening_trial = f64::INFINITY;
                     continue;
                 }
                 let x = self.position(input, &u, i);
                 let prox = placed.proximity(x, t1, self.planar);
-                if let ToolContact::Friction(_) = placed.tool.contact {
-                    // The tangential multiplier is not part of the friction law (the
-                    // anchor is): take the traction the law gives at the result.
-                    let (_, f) = law(placed.tool.contact, pair, &prox, x, penalty[j], OPEN_BAND * self.size[j]);
-                    set_multipliers(placed.tool.contact, pair, &prox, f);
+                if pair.status != Status::Cohesive {
+                    if let ToolContact::Friction(_) = placed.tool.contact {
+                        // The tangential multiplier is not part of the friction law (the
+                        // anchor is): take the traction the law gives at the result.
+                        let cohesion = self.cohesion(c, j, prox.normal);
+                        let pair = &mut state.pairs[c][j];
+                        let band = OPEN_BAND * self.size[j];
+                        let (_, f) = law(placed.tool.contact, pair, &prox, x, penalty[j], band, cohesion);
+                        set_multipliers(placed.tool.contact, pair, &prox, f);
+                    }
                 }
+                let pair = &mut state.pairs[c][j];
                 let (f_n, f_t) = match placed.tool.contact {
                     ToolContact::Glued => {
                         let f = pair.lambda_t;
                         let fnn = dot(f, prox.normal);
                         (fnn, tangential(f, prox.normal))
                     }
+                    _ if pair.status == Status::Cohesive => (pair.cohesive_n, [0.0; 3]),
                     _ => (pair.lambda_n, pair.lambda_t),
                 };
+                // Adhesion's history, committed at the step's end: a pair in contact
+                // is bonded (it re-adheres whenever it touches again); a cohesive one
+                // keeps its largest opening.
+                if self.adheres[c] {
+                    pair.opening_max = match pair.status {
+                        Status::Cohesive => pair.opening_trial.max(prox.gap.max(0.0)),
+                        _ => 0.0,
+                    };
+                    pair.opening_trial = pair.opening_max;
+                }
                 // The force on the specimen is f_n n + f_t; on the tool its opposite.
                 for k in 0..3 {
                     let f = f_n * prox.normal[k] + f_t[k];
@@ -1180,6 +1399,7 @@ impl<'t> ContactModel<'t> {
 
 /// The contact law of one pair at the position `x`: status, the force on the node
 /// (3 components) for the current multipliers.
+#[allow(clippy::too_many_arguments)]
 fn law(
     contact: ToolContact,
     pair: &mut Pair,
@@ -1187,10 +1407,42 @@ fn law(
     x: [f64; 3],
     k: f64,
     band: f64,
+    cohesion: Option<Cohesion>,
 ) -> (Status, [f64; 3]) {
     let n = prox.normal;
     // The hysteresis of opening (see OPEN_BAND).
-    let opens = |trial: f64, status: Status| if status == Status::Open { trial <= 0.0 } else { trial <= -k * band };
+    let opens = |trial: f64, status: Status| {
+        if matches!(status, Status::Open | Status::Cohesive) {
+            trial <= 0.0
+        } else {
+            trial <= -k * band
+        }
+    };
+    // Adhesion: a bonded pair (in contact at the last step end) holds the tool in
+    // tension down to its strength.
+    let cap = match cohesion {
+        Some(c) if pair.opening_trial == 0.0 => c.strength_n,
+        _ => 0.0,
+    };
+    pair.tension_cap = cap;
+    pair.cohesive_n = 0.0;
+    pair.cohesive_stiffness = 0.0;
+    // A bonded pair in contact tears off on its multiplier, not on the trial
+    // (see `torn`): within the iteration only the opening band's hysteresis. At
+    // the peak, where tearing off and staying give the same force, the rounding
+    // of the position times the penalty decides (as at friction's cone edge):
+    // within that band a pair keeps its status, so a cohesive pair touches again
+    // only past it.
+    let rounding = k * ROUNDING * norm(x);
+    let opens = |trial: f64, status: Status| {
+        if cap > 0.0 && !matches!(status, Status::Open | Status::Cohesive) {
+            band > 0.0 && trial <= -k * band
+        } else if status == Status::Cohesive {
+            trial <= rounding
+        } else {
+            opens(trial, status)
+        }
+    };
     match contact {
         ToolContact::Glued => {
             if pair.anchor.is_none() {
@@ -1206,17 +1458,17 @@ fn law(
         }
         ToolContact::Frictionless => {
             let trial = pair.lambda_n - k * prox.gap;
-            if opens(trial, pair.status) {
-                return (Status::Open, [0.0; 3]);
+            if opens(trial + cap, pair.status) || torn(pair, cap, band, rounding) {
+                return detached(pair, cohesion, prox);
             }
             (Status::Normal, n.map(|c| c * trial))
         }
         ToolContact::Friction(mu) => {
             let trial = pair.lambda_n - k * prox.gap;
-            if opens(trial, pair.status) {
+            if opens(trial + cap, pair.status) || torn(pair, cap, band, rounding) {
                 pair.anchor = None;
                 pair.slip_force = [0.0; 3];
-                return (Status::Open, [0.0; 3]);
+                return detached(pair, cohesion, prox);
             }
             // Return mapping: the tangential traction is the penalty times the
             // elastic slip from the anchor, capped at mu times the normal force.
@@ -1253,16 +1505,59 @@ fn law(
     }
 }
 
+/// Whether a bonded pair in contact tears off the tool: in the pass right after
+/// the multipliers' update (`band` 0), when its updated multiplier pulls beyond
+/// its strength. The trial `lambda - k g` there would count the gap twice (the
+/// update already took it in), and pairs close to their strength would tear off
+/// and touch again in turn.
+fn torn(pair: &Pair, cap: f64, band: f64, rounding: f64) -> bool {
+    cap > 0.0
+        && band == 0.0
+        && !matches!(pair.status, Status::Open | Status::Cohesive)
+        && pair.lambda_n < -cap - rounding
+}
+
+/// A pair off its tool: open, or with adhesion the cohesive traction of an
+/// adhered pair (`opening_max < delta_c`). With `delta = max(gap, 0)` and
+/// `d0 = opening_max` (the history at the step's start, committed at step ends):
+/// on the softening branch (`delta >= d0`) the rigid-linear law
+/// `t = -sigma_a A (1 - delta/delta_c)`, explicit in the iteration (its tangent is
+/// negative: in the matrix it could make it indefinite); below `d0` the secant
+/// back to the origin, `t = -sigma_a A (1 - d0/delta_c) delta/d0`, implicit (its
+/// positive stiffness goes into the matrix block); zero once `delta >= delta_c`.
+fn detached(pair: &mut Pair, cohesion: Option<Cohesion>, prox: &super::tools::Proximity) -> (Status, [f64; 3]) {
+    pair.tension_cap = 0.0;
+    if let Some(c) = cohesion {
+        let (delta, d0) = (prox.gap.max(0.0), pair.opening_trial);
+        pair.opening_trial = d0.max(delta);
+        if d0.max(delta) < c.opening_mm {
+            let (f, s) = if delta >= d0 {
+                (-c.strength_n * (1.0 - delta / c.opening_mm), 0.0)
+            } else {
+                let s = c.strength_n * (1.0 - d0 / c.opening_mm) / d0;
+                (-s * delta, s)
+            };
+            pair.cohesive_n = f;
+            pair.cohesive_stiffness = s;
+            return (Status::Cohesive, prox.normal.map(|x| x * f));
+        }
+    }
+    (Status::Open, [0.0; 3])
+}
+
 /// Stores the multipliers that the force `f` (from [`law`]) implies: glued pairs
-/// keep the whole traction in `lambda_t`, the others split it along the normal.
+/// keep the whole traction in `lambda_t`, the others split it along the normal
+/// (a bonded adhesive pair's normal multiplier may pull, down to its strength).
 fn set_multipliers(contact: ToolContact, pair: &mut Pair, prox: &super::tools::Proximity, f: [f64; 3]) {
-    if pair.status == Status::Open {
+    if matches!(pair.status, Status::Open | Status::Cohesive) {
         return;
     }
     match contact {
         ToolContact::Glued => pair.lambda_t = f,
         _ => {
-            pair.lambda_n = dot(f, prox.normal).max(0.0);
+            let fnn = dot(f, prox.normal);
+            // A bonded pair's multiplier is not capped: `torn` reads it.
+            pair.lambda_n = if pair.tension_cap > 0.0 { fnn } else { fnn.max(0.0) };
             pair.lambda_t = tangential(f, prox.normal);
         }
     }

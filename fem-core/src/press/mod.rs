@@ -39,9 +39,10 @@ pub use tools::{Keyframe, Tool, ToolContact, ToolShape};
 
 /// Runs a press problem; `progress` is called after every step.
 ///
-/// With effects ([`PressProblem::effects`], [`crate::effects`]): `ageing` and
-/// `plate-friction` change the problem before the run (aged materials; friction
-/// plates as contact tools), `gravity` and `machine-compliance` act inside the
+/// With effects ([`PressProblem::effects`], [`crate::effects`]): `ageing`,
+/// `plate-friction` and `adhesion` change the problem before the run (aged
+/// materials; friction or adhesive plates as contact tools; adhesion then acts in
+/// the tools' normal contact law), `gravity` and `machine-compliance` act inside the
 /// steps, the material-point effects (`plastic-slider`, `bingham-dashpot`,
 /// `stress-thinning`, `dual-viscosity`, `strain-stiffening`) in each cell's update with a global
 /// iteration per step, `finite-strain` in the kinematics of that iteration (total
@@ -81,8 +82,11 @@ where
 /// and, when the support is frictionless, a friction floor; placed as
 /// `Tool::plate_above` and `Tool::floor_below` place them around the mesh's
 /// bounding box, or around `[-R, R]` for an axisymmetric section), both then
-/// removed from its effects. Borrowed as it is when neither is active. (The
-/// engine validates the result when it builds its model.)
+/// removed from its effects; `adhesion` on the constrained plate makes it a
+/// frictionless contact tool the same way (a friction one with `plate-friction`),
+/// and stays in the effects for the contact model's normal law. Borrowed as it is
+/// when none of them acts. (The engine validates the result when it builds its
+/// model.)
 fn effects_applied<const D: usize, const N: usize, const S: usize>(
     problem: &PressProblem<D, N, S>,
 ) -> Result<std::borrow::Cow<'_, PressProblem<D, N, S>>, PressError>
@@ -92,7 +96,10 @@ where
     use crate::effects::{EffectId, Effects};
     let ageing = problem.effects.ageing_scales();
     let friction = problem.effects.plate_friction();
-    if ageing.is_none() && friction.is_none() {
+    // Adhesion on the constrained plate: the plate becomes a frictionless contact
+    // tool (the effect itself stays: the contact model reads it).
+    let adhesive_plate = problem.effects.adhesion().is_some() && problem.tools.is_empty();
+    if ageing.is_none() && friction.is_none() && !adhesive_plate {
         return Ok(std::borrow::Cow::Borrowed(problem));
     }
     let mut p = problem.clone();
@@ -100,7 +107,7 @@ where
         p.materials = p.materials.iter().map(|m| Effects::aged(m, scales)).collect();
         p.effects.clear(EffectId::Ageing);
     }
-    if let Some(mu) = friction {
+    if friction.is_some() || adhesive_plate {
         let (lo, hi) = p.mesh.bounding_box();
         let (mut lo3, mut hi3) = ([0.0; 3], [0.0; 3]);
         for k in 0..D {
@@ -109,10 +116,11 @@ where
         if p.formulation == crate::element::Formulation::Axisymmetric {
             (lo3, hi3) = ([-hi[0], lo[1], -hi[0]], [hi[0], hi[1], hi[0]]);
         }
-        let contact = ToolContact::Friction(mu);
+        let contact = friction.map_or(ToolContact::Frictionless, ToolContact::Friction);
         let pr = &p.protocol;
         let mut tools = vec![Tool::plate_above("plate", lo3, hi3, &pr.waypoints, contact, pr.release_s)];
-        if pr.support == Attachment::Frictionless {
+        // A friction floor with plate friction; adhesion alone leaves the support as it is.
+        if friction.is_some() && pr.support == Attachment::Frictionless {
             tools.push(Tool::floor_below("floor", lo3, hi3, contact));
             p.protocol.support = Attachment::Free;
         }

@@ -1,5 +1,6 @@
 use thiserror::Error;
 
+use super::ToolContact;
 use crate::effects::{EffectError, EffectId, Effects};
 use crate::element::{valid_strain_size, Formulation, ReferenceSimplex, Simplex};
 use crate::material::Material;
@@ -407,8 +408,10 @@ where
 
     /// The effects' own checks, and how they fit the problem: `gravity` not with
     /// `protocol.gravity` (which is the factor 1 already); `plate-friction` only on
-    /// a frictionless constrained plate (the baseline it extends); `machine-compliance`
-    /// only on the constrained plate (not with contact tools).
+    /// a frictionless constrained plate (the baseline it extends); `adhesion` on a
+    /// frictionless constrained plate or on contact tools of which one presses and is
+    /// not glued; `machine-compliance` and the material-point effects only on the
+    /// constrained plate (not with contact tools, plate friction or adhesion).
     pub(crate) fn validate_effects(&self) -> Result<(), PressError> {
         let e = &self.effects;
         e.validate()?;
@@ -436,19 +439,35 @@ where
                 );
             }
         }
-        if e.is_active(EffectId::MachineCompliance) && (!self.tools.is_empty() || e.is_active(EffectId::PlateFriction))
-        {
+        if e.is_active(EffectId::Adhesion) {
+            if self.tools.is_empty() && self.protocol.plate != Attachment::Frictionless {
+                return conflict(
+                    EffectId::Adhesion,
+                    "extends a frictionless plate (a glued plate holds the top in tension already); this trial's \
+                     plate is not frictionless",
+                );
+            }
+            if !self.tools.is_empty() && self.tools.iter().all(|t| t.floor || t.contact == ToolContact::Glued) {
+                return conflict(
+                    EffectId::Adhesion,
+                    "acts on the pressing tools that are not glued; this trial has none (glued tools and floors only)",
+                );
+            }
+        }
+        let contact = !self.tools.is_empty() || e.is_active(EffectId::PlateFriction) || e.is_active(EffectId::Adhesion);
+        if e.is_active(EffectId::MachineCompliance) && contact {
             return conflict(
                 EffectId::MachineCompliance,
-                "acts on the constrained plate only; with contact tools (or plate friction) it is not implemented yet",
+                "acts on the constrained plate only; with contact tools (or plate friction, adhesion) it is not \
+                 implemented yet",
             );
         }
         if let Some((effect, _)) = e.material_point() {
-            if !self.tools.is_empty() || e.is_active(EffectId::PlateFriction) {
+            if contact {
                 return conflict(
                     effect,
                     "material-point effects run on the constrained plate only; with contact tools (or plate \
-                     friction) they are not implemented yet",
+                     friction, adhesion) they are not implemented yet",
                 );
             }
             if e.is_active(EffectId::MachineCompliance) {

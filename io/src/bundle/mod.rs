@@ -58,6 +58,8 @@
 //! ageing_c_rate_per_h = -0.02         # ageing gamma_c [1/h]: c_i -> c_i exp(gamma_c age_h)
 //! age_h = 5.0                         # trial covariate: hours since preparation (needed by ageing)
 //! plate_friction = 0.3                # Coulomb mu at a frictionless plate (and a frictionless floor)
+//! adhesion_strength_MPa = 0.002       # adhesion sigma_a [MPa]: the plate holds the top in tension
+//! adhesion_opening_mm = 0.1           # adhesion delta_c [mm]: the tension falls to 0 at this opening
 //! plastic_yield_stress_MPa = 0.002    # plastic-slider sigma_y [MPa] (absent: no slider)
 //! plastic_hardening_MPa = 0.01        # plastic-slider H [MPa], kinematic hardening (default 0.01)
 //! bingham_threshold_MPa = 0.001       # bingham-dashpot sigma_B [MPa]: c3 flows above it only
@@ -70,7 +72,7 @@
 //!
 //! The last eight are the material-point effects (`fem_core::effects`): at most
 //! one of them per trial, on the constrained plate (not with contact tools,
-//! `plate_friction` or `machine_compliance_mm_per_N`); the dashpot ones need a
+//! `plate_friction`, `adhesion_strength_MPa` or `machine_compliance_mm_per_N`); the dashpot ones need a
 //! chain with `c3` (not `elastic`).
 //!
 //! Unit suffixes read as the format's (`_N`, `_mm`, `_MPa`) with `_per_` for a
@@ -82,22 +84,26 @@
 //! strain `eps + b 1/2 H^T H` in a total Lagrangian formulation (2nd
 //! Piola-Kirchhoff stress, forces `B(u)^T S`): an elastic specimen in uniaxial
 //! compression carries the nominal stress `(1 + b eps) E (eps + b eps^2 / 2)`,
-//! softer than the small-strain one. The other effects' keys
-//! (`adhesion_strength_MPa`,
-//! `adhesion_opening_mm`) are known and refused as "not implemented in the
-//! engine yet". Refused, naming the file, the line and the key: any other key; a
+//! softer than the small-strain one. `adhesion_strength_MPa` is a rigid-linear
+//! cohesive zone in the normal law of the pressing contact tools that are not
+//! glued (a frictionless constrained plate becomes a frictionless contact tool;
+//! the floor never adheres): a node that touched holds the tool in tension down
+//! to `sigma_a` times its area facing the tool, then opens with a traction falling
+//! linearly to zero at `adhesion_opening_mm` (`fem_core::effects`, "Adhesion").
+//! Refused, naming the file, the line and the key: any other key; a
 //! value outside its parameter's bounds (`gravity` in [0, 1], `plate_friction` in
 //! [0, 10], `machine_compliance_mm_per_N` >= 0, ageing rates in [-1, 1] per hour,
 //! the slider's stresses and the Bingham threshold >= 0,
 //! `thinning_inverse_stress_1_per_MPa` >= 0, `thinning_exponent` in [0.2, 4],
 //! `dual_viscosity_log_ratio` in [-10, 10], `strain_stiffening` in [-4, 50],
-//! `finite_strain` in [0, 1]); two
+//! `finite_strain` in [0, 1], both adhesion keys `>= 0`); two
 //! material-point effects at once;
 //! a dashpot effect on an `elastic` material; a negative `age_h`; ageing rates without
 //! `age_h`; `gravity` together with `[protocol] gravity = true` (the factor 1
 //! already); `plate_friction` on a plate that is not frictionless or on a trial
 //! with contact tools (give the tool's `friction` there); `machine_compliance_mm_per_N`
-//! with contact tools or plate friction.
+//! with contact tools, plate friction or adhesion; `adhesion_strength_MPa` on a
+//! glued plate or on tools that are all glued.
 //!
 //! `plate_friction = mu` makes the trial the one with `tool_contact = "friction"`,
 //! `friction = mu` (and `support = "friction"` when the support is frictionless;
@@ -107,7 +113,8 @@
 //! trial is written with `force_tared = false`. `wagashi fit` fits with the
 //! effects in place (forward sensitivities for `force-offset` and `gravity`,
 //! forward differences on frozen steps for the others) and refuses
-//! `plate_friction` (no sensitivities through contact yet).
+//! `plate_friction` and `adhesion_strength_MPa` (no sensitivities through
+//! contact yet, and a contact step may not be subdivided on a frozen replay).
 //!
 //! ## Rigid tools
 //!
