@@ -168,7 +168,6 @@ impl Truth {
                     .params()
                     .iter()
                     .zip(values)
-                    .filter(|(p, _)| !p.nuisance || values.len() == 1)
                     .map(|(p, v)| format!("{} = {v:.4e}", p.key))
                     .collect();
                 format!("{e} ({})", v.join(", "))
@@ -294,9 +293,13 @@ pub fn simulate(
 }
 
 /// The generator's discretisation: elements of half the diagnoser's size (given
-/// by the caller), steps at `rtol` 1e-5 and at most 1 s.
+/// by the caller) and fixed 0.25 s steps (landing on the protocol's kinks). Not
+/// adaptive steps: the engine's slider (`plastic-slider`) does not converge in
+/// the very short step the adaptive control takes right after the release on
+/// this specimen (measured: "the material-point iteration did not converge" at
+/// t = 210.930003 s with rtol 1e-3 and 1e-4, on 5 and 2.5 mm elements).
 pub fn generator_settings() -> Settings {
-    Settings { rtol: 1e-5, max_dt_s: Some(1.0), ..Settings::default() }
+    Settings { fixed_dt_s: Some(0.25), ..Settings::default() }
 }
 
 /// The sensor noise of the measured bundles.
