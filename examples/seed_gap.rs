@@ -36,8 +36,8 @@ use fem_core::effects::EffectId;
 use wagashi_io::{Bundle, MaterialSpec};
 
 /// Element sizes [mm]: the diagnoser's, and the generator's (half).
-const SIZE_MM: f64 = 5.0;
-const TRUTH_SIZE_MM: f64 = 2.5;
+const SIZE_MM: f64 = 10.0;
+const TRUTH_SIZE_MM: f64 = 5.0;
 /// Element size of the Table II matching [mm] (the matched truth then runs at `TRUTH_SIZE_MM`).
 const MATCH_SIZE_MM: f64 = 5.0;
 const SEED: u64 = 20_261_122;
@@ -189,6 +189,23 @@ fn main() {
 
     }
     println!("\n## 3. Diagnosis: hold and speed varied ({} trials)\n", HOLD_SPEED_DESIGN.len());
+    for bundle in &b {
+        let f: Vec<(f64, f64)> =
+            bundle.force.as_ref().unwrap().samples.iter().map(|s| (s.t_s, s.force_n)).collect();
+        let release = bundle.experiment.protocol.release_s;
+        let after: Vec<f64> = f.iter().filter(|s| s.0 > release + 5.0).map(|s| s.1).collect();
+        let mean = after.iter().sum::<f64>() / after.len() as f64;
+        let sd = (after.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / after.len() as f64).sqrt();
+        println!(
+            "  {}: force noise by the difference method {:.2} mN (generator: {:.1} mN, lag-1 {}); after release: mean {:.2} mN, sd {:.2} mN",
+            bundle.experiment.name,
+            1e3 * calibrate::trial::force_noise(&f),
+            1e3 * noise.force_sigma_n,
+            noise.force_rho,
+            1e3 * mean,
+            1e3 * sd
+        );
+    }
     let t0 = Instant::now();
     let d = run_diagnosis(&b, &start);
     eprintln!("  diagnosed in {:.0} s", t0.elapsed().as_secs_f64());
