@@ -115,6 +115,11 @@ pub struct DiagnosisOptions {
     pub marker_sigma_mm: f64,
     /// Levenberg-Marquardt settings (baseline and refits).
     pub lsq: Options,
+    /// Fixed time steps [s] for every simulation instead of the adaptive control
+    /// (`None`, the default: adaptive). For effects the engine does not run on
+    /// some adaptive step sequences (the slider right after a release; see
+    /// `crate::seed_gap`).
+    pub fixed_dt_s: Option<f64>,
 }
 
 impl Default for DiagnosisOptions {
@@ -130,6 +135,7 @@ impl Default for DiagnosisOptions {
             axisymmetric: false,
             marker_sigma_mm: 0.05,
             lsq: Options { max_iterations: 60, ..Options::default() },
+            fixed_dt_s: None,
         }
     }
 }
@@ -382,7 +388,7 @@ pub fn diagnose(
                 .into(),
         ));
     }
-    let model = Model::new(
+    let mut model = Model::new(
         calibration,
         &campaign.materials,
         campaign.unknowns.clone(),
@@ -390,6 +396,7 @@ pub fn diagnose(
         options.axisymmetric,
         options.marker_sigma_mm,
     )?;
+    model.settings.fixed_dt_s = options.fixed_dt_s;
     let vmodel = if validation.is_empty() {
         None
     } else {
@@ -400,7 +407,11 @@ pub fn diagnose(
             options.size_mm,
             options.axisymmetric,
             options.marker_sigma_mm,
-        )?)
+        )
+        .map(|mut m| {
+            m.settings.fixed_dt_s = options.fixed_dt_s;
+            m
+        })?)
     };
     let mut warnings = Vec::new();
 
