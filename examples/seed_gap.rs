@@ -128,12 +128,24 @@ fn print_closure(bundles: &[Bundle], start: &BTreeMap<String, MaterialSpec>, d: 
     let segments = cells::segments(&model);
     let w0 = cells::where_table(&segments, &r0, o.alpha_where);
     let w1 = cells::where_table(&segments, &r1, o.alpha_where);
-    println!("  One parameter set with {id}: {}", c.parameters.iter().map(|p| format!("{} = {:.4e}", p.key, p.value)).collect::<Vec<_>>().join(", "));
-    println!("  and {}", d.baseline.labels.iter().zip(&c.theta).map(|(l, v)| format!("{l} = {v:.4}")).collect::<Vec<_>>().join(", "));
+    println!(
+        "  One parameter set with {id}: {}",
+        c.parameters.iter().map(|p| format!("{} = {:.4e}", p.key, p.value)).collect::<Vec<_>>().join(", ")
+    );
+    println!(
+        "  and {}",
+        d.baseline.labels.iter().zip(&c.theta).map(|(l, v)| format!("{l} = {v:.4}")).collect::<Vec<_>>().join(", ")
+    );
     println!("  | cell | RMS baseline | RMS with {id} | flagged after |");
     println!("  |---|---|---|---|");
     for (a, b) in w0.iter().zip(&w1) {
-        println!("  | {} | {:.2} | {:.2} | {} |", a.label(), a.rms_noise_units, b.rms_noise_units, if b.flagged { "yes" } else { "" });
+        println!(
+            "  | {} | {:.2} | {:.2} | {} |",
+            a.label(),
+            a.rms_noise_units,
+            b.rms_noise_units,
+            if b.flagged { "yes" } else { "" }
+        );
     }
 }
 
@@ -189,30 +201,47 @@ fn main() {
     let swap_only = std::env::args().any(|a| a == "--swap-only");
     let skip_symptom = swap_only || std::env::args().any(|a| a == "--no-symptom");
     if !skip_symptom {
-    println!("## 2. The symptom: the seed's three steps on the seed's protocol\n");
-    let c = Campaign::new(&a, &start, Some(SIZE_MM), false).expect("campaign");
-    let report = procedure::run(&c, Procedure::Seed, &ProcedureOptions { starts: 1, ..Default::default() }, &|_, _, _| {})
-        .expect("seed procedure");
-    for (name, set) in &report.sets {
-        println!("- x_{name}: {}", set.iter().map(|e| format!("{} = {:.4}", e.key, e.value)).collect::<Vec<_>>().join(", "));
-    }
-    let c3 = |name: &str| report.sets.iter().find(|s| s.0 == name).and_then(|s| s.1.iter().find(|e| e.key == "c3_MPa_s")).map(|e| e.value).unwrap();
-    println!("- kappa = c3_force / c3_shape = {:.2} / {:.3} = {:.1} (Table II: 29.719 / 1.4951 = {:.1})\n", c3("force"), c3("shape"), c3("force") / c3("shape"), X_FORCE[4] / X_SHAPE_C3);
-    for s in &report.steps {
-        println!("  step {}: RMS {:.2} noise units ({})", s.name, s.rms, s.stop);
-    }
-
+        println!("## 2. The symptom: the seed's three steps on the seed's protocol\n");
+        let c = Campaign::new(&a, &start, Some(SIZE_MM), false).expect("campaign");
+        let report =
+            procedure::run(&c, Procedure::Seed, &ProcedureOptions { starts: 1, ..Default::default() }, &|_, _, _| {})
+                .expect("seed procedure");
+        for (name, set) in &report.sets {
+            println!(
+                "- x_{name}: {}",
+                set.iter().map(|e| format!("{} = {:.4}", e.key, e.value)).collect::<Vec<_>>().join(", ")
+            );
+        }
+        let c3 = |name: &str| {
+            report
+                .sets
+                .iter()
+                .find(|s| s.0 == name)
+                .and_then(|s| s.1.iter().find(|e| e.key == "c3_MPa_s"))
+                .map(|e| e.value)
+                .unwrap()
+        };
+        println!(
+            "- kappa = c3_force / c3_shape = {:.2} / {:.3} = {:.1} (Table II: 29.719 / 1.4951 = {:.1})\n",
+            c3("force"),
+            c3("shape"),
+            c3("force") / c3("shape"),
+            X_FORCE[4] / X_SHAPE_C3
+        );
+        for s in &report.steps {
+            println!("  step {}: RMS {:.2} noise units ({})", s.name, s.rms, s.stop);
+        }
     }
     if !swap_only {
-    println!("\n## 3. Diagnosis: hold and speed varied ({} trials)\n", HOLD_SPEED_DESIGN.len());
-    for bundle in &b {
-        let f: Vec<(f64, f64)> =
-            bundle.force.as_ref().unwrap().samples.iter().map(|s| (s.t_s, s.force_n)).collect();
-        let release = bundle.experiment.protocol.release_s;
-        let after: Vec<f64> = f.iter().filter(|s| s.0 > release + 5.0).map(|s| s.1).collect();
-        let mean = after.iter().sum::<f64>() / after.len() as f64;
-        let sd = (after.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / after.len() as f64).sqrt();
-        println!(
+        println!("\n## 3. Diagnosis: hold and speed varied ({} trials)\n", HOLD_SPEED_DESIGN.len());
+        for bundle in &b {
+            let f: Vec<(f64, f64)> =
+                bundle.force.as_ref().unwrap().samples.iter().map(|s| (s.t_s, s.force_n)).collect();
+            let release = bundle.experiment.protocol.release_s;
+            let after: Vec<f64> = f.iter().filter(|s| s.0 > release + 5.0).map(|s| s.1).collect();
+            let mean = after.iter().sum::<f64>() / after.len() as f64;
+            let sd = (after.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / after.len() as f64).sqrt();
+            println!(
             "  {}: force noise by the difference method {:.2} mN (generator: {:.1} mN, lag-1 {}); after release: mean {:.2} mN, sd {:.2} mN",
             bundle.experiment.name,
             1e3 * calibrate::trial::force_noise(&f),
@@ -221,21 +250,21 @@ fn main() {
             1e3 * mean,
             1e3 * sd
         );
-    }
-    let t0 = Instant::now();
-    let d = run_diagnosis(&b, &start);
-    eprintln!("  diagnosed in {:.0} s", t0.elapsed().as_secs_f64());
-    print_where(&d);
-    println!("\n  verdict: {} — {}\n", d.verdict.label, d.verdict.sentence);
-    print_candidates(&d);
-    println!();
-    print_closure(&b, &start, &d);
-    for w in &d.warnings {
-        println!("  warning: {w}");
-    }
-    if quick {
-        return;
-    }
+        }
+        let t0 = Instant::now();
+        let d = run_diagnosis(&b, &start);
+        eprintln!("  diagnosed in {:.0} s", t0.elapsed().as_secs_f64());
+        print_where(&d);
+        println!("\n  verdict: {} — {}\n", d.verdict.label, d.verdict.sentence);
+        print_candidates(&d);
+        println!();
+        print_closure(&b, &start, &d);
+        for w in &d.warnings {
+            println!("  warning: {w}");
+        }
+        if quick {
+            return;
+        }
     }
 
     println!("\n## 4. Swap study\n");
@@ -247,7 +276,11 @@ fn main() {
                 let d = run_swap_diagnosis(bundles, &start);
                 eprintln!("  {e}: {}", d.verdict.sentence);
                 print_candidates(&d);
-                format!("{} ({})", d.verdict.label, d.verdict.effects.iter().map(|e| e.id()).collect::<Vec<_>>().join(", "))
+                format!(
+                    "{} ({})",
+                    d.verdict.label,
+                    d.verdict.effects.iter().map(|e| e.id()).collect::<Vec<_>>().join(", ")
+                )
             }
             Err(_) => "not generated (the truth does not run)".to_string(),
         };

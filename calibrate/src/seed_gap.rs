@@ -61,17 +61,8 @@ pub const X_FORCE: [f64; 5] = [0.0349, 0.0221, 0.0071, 0.1869, 29.719];
 pub const X_SHAPE_C3: f64 = 1.4951;
 /// Marker places relative to the block (x / W, y / H): three heights (bottom,
 /// middle, top third) at the middle and at the free side.
-pub const MARKERS: [[f64; 2]; 9] = [
-    [0.5, 0.2],
-    [0.5, 0.5],
-    [0.5, 0.8],
-    [0.75, 0.2],
-    [0.75, 0.5],
-    [0.75, 0.8],
-    [1.0, 0.2],
-    [1.0, 0.5],
-    [1.0, 0.8],
-];
+pub const MARKERS: [[f64; 2]; 9] =
+    [[0.5, 0.2], [0.5, 0.5], [0.5, 0.8], [0.75, 0.2], [0.75, 0.5], [0.75, 0.8], [1.0, 0.2], [1.0, 0.5], [1.0, 0.8]];
 
 /// One trial's protocol.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -164,12 +155,8 @@ impl Truth {
         let effect = match &self.effect {
             None => "no effect".to_string(),
             Some((e, values)) => {
-                let v: Vec<String> = e
-                    .params()
-                    .iter()
-                    .zip(values)
-                    .map(|(p, v)| format!("{} = {v:.4e}", p.key))
-                    .collect();
+                let v: Vec<String> =
+                    e.params().iter().zip(values).map(|(p, v)| format!("{} = {v:.4e}", p.key)).collect();
                 format!("{e} ({})", v.join(", "))
             }
         };
@@ -341,7 +328,11 @@ fn quantise(x: f64, q: f64) -> f64 {
 /// The bundle a diagnoser gets from `run`: named `name`, the material by model and
 /// Poisson's ratio only, no effect, and the run's force and markers with `noise`
 /// drawn from `rng` (`None`: noise-free).
-pub fn measured(name: &str, run: &TruthRun, noise: Option<(&NoiseModel, &mut SplitMix64)>) -> Result<Bundle, BundleError> {
+pub fn measured(
+    name: &str,
+    run: &TruthRun,
+    noise: Option<(&NoiseModel, &mut SplitMix64)>,
+) -> Result<Bundle, BundleError> {
     let material = format!("model = \"five-element\"\npoisson = {POISSON}\n");
     let mut b = bundle(&experiment_toml(name, &run.trial, &material, ""))?;
     let (force, markers): (Vec<f64>, Vec<Vec<[f64; 2]>>) = match noise {
@@ -354,7 +345,8 @@ pub fn measured(name: &str, run: &TruthRun, noise: Option<(&NoiseModel, &mut Spl
                 .enumerate()
                 .map(|(i, f)| {
                     if i > 0 {
-                        e = n.force_rho * e + (1.0 - n.force_rho.powi(2)).sqrt() * n.force_sigma_n * rng.next_gaussian();
+                        e = n.force_rho * e
+                            + (1.0 - n.force_rho.powi(2)).sqrt() * n.force_sigma_n * rng.next_gaussian();
                     }
                     quantise(f.1 + e, n.force_quantum_n)
                 })
@@ -391,11 +383,7 @@ pub fn measured(name: &str, run: &TruthRun, noise: Option<(&NoiseModel, &mut Spl
         .enumerate()
         .map(|(m, track)| MarkerSeries {
             name: format!("m{m}"),
-            samples: track
-                .iter()
-                .zip(&times)
-                .map(|(p, &t)| MarkerSample { t_s: t, position_mm: p.to_vec() })
-                .collect(),
+            samples: track.iter().zip(&times).map(|(p, &t)| MarkerSample { t_s: t, position_mm: p.to_vec() }).collect(),
         })
         .collect();
     Ok(b)
@@ -572,10 +560,8 @@ pub fn campaign(
     noise: &NoiseModel,
     seed: u64,
 ) -> Result<Vec<Bundle>, GenerateError> {
-    let runs: Vec<TruthRun> = trials
-        .par_iter()
-        .map(|t| simulate(t, truth, size_mm, &generator_settings()))
-        .collect::<Result<_, _>>()?;
+    let runs: Vec<TruthRun> =
+        trials.par_iter().map(|t| simulate(t, truth, size_mm, &generator_settings())).collect::<Result<_, _>>()?;
     runs.iter()
         .enumerate()
         .map(|(k, run)| {

@@ -397,7 +397,7 @@ pub fn diagnose(
         options.marker_sigma_mm,
     )?;
     model.settings.fixed_dt_s = options.fixed_dt_s;
-    let vmodel = if validation.is_empty() {
+    let mut vmodel = if validation.is_empty() {
         None
     } else {
         Some(Model::new(
@@ -407,12 +407,11 @@ pub fn diagnose(
             options.size_mm,
             options.axisymmetric,
             options.marker_sigma_mm,
-        )
-        .map(|mut m| {
-            m.settings.fixed_dt_s = options.fixed_dt_s;
-            m
-        })?)
+        )?)
     };
+    if let Some(m) = vmodel.as_mut() {
+        m.settings.fixed_dt_s = options.fixed_dt_s;
+    }
     let mut warnings = Vec::new();
 
     // Step 1: the baseline.
