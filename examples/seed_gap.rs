@@ -9,7 +9,12 @@
 //! and the diagnosis is run on them.
 //!
 //! Run: `cargo run --release -p wagashi-workspace-tests --example seed_gap`
-//! (`-- --quick` skips the swap study).
+//! (`-- --quick` stops before the swap study, `-- --no-symptom` skips step 2,
+//! `-- --swap-only` runs steps 1 and 4). The generator runs on 5 mm elements and
+//! fixed 0.25 s steps, the diagnoser on 10 mm elements and fixed 0.5 s steps
+//! (the engine's slider does not converge in the short step adaptive control
+//! takes right after the release). Long: step 3 (the whole library) took 840 s
+//! and each swap diagnosis several minutes on the shared 2-core machine.
 //!
 //! Steps:
 //! 1. every kappa > 1 candidate (diagnosis-details.md §1: plastic-slider,

@@ -16,10 +16,13 @@
 //!
 //! ## The truth and its noise
 //!
-//! A [`Truth`] is the five-element chain with the seed's elastic and fast
-//! viscous parameters and its own c3, plus at most one effect of the library
-//! with its bundle values. It is simulated on a finer mesh and with tighter steps
-//! than any diagnoser uses ([`simulate`]). [`measured`] turns a run into the
+//! A [`Truth`] is the five-element chain with the seed's E1, E2, c1, c2 times a
+//! common scale and its own c3, plus at most one effect of the library with its
+//! bundle values. [`match_table_ii`] fits a cause's truth to Table II: x_force's
+//! force and keep shape, x_shape's final shape (the example's step 1 picks the
+//! cause that matches best). A truth is simulated on the caller's (finer) mesh
+//! and on fixed 0.25 s steps ([`generator_settings`], which says why not
+//! adaptive). [`measured`] turns a run into the
 //! bundle a diagnoser gets: the material by model and Poisson's ratio only, the
 //! force with AR(1) noise ([`NoiseModel`]) quantised to the sensor's step, the
 //! markers with white noise quantised to the camera's. Every draw comes from a
