@@ -113,6 +113,7 @@ pub mod multistart;
 pub mod procedure;
 pub mod profile;
 pub mod rng;
+pub mod seed_gap;
 pub mod stats;
 pub mod trial;
 pub mod uncertainty;

@@ -163,6 +163,11 @@ pub struct DiagnosisOptions {
     /// Correct the predictions by a run on a mesh of half the element size
     /// (module docs, step 0).
     pub mesh_correction: bool,
+    /// Fixed time steps [s] for every simulation instead of the adaptive control
+    /// (`None`, the default: adaptive). For effects the engine does not run on
+    /// some adaptive step sequences (the slider right after a release; see
+    /// `crate::seed_gap`).
+    pub fixed_dt_s: Option<f64>,
 }
 
 impl Default for DiagnosisOptions {
@@ -180,6 +185,7 @@ impl Default for DiagnosisOptions {
             lsq: Options { max_iterations: 60, ..Options::default() },
             sample_scale_sd: 0.1,
             mesh_correction: true,
+            fixed_dt_s: None,
         }
     }
 }
@@ -450,6 +456,7 @@ pub fn diagnose(
         options.axisymmetric,
         options.marker_sigma_mm,
     )?;
+    model.settings.fixed_dt_s = options.fixed_dt_s;
     model.sample_scale_sd = options.sample_scale_sd.max(0.0);
     let mut fine = if options.mesh_correction {
         Some(Model::with_refinement(
@@ -464,7 +471,7 @@ pub fn diagnose(
     } else {
         None
     };
-    let vmodel = if validation.is_empty() {
+    let mut vmodel = if validation.is_empty() {
         None
     } else {
         Some(Model::new(
@@ -476,6 +483,9 @@ pub fn diagnose(
             options.marker_sigma_mm,
         )?)
     };
+    for m in vmodel.iter_mut().chain(fine.iter_mut()) {
+        m.settings.fixed_dt_s = options.fixed_dt_s;
+    }
     let mut warnings = Vec::new();
 
     // Step 1: the baseline (on the mesh-corrected model: the correction at the
