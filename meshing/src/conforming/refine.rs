@@ -215,39 +215,19 @@ impl Recovery {
                         self.insert_free(p)?;
                         stats.circumcentres += 1;
                     }
-                    // A bad tet on four input vertices (smoothing cannot move
-                    // them) whose circumcentre encroaches a subfacet: refine
-                    // that subfacet (Shewchuk's rule; only for these, see the
-                    // module docs).
+                    // Refine the subfacet the circumcentre encroaches
+                    // (Shewchuk's rule, restricted; module docs) for a bad tet
+                    // on four input vertices (smoothing cannot move them), and
+                    // for a tet of radius-edge ratio over PLANE_RADIUS_EDGE when
+                    // the subfacet lies on a merged plane of the input (CAD; a
+                    // scan's triangles are rarely coplanar) and is at least as
+                    // large as the tet's shortest edge.
                     (None, Some(face))
                         if !too_big
                             && caps_left > 0
                             && self.boundary_room()
-                            && v.iter().all(|&x| (x as usize) < self.num_input()) =>
-                    {
-                        caps_left -= 1;
-                        match self.refine_face(face) {
-                            Ok(()) => stats.boundary_splits += 1,
-                            Err(_) if self.last_duplicate => {
-                                self.last_duplicate = false;
-                                skipped.insert(v);
-                                stats.slivers_skipped += 1;
-                                continue;
-                            }
-                            Err(e) => return Err(e),
-                        }
-                    }
-                    // A tet of radius-edge ratio over PLANE_RADIUS_EDGE whose
-                    // circumcentre encroaches a subfacet of a merged plane of
-                    // the input (CAD; a scan's triangles are rarely coplanar)
-                    // at least as large as the tet's shortest edge: refine
-                    // that subfacet (Shewchuk's rule, restricted; module docs).
-                    (None, Some(face))
-                        if !too_big
-                            && re > PLANE_RADIUS_EDGE
-                            && caps_left > 0
-                            && self.boundary_room()
-                            && self.plane_subfacet_larger(face, v) =>
+                            && (v.iter().all(|&x| (x as usize) < self.num_input())
+                                || (re > PLANE_RADIUS_EDGE && self.plane_subfacet_larger(face, v))) =>
                     {
                         caps_left -= 1;
                         match self.refine_face(face) {
