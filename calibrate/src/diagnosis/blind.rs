@@ -113,7 +113,7 @@ use rayon::prelude::*;
 use wagashi_io::{read_bundle_from_str, Bundle, ForceSample, ForceSeries, MarkerSample, MarkerSeries};
 
 use super::model::{Candidate, Fitting, Model};
-use super::{diagnose, Diagnosis, DiagnosisError, DiagnosisOptions};
+use super::{diagnose, diagnosis_model, Diagnosis, DiagnosisError, DiagnosisOptions};
 use crate::lsq::levenberg_marquardt;
 use crate::rng::SplitMix64;
 use crate::trial::Campaign;
@@ -669,14 +669,7 @@ fn noise_free_model(
     options: &DiagnosisOptions,
 ) -> Result<(Model, Vec<f64>, Option<Model>), DiagnosisError> {
     let campaign = Campaign::new(bundles, &BTreeMap::new(), options.size_mm, options.axisymmetric)?;
-    let mut model = Model::new(
-        bundles,
-        &campaign.materials,
-        campaign.unknowns.clone(),
-        options.size_mm,
-        options.axisymmetric,
-        options.marker_sigma_mm,
-    )?;
+    let mut model = diagnosis_model(bundles, &campaign, options, 1.0)?;
     for (t, &(s, rho)) in model.trials.iter_mut().zip(noise) {
         t.force_sigma_n = s;
         t.force_rho = rho;
@@ -695,15 +688,7 @@ fn noise_free_model(
         .collect();
     x0.resize(model.num_theta(), 0.0);
     let fine = if options.mesh_correction {
-        let mut f = Model::with_refinement(
-            bundles,
-            &campaign.materials,
-            campaign.unknowns.clone(),
-            options.size_mm,
-            options.axisymmetric,
-            options.marker_sigma_mm,
-            0.5,
-        )?;
+        let mut f = diagnosis_model(bundles, &campaign, options, 0.5)?;
         model.set_mesh_correction(&mut f, &x0)?;
         Some(f)
     } else {

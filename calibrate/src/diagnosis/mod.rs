@@ -410,6 +410,28 @@ fn validation_heldout(
     Ok(parts.concat())
 }
 
+/// The diagnoser's model of `bundles` on `campaign`'s materials and unknowns,
+/// with `options`' element size times `refinement` (0.5: step 0's half-size
+/// run), formulation, marker noise and fixed steps.
+pub(super) fn diagnosis_model(
+    bundles: &[Bundle],
+    campaign: &Campaign,
+    options: &DiagnosisOptions,
+    refinement: f64,
+) -> Result<Model, DiagnosisError> {
+    let mut model = Model::with_refinement(
+        bundles,
+        &campaign.materials,
+        campaign.unknowns.clone(),
+        options.size_mm,
+        options.axisymmetric,
+        options.marker_sigma_mm,
+        refinement,
+    )?;
+    model.settings.fixed_dt_s = options.fixed_dt_s;
+    Ok(model)
+}
+
 /// Why a candidate is not evaluated, if it is not.
 fn not_evaluable(model: &Model, effect: EffectId) -> Option<String> {
     if !effect.implemented() {
@@ -448,44 +470,11 @@ pub fn diagnose(
                 .into(),
         ));
     }
-    let mut model = Model::new(
-        calibration,
-        &campaign.materials,
-        campaign.unknowns.clone(),
-        options.size_mm,
-        options.axisymmetric,
-        options.marker_sigma_mm,
-    )?;
-    model.settings.fixed_dt_s = options.fixed_dt_s;
+    let mut model = diagnosis_model(calibration, &campaign, options, 1.0)?;
     model.sample_scale_sd = options.sample_scale_sd.max(0.0);
-    let mut fine = if options.mesh_correction {
-        Some(Model::with_refinement(
-            calibration,
-            &campaign.materials,
-            campaign.unknowns.clone(),
-            options.size_mm,
-            options.axisymmetric,
-            options.marker_sigma_mm,
-            0.5,
-        )?)
-    } else {
-        None
-    };
-    let mut vmodel = if validation.is_empty() {
-        None
-    } else {
-        Some(Model::new(
-            validation,
-            &campaign.materials,
-            campaign.unknowns.clone(),
-            options.size_mm,
-            options.axisymmetric,
-            options.marker_sigma_mm,
-        )?)
-    };
-    for m in vmodel.iter_mut().chain(fine.iter_mut()) {
-        m.settings.fixed_dt_s = options.fixed_dt_s;
-    }
+    let mut fine =
+        if options.mesh_correction { Some(diagnosis_model(calibration, &campaign, options, 0.5)?) } else { None };
+    let vmodel = if validation.is_empty() { None } else { Some(diagnosis_model(validation, &campaign, options, 1.0)?) };
     let mut warnings = Vec::new();
 
     // Step 1: the baseline (on the mesh-corrected model: the correction at the
