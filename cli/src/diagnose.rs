@@ -6,8 +6,8 @@
 //!
 //! | file             | what                                                                 |
 //! |------------------|----------------------------------------------------------------------|
-//! | `diagnosis.json` | `verdict` (label, effects, sentence, separating experiment), `where` (one entry per cell), `candidates` (per effect id: score, LR, p-value, held-out gain, gap closure with its 90 % interval, fitted effect parameters), `numerical_error` (noise units), the baseline, the candidates not evaluated and why, warnings |
-//! | `report.html`    | one self-contained page (inline SVG, no network): the verdict, measured against simulated force per trial and phase before and after the named effect, the WHERE heat table, the candidates as a bar chart, the recommended next experiment |
+//! | `diagnosis.json` | `verdict` (label, effects, sentence, separating experiment), `where` (one entry per cell), `candidates` (per effect id: score, LR, p-value, held-out gain, gap closure with its 90 % interval, fitted effect parameters), `numerical_error` (noise units), `marker_shapes` (per trial, the last photograph of the hold and of the recovery: measured, baseline and with the effect), the baseline, the candidates not evaluated and why, warnings |
+//! | `report.html`    | one self-contained page (inline SVG, no network): the verdict, measured against simulated force per trial and phase before and after the named effect, the marker shapes before and after (misfits magnified, RMS in mm), the WHERE heat table, the candidates as a bar chart, the recommended next experiment |
 //! | `summary.json`   | a short summary (and the mark of a wagashi output folder for `--force`) |
 
 use std::collections::BTreeMap;
@@ -318,6 +318,14 @@ pub fn diagnosis_json(d: &Diagnosis) -> Value {
             "residuals": d.baseline.num_residuals,
             "stop": d.baseline.stop,
         },
+        "marker_shapes": d.shapes.iter().map(|s| json!({
+            "trial": s.trial,
+            "t_s": s.t_s,
+            "phase": s.phase.as_str(),
+            "markers": s.markers.iter().map(|p| json!({
+                "marker": p.marker, "measured_mm": p.measured, "baseline_mm": p.baseline, "with_effect_mm": p.with_effect,
+            })).collect::<Vec<_>>(),
+        })).collect::<Vec<_>>(),
         "trials": d.trials,
         "validation_trials": d.validation_trials,
         "heldout_method": d.heldout_method,
@@ -409,6 +417,75 @@ fn force_svg(c: &calibrate::diagnosis::ForceCurves, named: bool) -> String {
     svg
 }
 
+/// Root-mean-square distance [mm] between two sets of positions.
+fn rms_distance(a: &[&Vec<f64>], b: &[&Vec<f64>]) -> f64 {
+    let n = a.len().max(1) as f64;
+    let sum: f64 =
+        a.iter().zip(b).map(|(p, q)| p.iter().zip(q.iter()).map(|(x, y)| (x - y).powi(2)).sum::<f64>()).sum();
+    (sum / n).sqrt()
+}
+
+/// A "nice" number (1, 2 or 5 times a power of ten) at most `x`.
+fn nice_floor(x: f64) -> f64 {
+    let p = 10f64.powf(x.log10().floor());
+    [5.0, 2.0, 1.0].into_iter().map(|m| m * p).find(|&v| v <= x).unwrap_or(p)
+}
+
+/// One photograph's markers as an inline SVG (x across, y up, equal scales):
+/// the measured places (grey dots) and, from each, the error of the baseline
+/// (red) and of the model with the named effect (blue), simulated minus
+/// measured, magnified by a stated factor so that millimetre shapes show
+/// tenth-of-a-millimetre misfits.
+fn shapes_svg(s: &calibrate::diagnosis::MarkerShapes, named: bool) -> String {
+    let (w, h, pad): (f64, f64, f64) = (360.0, 260.0, 30.0);
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in s.markers.iter().map(|m| &m.measured) {
+        for i in 0..2 {
+            lo[i] = lo[i].min(p[i]);
+            hi[i] = hi[i].max(p[i]);
+        }
+    }
+    let span = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1.0) * 1.3;
+    let err = |a: &[f64], b: &[f64]| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt();
+    let largest = s
+        .markers
+        .iter()
+        .map(|p| err(&p.baseline, &p.measured).max(if named { err(&p.with_effect, &p.measured) } else { 0.0 }))
+        .fold(0.0, f64::max);
+    // The largest error drawn as about a fifth of the picture.
+    let gain = if largest > 0.0 { nice_floor(0.2 * span / largest).max(1.0) } else { 1.0 };
+    let (cx, cy) = (0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]));
+    let scale = (w - 2.0 * pad).min(h - 2.0 * pad) / span;
+    let x = |v: f64| 0.5 * w + scale * (v - cx);
+    let y = |v: f64| 0.5 * h - scale * (v - cy);
+    let mut svg = format!(r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}">"#);
+    svg.push_str(&format!(r##"<rect x="0" y="0" width="{w}" height="{h}" fill="#fafafa" stroke="#ddd"/>"##));
+    for calibrate::diagnosis::MarkerPlaces { measured, baseline, with_effect: with, .. } in &s.markers {
+        let (mx, my) = (x(measured[0]), y(measured[1]));
+        let mut arrow = |to: &[f64], colour: &str| {
+            let (ex, ey) =
+                (x(measured[0] + gain * (to[0] - measured[0])), y(measured[1] + gain * (to[1] - measured[1])));
+            svg.push_str(&format!(
+                r##"<line x1="{mx:.1}" y1="{my:.1}" x2="{ex:.1}" y2="{ey:.1}" stroke="{colour}" stroke-width="1.5"/><circle cx="{ex:.1}" cy="{ey:.1}" r="2.5" fill="{colour}"/>"##
+            ));
+        };
+        arrow(baseline, "#c0392b");
+        if named {
+            arrow(with, "#2471a3");
+        }
+        svg.push_str(&format!(r##"<circle cx="{mx:.1}" cy="{my:.1}" r="3" fill="#777"/>"##));
+    }
+    svg.push_str(&format!(
+        r#"<text x="4" y="{:.1}" font-size="11">errors x {gain}; x {:.1} to {:.1} mm, y {:.1} to {:.1} mm</text></svg>"#,
+        h - 6.0,
+        lo[0],
+        hi[0],
+        lo[1],
+        hi[1]
+    ));
+    svg
+}
+
 /// `report.html`: one self-contained page (inline SVG, no network).
 pub fn report_html(d: &Diagnosis) -> String {
     let named = !d.verdict.effects.is_empty() && d.verdict.label != "tie";
@@ -427,6 +504,30 @@ pub fn report_html(d: &Diagnosis) -> String {
     html.push_str("</p>");
     for c in &d.curves {
         html.push_str(&format!("<h3>{}</h3>{}", esc(&c.trial), force_svg(c, named)));
+    }
+    if !d.shapes.is_empty() {
+        html.push_str("<h2>Marker shapes</h2><p>The markers at the last photograph of each phase, grey dots where they were measured; from each, the error of the simulation (simulated minus measured place, magnified by the stated factor): red the baseline");
+        if named {
+            html.push_str(&format!(", blue with {}", esc(&d.verdict.label)));
+        }
+        html.push_str(".</p><div style=\"display:flex;flex-wrap:wrap;gap:12px\">");
+        for s in &d.shapes {
+            let measured: Vec<&Vec<f64>> = s.markers.iter().map(|m| &m.measured).collect();
+            let baseline: Vec<&Vec<f64>> = s.markers.iter().map(|m| &m.baseline).collect();
+            let with: Vec<&Vec<f64>> = s.markers.iter().map(|m| &m.with_effect).collect();
+            let mut caption = format!(
+                "{}, {} at {:.1} s: RMS distance to measured {:.3} mm (baseline)",
+                esc(&s.trial),
+                s.phase.as_str(),
+                s.t_s,
+                rms_distance(&baseline, &measured)
+            );
+            if named {
+                caption.push_str(&format!(", {:.3} mm (with the effect)", rms_distance(&with, &measured)));
+            }
+            html.push_str(&format!("<figure style=\"margin:0\">{}<figcaption style=\"font-size:12px;max-width:360px\">{caption}</figcaption></figure>", shapes_svg(s, named)));
+        }
+        html.push_str("</div>");
     }
     html.push_str("<h2>Where: smooth test per cell</h2><table><tr><th>phase</th><th>channel</th><th>region</th><th>RMS [noise units]</th><th>-log10 p</th><th>flagged</th></tr>");
     for c in &d.where_cells {

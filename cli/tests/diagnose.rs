@@ -61,14 +61,25 @@ impl Noise {
 
 /// Simulates the three trials with `effects` and writes the measured bundles
 /// `meas0..2` (material by model and Poisson's ratio only, no effect, force
-/// with noise of 3 mN).
+/// with noise of 3 mN) and `mark0..2` (the same with three markers).
 fn campaign(cwd: &Path, effects: &str) {
     let mut noise = Noise(0x5eed_1234_abcd);
     for (k, &(push, hold)) in DESIGN.iter().enumerate() {
         let truth = cwd.join(format!("truth{k}"));
         std::fs::create_dir_all(&truth).unwrap();
         let material = "E1_MPa = 0.05\nc1_MPa_s = 0.05\nc3_MPa_s = 5.0\n";
-        std::fs::write(truth.join("experiment.toml"), experiment("t", push, hold, material, effects)).unwrap();
+        // Three markers on the free side and the top, photographed late in the
+        // hold and twice in the recovery; the truth's run gives their places.
+        let release = push + hold;
+        let mut markers = String::from("marker,t_s,x_mm,y_mm\n");
+        for (name, x, y) in [("side-low", 20.0, 4.0), ("side-high", 20.0, 11.0), ("top", 6.0, 15.0)] {
+            for t in [0.0, release - 1.0, release + 5.0, release + 15.0] {
+                markers.push_str(&format!("{name},{t},{x},{y}\n"));
+            }
+        }
+        std::fs::write(truth.join("markers.csv"), markers).unwrap();
+        let tail = format!("{effects}\n[data]\nmarkers = \"markers.csv\"\n");
+        std::fs::write(truth.join("experiment.toml"), experiment("t", push, hold, material, &tail)).unwrap();
         let sim = format!("sim{k}");
         assert_success(&wagashi_in(
             cwd,
@@ -81,9 +92,16 @@ fn campaign(cwd: &Path, effects: &str) {
         for (t, f) in force {
             csv.push_str(&format!("{t},{}\n", f + 3e-3 * noise.gaussian()));
         }
-        std::fs::write(meas.join("force.csv"), csv).unwrap();
+        std::fs::write(meas.join("force.csv"), &csv).unwrap();
         let text = experiment(&format!("trial{k}"), push, hold, "", "\n[data]\nforce = \"force.csv\"\n");
         std::fs::write(meas.join("experiment.toml"), text).unwrap();
+        // The same trial with the markers too (noise-free).
+        let mark = cwd.join(format!("mark{k}"));
+        std::fs::create_dir_all(&mark).unwrap();
+        std::fs::write(mark.join("force.csv"), &csv).unwrap();
+        std::fs::copy(cwd.join(&sim).join("markers.csv"), mark.join("markers.csv")).unwrap();
+        let tail = "\n[data]\nforce = \"force.csv\"\nmarkers = \"markers.csv\"\n";
+        std::fs::write(mark.join("experiment.toml"), experiment(&format!("trial{k}"), push, hold, "", tail)).unwrap();
     }
 }
 
@@ -134,6 +152,42 @@ fn a_withheld_machine_compliance_is_named() {
     );
     assert!(!html.contains("<script") && !html.contains("src=\"http"), "no network");
     roxmltree::Document::parse(html.trim_start_matches("<!DOCTYPE html>")).expect("report.html is well-formed");
+    assert!(d["marker_shapes"].as_array().unwrap().is_empty() && !html.contains("Marker shapes"), "no markers");
+
+    // With markers: the same verdict, and the marker shapes before and after
+    // (per trial, the last photograph of the hold and of the recovery). The
+    // measured places are the truth's (noise-free); in the hold, where the
+    // compliance acts, the named effect brings the simulated markers at least
+    // twice as close to them as the baseline does.
+    let o = wagashi_in(
+        cwd,
+        ["diagnose", "--calibrate", "mark0", "mark1", "mark2", "--size-mm", "5", "--starts", "1", "-o", "diag-m"],
+    );
+    assert_success(&o);
+    let m: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(cwd.join("diag-m/diagnosis.json")).unwrap()).unwrap();
+    assert_eq!(m["verdict"]["label"], "machine-compliance", "{:#}", m["verdict"]);
+    let html = std::fs::read_to_string(cwd.join("diag-m/report.html")).unwrap();
+    assert!(html.contains("Marker shapes"), "the report shows the marker shapes");
+    roxmltree::Document::parse(html.trim_start_matches("<!DOCTYPE html>")).expect("report.html is well-formed");
+    let shapes = m["marker_shapes"].as_array().unwrap();
+    assert_eq!(shapes.len(), 2 * DESIGN.len(), "{shapes:#?}");
+    let rms = |s: &serde_json::Value, key: &str| {
+        let m = s["markers"].as_array().unwrap();
+        let sum: f64 = m
+            .iter()
+            .map(|e| {
+                let (a, b) = (e[key].as_array().unwrap(), e["measured_mm"].as_array().unwrap());
+                a.iter().zip(b).map(|(x, y)| (x.as_f64().unwrap() - y.as_f64().unwrap()).powi(2)).sum::<f64>()
+            })
+            .sum();
+        (sum / m.len() as f64).sqrt()
+    };
+    for s in shapes.iter().filter(|s| s["phase"] == "hold") {
+        assert_eq!(s["markers"].as_array().unwrap().len(), 3);
+        let (before, after) = (rms(s, "baseline_mm"), rms(s, "with_effect_mm"));
+        assert!(after < 0.5 * before, "{}: RMS {before} mm before, {after} mm after", s["trial"]);
+    }
 
     // Calibrated on two trials and validated on the third: the same verdict, the
     // gap closure measured on the held-out trial, the validation trial named.

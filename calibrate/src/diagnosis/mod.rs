@@ -328,6 +328,34 @@ pub struct ForceCurves {
     pub with_effect: Vec<f64>,
 }
 
+/// One marker's places at one photograph [mm], in the model's coordinates (x,
+/// y; z in 3D; r, y in the axisymmetric section), mesh correction included.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MarkerPlaces {
+    /// The marker's index in its bundle.
+    pub marker: usize,
+    /// Measured.
+    pub measured: Vec<f64>,
+    /// The calibrated baseline.
+    pub baseline: Vec<f64>,
+    /// With the named effect (the baseline when none is named).
+    pub with_effect: Vec<f64>,
+}
+
+/// Marker positions of one calibration trial at one photograph, measured and
+/// simulated before and after the named effect: the specimen's shape.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MarkerShapes {
+    /// The trial.
+    pub trial: String,
+    /// The photograph's time [s].
+    pub t_s: f64,
+    /// Its phase.
+    pub phase: Phase,
+    /// Per marker.
+    pub markers: Vec<MarkerPlaces>,
+}
+
 /// A diagnosis.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Diagnosis {
@@ -353,6 +381,9 @@ pub struct Diagnosis {
     pub warnings: Vec<String>,
     /// Forces for the report.
     pub curves: Vec<ForceCurves>,
+    /// Per calibration trial, the marker shapes at the last photograph of the
+    /// hold and of the recovery (none without markers).
+    pub shapes: Vec<MarkerShapes>,
     /// The force noise model per calibration trial: (trial, sigma [N], lag-1 correlation).
     pub force_noise: Vec<(String, f64, f64)>,
 }
@@ -663,6 +694,7 @@ pub fn diagnose(
     }
     let named = verdict.effects.first().and_then(|id| evaluated.iter().find(|e| e.report.effect == *id));
     let curves = force_curves(&model, &r0, named.map_or(&r0, |e| &e.residuals));
+    let shapes = marker_shapes(&model, &r0, named.map_or(&r0, |e| &e.residuals));
     Ok(Diagnosis {
         trials: model.trial_names(),
         validation_trials: vmodel.as_ref().map(Model::trial_names).unwrap_or_default(),
@@ -675,6 +707,7 @@ pub fn diagnose(
         verdict,
         warnings,
         curves,
+        shapes,
         force_noise: model.trials.iter().map(|t| (t.name.clone(), t.force_sigma_n, t.force_rho)).collect(),
     })
 }
@@ -969,6 +1002,34 @@ fn force_curves(model: &Model, r0: &[f64], r1: &[f64]) -> Vec<ForceCurves> {
             }
         })
         .collect()
+}
+
+/// Marker shapes from the residuals (no extra simulation): per trial, the
+/// last photograph of each phase that has one.
+fn marker_shapes(model: &Model, r0: &[f64], r1: &[f64]) -> Vec<MarkerShapes> {
+    let mut out = Vec::new();
+    for (k, t) in model.trials.iter().enumerate() {
+        let before = model.marker_samples(k, r0);
+        let after = model.marker_samples(k, r1);
+        for phase in Phase::ALL {
+            let Some(t_last) = before.iter().filter(|s| s.phase == phase).map(|s| s.t_s).reduce(f64::max) else {
+                continue;
+            };
+            let markers = before
+                .iter()
+                .zip(&after)
+                .filter(|(b, _)| b.phase == phase && b.t_s == t_last)
+                .map(|(b, a)| MarkerPlaces {
+                    marker: b.marker,
+                    measured: b.measured.clone(),
+                    baseline: b.simulated.clone(),
+                    with_effect: a.simulated.clone(),
+                })
+                .collect();
+            out.push(MarkerShapes { trial: t.name.clone(), t_s: t_last, phase, markers });
+        }
+    }
+    out
 }
 
 #[cfg(test)]

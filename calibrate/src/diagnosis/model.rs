@@ -428,6 +428,37 @@ pub fn whiten_markers(r: &mut [f64], groups: &[Vec<usize>]) {
     }
 }
 
+/// The inverse of [`whiten_markers`]: a whitened group's mean is the raw mean
+/// divided by `sqrt(1 + m)`, and the shift is a multiple of the raw mean.
+pub fn unwhiten_markers(w: &mut [f64], groups: &[Vec<usize>]) {
+    for g in groups {
+        if g.is_empty() {
+            continue;
+        }
+        let m = g.len() as f64;
+        let mean = g.iter().map(|&i| w[i]).sum::<f64>() / m;
+        let shift = ((1.0 + m).sqrt() - 1.0) * mean;
+        for &i in g {
+            w[i] += shift;
+        }
+    }
+}
+
+/// One marker sample of a trial, measured and as a run gives it.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct MarkerSample {
+    /// The marker's index in its bundle.
+    pub marker: usize,
+    /// Time [s].
+    pub t_s: f64,
+    /// The phase the sample lies in.
+    pub phase: Phase,
+    /// Measured position [mm], in the model's coordinates.
+    pub measured: Vec<f64>,
+    /// Simulated position [mm], mesh correction included.
+    pub simulated: Vec<f64>,
+}
+
 /// The inverse of [`whiten`].
 pub fn unwhiten(w: &mut [f64], rho: f64) {
     if rho == 0.0 {
@@ -746,6 +777,28 @@ impl Model {
         whiten(&mut r[..trial.force.len()], trial.force_rho);
         whiten_markers(&mut r, &trial.marker_groups);
         r
+    }
+
+    /// Trial `k`'s marker samples, the simulated positions recovered from `r`,
+    /// the campaign's whitened residuals at some point (the residuals hold the
+    /// simulated minus the measured position in noise units; no extra run).
+    pub(crate) fn marker_samples(&self, k: usize, r: &[f64]) -> Vec<MarkerSample> {
+        let trial = &self.trials[k];
+        let start = self.offsets[k];
+        let mut raw = r[start..self.offsets[k + 1]].to_vec();
+        unwhiten_markers(&mut raw, &trial.marker_groups);
+        let mut at = trial.force.len();
+        trial
+            .markers
+            .iter()
+            .map(|(m, _, position)| {
+                let obs = &self.observations[start + at];
+                let simulated =
+                    position.iter().zip(&raw[at..]).map(|(p, d)| p + self.marker_sigma_mm * d).collect::<Vec<_>>();
+                at += position.len();
+                MarkerSample { marker: *m, t_s: obs.t_s, phase: obs.phase, measured: position.clone(), simulated }
+            })
+            .collect()
     }
 
     /// Sets every trial's mesh correction to the difference between `fine`'s
@@ -1130,6 +1183,66 @@ mod tests {
             for j in 0..m {
                 let want = if i == j { 1.0 } else { 0.0 };
                 assert!((out[(i, j)] - want).abs() < 1e-12, "{i} {j}: {}", out[(i, j)]);
+            }
+        }
+    }
+
+    #[test]
+    fn marker_unwhitening_inverts_the_whitening() {
+        // Two groups (sizes 3 and 5) interleaved with untouched entries.
+        let groups = vec![vec![1, 4, 6], vec![0, 2, 3, 7, 9]];
+        let r: Vec<f64> = (0..10).map(|i| (i as f64 * 1.7).sin() + 0.3).collect();
+        let mut w = r.clone();
+        whiten_markers(&mut w, &groups);
+        assert!(w.iter().zip(&r).any(|(a, b)| (a - b).abs() > 1e-3));
+        unwhiten_markers(&mut w, &groups);
+        for (a, b) in r.iter().zip(&w) {
+            assert!((a - b).abs() < 1e-12, "{a} {b}");
+        }
+    }
+
+    /// The marker positions recovered from whitened residuals are the run's
+    /// own, to round-off (1e-9 mm on positions of about 10 mm), and the samples
+    /// carry their time and phase.
+    #[test]
+    fn marker_samples_recover_the_simulated_positions() {
+        use wagashi_io::{MarkerSample as Sample, MarkerSeries};
+        let mut bundles = crate::diagnosis::tests::campaign("", 3e-3, 16);
+        for b in &mut bundles {
+            let (release, end) = (b.experiment.protocol.release_s, b.experiment.protocol.end_s);
+            let times = [0.0, 0.6 * release, 0.9 * release, 0.5 * (release + end), end];
+            b.markers = [[20.0, 4.0], [20.0, 11.0], [6.0, 15.0]]
+                .iter()
+                .enumerate()
+                .map(|(m, &[x, y])| MarkerSeries {
+                    name: format!("m{m}"),
+                    // Measured: the initial place, moved by a made-up amount.
+                    samples: times
+                        .iter()
+                        .enumerate()
+                        .map(|(i, &t)| Sample { t_s: t, position_mm: vec![x + 0.01 * i as f64, y - 0.02 * i as f64] })
+                        .collect(),
+                })
+                .collect();
+        }
+        let c = crate::trial::Campaign::new(&bundles, &BTreeMap::new(), Some(5.0), false).unwrap();
+        let model = Model::new(&bundles, &c.materials, c.unknowns.clone(), Some(5.0), false, 0.05).unwrap();
+        let theta = c.values();
+        let (r, _) = model.residuals(&theta, None, None).unwrap();
+        for (k, b) in bundles.iter().enumerate() {
+            let result = model.run(k, &model.problem(k, &theta, None).unwrap(), None).unwrap();
+            let samples = model.marker_samples(k, &r);
+            // Three markers; the t = 0 and in-push samples are not observations.
+            assert!(samples.len() >= 9, "{}", samples.len());
+            let release = b.experiment.protocol.release_s;
+            for s in &samples {
+                let i = b.markers[s.marker].samples.iter().position(|x| x.t_s == s.t_s).unwrap();
+                assert_eq!(s.phase, if s.t_s > release { Phase::Recovery } else { Phase::Hold });
+                let want = &result.markers[s.marker].samples[i].1;
+                for (a, w) in s.simulated.iter().zip(want) {
+                    assert!((a - w).abs() < 1e-9, "trial {k} marker {} t {}: {a} vs {w}", s.marker, s.t_s);
+                }
+                assert_eq!(s.measured, b.markers[s.marker].samples[i].position_mm);
             }
         }
     }
