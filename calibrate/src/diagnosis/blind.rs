@@ -248,9 +248,16 @@ pub struct Case {
 /// [`LAMBDAS`], one null campaign per implemented effect, and every
 /// out-of-library kind at every strength of [`OUT_OF_LIBRARY_LAMBDAS`].
 pub fn full_cycle() -> Vec<Case> {
-    // Adhesion is withheld from the check: its blind trials withdraw the plate to
-    // half the depth, where the baseline's constrained plate holds bilaterally, so
-    // its strength's limit at 0+ (a unilateral plate) is not the null campaign.
+    // Adhesion is withheld from the check: the design never pulls on the
+    // specimen. Its plate withdraws to half the depth before the release, and the
+    // nominal trials still press there (session 14, `wagashi press` on the four
+    // nominal trials, 5 mm elements: the force in the withdrawal stays above 3 to
+    // 14 % of the peak, 0.073 N at the least), so no bond is ever loaded and no
+    // strength reaches any lambda. Eliciting adhesion needs a pull-off (a plate
+    // rising faster than the specimen recovers), where the baseline's
+    // constrained plate, bilateral until `release_s`, would itself pull: that
+    // trial needs the unilateral plate as the baseline (fem_core::effects,
+    // "Nesting caveat").
     let effects: Vec<EffectId> =
         EffectId::ALL.into_iter().filter(|e| e.implemented() && *e != EffectId::Adhesion).collect();
     let mut cases = Vec::new();
