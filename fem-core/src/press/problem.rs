@@ -252,7 +252,7 @@ impl AnyPress {
 pub enum PressError {
     /// The mesh is invalid.
     #[error("mesh: {0}")]
-    Mesh(#[from] MeshError),
+    Mesh(MeshError),
     /// Regions and materials do not match.
     #[error("the mesh has {regions} regions but {materials} materials were given")]
     MaterialCount { regions: usize, materials: usize },
@@ -305,7 +305,21 @@ pub enum PressError {
     NotConverged { step: usize, time_s: f64, detail: String },
     /// Effect values refused, or an effect that does not fit the problem.
     #[error("effects: {0}")]
-    Effect(#[from] EffectError),
+    Effect(EffectError),
+}
+
+// The wrapped errors are printed in the message and not exposed as sources
+// (a chain printer would show them twice): `From` by hand, not `#[from]`.
+impl From<MeshError> for PressError {
+    fn from(e: MeshError) -> Self {
+        Self::Mesh(e)
+    }
+}
+
+impl From<EffectError> for PressError {
+    fn from(e: EffectError) -> Self {
+        Self::Effect(e)
+    }
 }
 
 fn list_nodes(nodes: &[u32]) -> String {
