@@ -1,7 +1,9 @@
 //! Quality: Delaunay refinement (stage 3).
 //!
-//! Passes over the inside tets (classified by a flood that crosses no subfacet,
-//! at the start of each pass), worst first. A tet is *bad* when its radius-edge
+//! First the facets are refined for quality where size refinement would not
+//! (`Recovery::refine_facet_quality`, [`FACET_QUALITY_EDGE`]). Then passes
+//! over the inside tets (classified by a flood that crosses no subfacet, at
+//! the start of each pass), worst first. A tet is *bad* when its radius-edge
 //! ratio exceeds the bound, its volume exceeds the largest allowed, or its
 //! smallest dihedral angle is under the sliver bound ([`Bounds`]).
 //!
@@ -25,7 +27,10 @@
 //! at a hinge flatter than [`CAP_HINGE_DEG`]) gets the hinge's subsegment
 //! split; a tet on four input vertices refines the subfacet its circumcentre
 //! blocks on (smoothing cannot move its corners, so nothing else would fix it);
-//! any other tet is left (module docs of `conforming`, "What is not done"). The facets whose subfacets went missing are recovered before going
+//! a tet of ratio over [`PLANE_RADIUS_EDGE`] refines the subfacet of a merged
+//! plane its circumcentre blocks on; any other tet is left (module docs of
+//! `conforming`, "What is not done"), and so is a tet with no free candidate
+//! whose circumcentre is a vertex already or beyond the hull. The facets whose subfacets went missing are recovered before going
 //! on. A tet that is bad only as a sliver is also left when no free
 //! candidate's star is better than it (it then waits for `smooth.rs`); a tet
 //! left is not tried again.
@@ -296,8 +301,10 @@ impl Recovery {
                         }
                         Err(e) => return Err(e),
                     },
-                    // Every candidate is a vertex already or beyond the hull:
-                    // nothing to do for this tet (left, not tried again).
+                    // No free candidate, and the circumcentre is a vertex
+                    // already or beyond the hull: left, not tried again (it
+                    // used to be retried until the pass limit, 64, with
+                    // nothing changing: the hinge took 64 passes).
                     (None, None) => {
                         skipped.insert(v);
                         continue;
