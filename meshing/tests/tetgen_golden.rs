@@ -93,8 +93,8 @@ const MODELS: [Model; 5] = [
     // CGAL's fandisk (CAD, 12 946 triangles): all hold since coplanar input
     // triangles merge into facets, bad tets on four input vertices refine the
     // subfacet their circumcentre encroaches and smoothing counts angles over
-    // 160 deg (measured: 45 530 tets, 10.06..160.29 deg, 0 % under 10 deg,
-    // p99.9 radius-edge 2.08).
+    // 160 deg (measured: 46 193 tets, 10.01..160.29 deg, 0 % under 10 deg,
+    // p99.9 radius-edge 1.74).
     Model {
         name: "fandisk",
         source: Source::Debian { package: "libcgal-demo", path: CGAL_DATA, member: Some("data/meshes/fandisk.off") },
@@ -102,10 +102,11 @@ const MODELS: [Model; 5] = [
         gates: Some(ALL),
     },
     // Netgen's hinge (CAD STL, 1 212 triangles, needle-heavy, coordinates with
-    // 7 digits): the p99.9 radius-edge ratio misses (measured: 1.74 against
-    // TetGen's 1.41; 31 360 tets, 10.03..159.91 deg, 0 % under 10 deg; 2.23
-    // before the facets were refined for quality first, 3.95 before tets of
-    // high ratio refined subfacets of merged planes). The miss is forced by
+    // 7 digits): the p99.9 radius-edge ratio misses (measured: 1.468 against
+    // TetGen's 1.408; 31 360 tets, 10.01..160.00 deg, 0 % under 10 deg; 1.74
+    // before smoothing for the ratio, 2.23 before the facets were refined for
+    // quality first, 3.95 before tets of high ratio refined subfacets of
+    // merged planes). The miss is forced by
     // the input with an exact boundary (asserted below and by
     // `hinge_sharp_input_corners_force_the_radius_edge_miss`): 100 input
     // corners under 20.8 deg between two sharp input edges each make a tet of
