@@ -7,8 +7,13 @@
 //! cargo run --release -p wagashi-meshing --example conforming_probe -- /usr/share/doc/netgen/examples/hinge.stl 2.0
 //! ```
 //!
-//! OBJ (read with `tobj`), OFF and ASCII STL files are read. `PROBE_WORST=N`
-//! also prints where the N worst tets are (see `diagnose`).
+//! OBJ (read with `tobj`), OFF and ASCII STL files are read (`PROBE_REPAIR=1`:
+//! an OBJ file repaired first, as the two boxes in `tests/tetgen_golden.rs`).
+//! `PROBE_WORST=N` also prints where the N worst tets are (see `diagnose`), the
+//! radius-edge histogram, the boundary faces over 1.414 by the kinds of their
+//! corners and the `PROBE_TOP` (30) tets of largest ratio with the kinds of
+//! their corners (I input vertex, S on a sharp input edge, F on the surface,
+//! V inside) and of their shortest edge's ends.
 //!
 //! ```text
 //! ```
