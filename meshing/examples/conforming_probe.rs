@@ -7,8 +7,13 @@
 //! cargo run --release -p wagashi-meshing --example conforming_probe -- /usr/share/doc/netgen/examples/hinge.stl 2.0
 //! ```
 //!
-//! OBJ (read with `tobj`), OFF and ASCII STL files are read. `PROBE_WORST=N`
-//! also prints where the N worst tets are (see `diagnose`).
+//! OBJ (read with `tobj`), OFF and ASCII STL files are read (`PROBE_REPAIR=1`:
+//! an OBJ file repaired first, as the two boxes in `tests/tetgen_golden.rs`).
+//! `PROBE_WORST=N` also prints where the N worst tets are (see `diagnose`), the
+//! radius-edge histogram, the boundary faces over 1.414 by the kinds of their
+//! corners and the `PROBE_TOP` (30) tets of largest ratio with the kinds of
+//! their corners (I input vertex, S on a sharp input edge, F on the surface,
+//! V inside) and of their shortest edge's ends.
 //!
 //! ```text
 //! ```
@@ -87,6 +92,12 @@ fn main() {
     let defaults = ConformingOptions::default();
     let (q, sliver) = (arg(3).unwrap_or(defaults.radius_edge), arg(4).unwrap_or(defaults.sliver_deg));
     let (s, sizes) = match args.get(1) {
+        Some(path) if path.ends_with(".obj") && std::env::var("PROBE_REPAIR").is_ok() => (
+            meshing::repair::repair(&read_obj(path), &meshing::repair::RepairOptions::default())
+                .unwrap_or_else(|e| panic!("{path}: {e}"))
+                .surface,
+            vec![arg(2)],
+        ),
         Some(path) if path.ends_with(".obj") => (read_obj(path), vec![arg(2)]),
         Some(path) => (read_off_or_stl(path), vec![arg(2)]),
         None => (Surface::cuboid([0.0; 3], [10.0, 20.0, 5.0], "box"), vec![None, Some(4.0), Some(2.0), Some(1.0)]),
@@ -197,6 +208,136 @@ fn diagnose(mesh: &fem_core::mesh::TetMesh, s: &Surface, n: usize) {
         })
         .collect();
     worst.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let res: Vec<f64> = mesh
+        .cells
+        .iter()
+        .map(|c| meshing::quality::tet_quality(&c.map(|v| mesh.nodes[v as usize])).radius_edge)
+        .collect();
+    for b in [1.414, 1.6, 1.8, 2.0, 2.3, 3.0] {
+        println!("radius-edge over {b}: {} tets", res.iter().filter(|&&r| r > b).count());
+    }
+    let tri_re = |f: [u32; 3]| {
+        let q = f.map(|v| mesh.nodes[v as usize]);
+        let (a, b, c) = (sub(q[1], q[0]), sub(q[2], q[0]), sub(q[2], q[1]));
+        let (la, lb, lc) = (dot(a, a).sqrt(), dot(b, b).sqrt(), dot(c, c).sqrt());
+        let area2 = dot(cross(a, b), cross(a, b)).sqrt();
+        la * lb * lc / (2.0 * area2) / la.min(lb).min(lc)
+    };
+    let face_re: Vec<f64> = faces.iter().map(|f| tri_re(*f)).collect();
+    for b in [1.0, 1.414, 2.0] {
+        println!("boundary faces over {b}: {}", face_re.iter().filter(|&&r| r > b).count());
+    }
+    let bad_faces: std::collections::HashSet<[u32; 3]> = faces
+        .iter()
+        .zip(&face_re)
+        .filter(|(_, &r)| r > 1.414)
+        .map(|(f, _)| {
+            let mut k = *f;
+            k.sort_unstable();
+            k
+        })
+        .collect();
+    let forced = mesh
+        .cells
+        .iter()
+        .zip(&res)
+        .filter(|(c, &r)| {
+            r > 1.414
+                && [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]].iter().any(|f| {
+                    let mut k = f.map(|j: usize| c[j]);
+                    k.sort_unstable();
+                    bad_faces.contains(&k)
+                })
+        })
+        .count();
+    println!("tets over 1.414 with a boundary face over 1.414: {forced}");
+    // Vertex classes: I input vertex, S on a sharp input edge (segment), F on
+    // the surface, V inside.
+    let sharp: Vec<[[f64; 3]; 2]> = {
+        let mut by_edge: std::collections::HashMap<(u32, u32), Vec<usize>> = Default::default();
+        for (i, t) in s.triangles.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                by_edge.entry((a.min(b), a.max(b))).or_default().push(i);
+            }
+        }
+        let normal = |t: &[u32; 3]| {
+            let q = t.map(|v| s.vertices[v as usize]);
+            let n = cross(sub(q[1], q[0]), sub(q[2], q[0]));
+            let l = dot(n, n).sqrt();
+            n.map(|x| x / l)
+        };
+        by_edge
+            .iter()
+            .filter(|(_, ts)| {
+                ts.len() != 2 || dot(normal(&s.triangles[ts[0]]), normal(&s.triangles[ts[1]])) < 1.0 - 1e-9
+            })
+            .map(|(&(a, b), _)| [s.vertices[a as usize], s.vertices[b as usize]])
+            .collect()
+    };
+    let on_bnd0: std::collections::HashSet<u32> = faces.iter().flatten().copied().collect();
+    let class = |v: u32| -> char {
+        let p = mesh.nodes[v as usize];
+        if s.vertices.contains(&p) {
+            'I'
+        } else if !on_bnd0.contains(&v) {
+            'V'
+        } else if sharp.iter().any(|e| seg_dist(p, e[0], e[1]) < 1e-9) {
+            'S'
+        } else {
+            'F'
+        }
+    };
+    let mut ftally: std::collections::BTreeMap<String, usize> = Default::default();
+    for (f, &r) in faces.iter().zip(&face_re) {
+        if r > 1.414 {
+            let q = f.map(|v| mesh.nodes[v as usize]);
+            let l = [0, 1, 2].map(|i| dot(sub(q[(i + 1) % 3], q[(i + 2) % 3]), sub(q[(i + 1) % 3], q[(i + 2) % 3])));
+            let apex = (0..3).fold(0, |b, i| if l[i] < l[b] { i } else { b });
+            let key = format!(
+                "apex {} others {}{} re>{}",
+                class(f[apex]),
+                class(f[(apex + 1) % 3]),
+                class(f[(apex + 2) % 3]),
+                if r > 2.0 {
+                    2.0
+                } else if r > 1.6 {
+                    1.6
+                } else {
+                    1.414
+                }
+            );
+            *ftally.entry(key).or_default() += 1;
+        }
+    }
+    println!("{ftally:#?}");
+    let mut re_sorted: Vec<usize> = (0..res.len()).collect();
+    re_sorted.sort_by(|&a, &b| res[b].total_cmp(&res[a]));
+    let mut tally: std::collections::BTreeMap<String, usize> = Default::default();
+    for &i in re_sorted.iter().take(std::env::var("PROBE_TOP").ok().and_then(|x| x.parse().ok()).unwrap_or(30)) {
+        let c = mesh.cells[i];
+        let q = c.map(|v| mesh.nodes[v as usize]);
+        let mut e = (f64::INFINITY, 0, 0);
+        for a in 0..4 {
+            for b in a + 1..4 {
+                let l = dot(sub(q[a], q[b]), sub(q[a], q[b])).sqrt();
+                if l < e.0 {
+                    e = (l, a, b);
+                }
+            }
+        }
+        let mut cls: Vec<char> = c.iter().map(|&v| class(v)).collect();
+        let short = format!("{}{}", class(c[e.1]), class(c[e.2]));
+        cls.sort_unstable();
+        let key = format!("{} short {}", cls.iter().collect::<String>(), short);
+        *tally.entry(key.clone()).or_default() += 1;
+        let qq = meshing::quality::tet_quality(&q);
+        println!(
+            "top re {:.2} min {:.1} max {:.1} {key} shortest {:.3} at {:?}",
+            res[i], qq.min_dihedral_deg, qq.max_dihedral_deg, e.0, q[0]
+        );
+    }
+    println!("{tally:#?}");
     let on_bnd: std::collections::HashSet<u32> = faces.iter().flatten().copied().collect();
     for &(qv, i) in worst.iter().take(n) {
         let c = mesh.cells[i];

@@ -93,8 +93,8 @@ const MODELS: [Model; 5] = [
     // CGAL's fandisk (CAD, 12 946 triangles): all hold since coplanar input
     // triangles merge into facets, bad tets on four input vertices refine the
     // subfacet their circumcentre encroaches and smoothing counts angles over
-    // 160 deg (measured: 45 530 tets, 10.06..160.29 deg, 0 % under 10 deg,
-    // p99.9 radius-edge 2.08).
+    // 160 deg (measured: 46 193 tets, 10.01..160.29 deg, 0 % under 10 deg,
+    // p99.9 radius-edge 1.74).
     Model {
         name: "fandisk",
         source: Source::Debian { package: "libcgal-demo", path: CGAL_DATA, member: Some("data/meshes/fandisk.off") },
@@ -102,12 +102,18 @@ const MODELS: [Model; 5] = [
         gates: Some(ALL),
     },
     // Netgen's hinge (CAD STL, 1 212 triangles, needle-heavy, coordinates with
-    // 7 digits): the p99.9 radius-edge ratio misses (measured: 2.23 against
-    // TetGen's 1.41; 28 534 tets, 10.01..160.00 deg, 0 % under 10 deg; 3.95
-    // before tets of ratio over 2.3 refined subfacets of merged planes).
-    // Tets next to the boundary of ratio 1.41 to 2.3 are left when their
-    // circumcentre encroaches a subfacet (module docs of `conforming`, "What
-    // is not done").
+    // 7 digits): the p99.9 radius-edge ratio misses (measured: 1.468 against
+    // TetGen's 1.408; 31 360 tets, 10.01..160.00 deg, 0 % under 10 deg; 1.74
+    // before smoothing for the ratio, 2.23 before the facets were refined for
+    // quality first, 3.95 before tets of high ratio refined subfacets of
+    // merged planes). The miss is forced by
+    // the input with an exact boundary (asserted below and by
+    // `hinge_sharp_input_corners_force_the_radius_edge_miss`): 100 input
+    // corners under 20.8 deg between two sharp input edges each make a tet of
+    // ratio over 1.41, more than 0.1 % of 1.25 x TetGen's count. TetGen
+    // merges those nearly coplanar triangles (its -T tolerance) and drops the
+    // edge between them: its faces there lie 2e-7 mm (3e-9 of the diagonal)
+    // off the input, over the 1e-9 gate (BENCHMARKS.md, session 14).
     Model {
         name: "hinge",
         source: Source::Debian {
@@ -251,6 +257,25 @@ fn our_conforming_meshes_pass_the_gates_against_tetgens_golden_figures() {
             };
             if gates.contains(gate) {
                 assert!(ok, "{}: gate {gate:?} misses: ours {what}, TetGen {g:?}", m.name);
+            } else if !ok && *gate == Gate::RadiusEdge {
+                // A known miss of the p99.9 radius-edge ratio must be forced:
+                // more than 0.1 % of the tets have a boundary face whose own
+                // radius-edge ratio is over TetGen's figure (a tet's ratio is
+                // at least that of each of its faces: its circumsphere cuts
+                // the face's plane in the face's circumcircle, and its
+                // shortest edge is at most the face's), each face an input
+                // corner's (`hinge_sharp_input_corners_force_the_radius_edge_miss`).
+                let forced = tets_on_bad_boundary_faces(&out.mesh, g.p999_radius_edge);
+                eprintln!(
+                    "{}: gate {gate:?} misses (known, not asserted): ours {what}; {forced} tets on boundary faces of \
+                     ratio over {}",
+                    m.name, g.p999_radius_edge
+                );
+                assert!(
+                    forced as f64 > 0.001 * r.num_cells as f64,
+                    "{}: the radius-edge miss is no longer forced by boundary faces ({forced} tets)",
+                    m.name
+                );
             } else if !ok {
                 eprintln!("{}: gate {gate:?} misses (known, not asserted): ours {what}", m.name);
             } else {
@@ -309,6 +334,108 @@ fn read_tetgen(node: &Path, ele: &Path) -> TetMesh {
         node_sets: Default::default(),
         face_sets: Default::default(),
     }
+}
+
+/// The radius-edge ratio (circumradius over shortest edge) of a triangle and
+/// its angle opposite the shortest edge [deg].
+fn triangle_ratio(q: [[f64; 3]; 3]) -> (f64, f64) {
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let norm = |a: [f64; 3]| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+    let l = [0, 1, 2].map(|i| norm(sub(q[(i + 2) % 3], q[(i + 1) % 3])));
+    let shortest = (0..3).fold(0, |b, i| if l[i] < l[b] { i } else { b });
+    // The smallest angle is opposite the shortest edge: l = 2 R sin(angle).
+    let (a, b) = (sub(q[(shortest + 1) % 3], q[shortest]), sub(q[(shortest + 2) % 3], q[shortest]));
+    let cos = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) / (norm(a) * norm(b));
+    let angle = cos.clamp(-1.0, 1.0).acos();
+    (1.0 / (2.0 * angle.sin()), angle.to_degrees())
+}
+
+/// The tets of `mesh` with a boundary face of radius-edge ratio over `bound`.
+fn tets_on_bad_boundary_faces(mesh: &TetMesh, bound: f64) -> usize {
+    let mut count: std::collections::HashMap<[u32; 3], usize> = Default::default();
+    for c in &mesh.cells {
+        for f in [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]] {
+            let mut k = f.map(|j: usize| c[j]);
+            k.sort_unstable();
+            *count.entry(k).or_default() += 1;
+        }
+    }
+    mesh.cells
+        .iter()
+        .filter(|c| {
+            [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]].iter().any(|f| {
+                let mut k = f.map(|j: usize| c[j]);
+                k.sort_unstable();
+                count[&k] == 1 && triangle_ratio(k.map(|v| mesh.nodes[v as usize])).0 > bound
+            })
+        })
+        .count()
+}
+
+/// Why the hinge's p99.9 radius-edge gate cannot hold with an exact boundary:
+/// an input triangle's corner of angle `a` between two input edges across
+/// each of which the surface bends (the neighbour's far corner off the
+/// triangle's plane by more than the 1e-9 Hausdorff gate, of the diagonal)
+/// must keep both edges, so the mesh has a boundary face inside that corner
+/// with an angle at most `a` there, whose radius-edge ratio is at least
+/// 1 / (2 sin a), and so is its tet's. With `a` under asin(1 / (2 x TetGen's
+/// p99.9)) (20.8 deg), there are more such corners, each in its own input
+/// triangle, than 0.1 % of 1.25 x TetGen's count.
+#[test]
+fn hinge_sharp_input_corners_force_the_radius_edge_miss() {
+    let Some(m) = MODELS.iter().find(|m| m.name == "hinge") else { unreachable!("the hinge is in MODELS") };
+    let Some(s) = surface(m) else { return };
+    let g = read_golden(m.name);
+    let tol = 1e-9 * s.diagonal();
+    let corner_bound = (1.0 / (2.0 * g.p999_radius_edge)).asin().to_degrees();
+    let mut by_edge: std::collections::HashMap<(u32, u32), Vec<usize>> = Default::default();
+    for (i, t) in s.triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            by_edge.entry((a.min(b), a.max(b))).or_default().push(i);
+        }
+    }
+    let p = |v: u32| s.vertices[v as usize];
+    let bends = |i: usize, a: u32, b: u32| {
+        let t = s.triangles[i];
+        let [x, y, z] = t.map(p);
+        let u = [y[0] - x[0], y[1] - x[1], y[2] - x[2]];
+        let w = [z[0] - x[0], z[1] - x[1], z[2] - x[2]];
+        let n = [u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]];
+        let nn = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        by_edge[&(a.min(b), a.max(b))].iter().filter(|&&j| j != i).all(|&j| {
+            s.triangles[j].iter().filter(|v| !t.contains(v)).all(|&far| {
+                let f = p(far);
+                let d = [f[0] - x[0], f[1] - x[1], f[2] - x[2]];
+                ((d[0] * n[0] + d[1] * n[1] + d[2] * n[2]) / nn).abs() > tol
+            })
+        })
+    };
+    let mut forced = 0;
+    let mut worst: f64 = 0.0;
+    for (i, t) in s.triangles.iter().enumerate() {
+        let (ratio, angle) = triangle_ratio(t.map(p));
+        if angle >= corner_bound {
+            continue;
+        }
+        // The corner opposite the shortest edge, and its two edges.
+        let l = |a: u32, b: u32| {
+            let (x, y) = (p(a), p(b));
+            ((x[0] - y[0]).powi(2) + (x[1] - y[1]).powi(2) + (x[2] - y[2]).powi(2)).sqrt()
+        };
+        let k = (0..3).min_by(|&a, &b| l(t[(a + 1) % 3], t[(a + 2) % 3]).total_cmp(&l(t[(b + 1) % 3], t[(b + 2) % 3])));
+        let k = k.unwrap_or(0);
+        if bends(i, t[k], t[(k + 1) % 3]) && bends(i, t[k], t[(k + 2) % 3]) {
+            forced += 1;
+            worst = worst.max(ratio);
+        }
+    }
+    let allowed = 0.001 * 1.25 * g.num_cells as f64;
+    eprintln!(
+        "hinge: {forced} input corners under {corner_bound:.2} deg between bent edges (ratio up to {worst:.2}); \
+         0.1 % of 1.25 x TetGen's count: {allowed:.1}"
+    );
+    assert!(forced as f64 > allowed, "hinge: {forced} forced corners, {allowed} allowed");
 }
 
 fn tetgen_on_path() -> bool {

@@ -394,6 +394,113 @@ impl Recovery {
         self.refine_subfacet(f, t)
     }
 
+    /// Ruppert's refinement of every facet's triangulation to radius-edge
+    /// ratio `bound` (module docs of `conforming`, stage 3): the subfacets over
+    /// it whose shortest edge is under `max_edge`, worst first, get their circumcentre (in the facet's plane) inserted,
+    /// or the subsegment of the facet it encroaches split; a subfacet whose
+    /// shortest edge joins two segments meeting at an input vertex (a small
+    /// angle of the input, which no split improves) is left, as is one whose
+    /// circumcentre lies off the facet. Rounds until none is left, at most
+    /// `max_rounds`; the number of points added.
+    pub fn refine_facet_quality(
+        &mut self,
+        bound: f64,
+        max_edge: f64,
+        max_rounds: usize,
+    ) -> Result<usize, ConformingError> {
+        let mut added = 0;
+        let mut skipped: BTreeSet<[u32; 3]> = BTreeSet::new();
+        for _ in 0..max_rounds {
+            // The segments through each vertex.
+            let mut on_segs: HashMap<u32, Vec<u32>> = HashMap::new();
+            for &(a, b, s) in &self.subsegs {
+                on_segs.entry(a).or_default().push(s);
+                on_segs.entry(b).or_default().push(s);
+            }
+            let pts = self.dt.points();
+            let mut bad: Vec<(f64, usize, [u32; 3])> = Vec::new();
+            for (f, facet) in self.facets.iter().enumerate() {
+                for &t in &facet.tris {
+                    let mut key = t;
+                    key.sort_unstable();
+                    if skipped.contains(&key) {
+                        continue;
+                    }
+                    let q = t.map(|v| pts[v as usize]);
+                    let (ratio, apex) = triangle_radius_edge(q);
+                    if ratio <= bound {
+                        continue;
+                    }
+                    let shortest = [0, 1, 2]
+                        .map(|i| {
+                            let d = sub(q[(i + 1) % 3], q[i]);
+                            dot(d, d).sqrt()
+                        })
+                        .into_iter()
+                        .fold(f64::INFINITY, f64::min);
+                    if shortest >= max_edge {
+                        continue;
+                    }
+                    let w = t[apex];
+                    let (p, r) = (t[(apex + 1) % 3], t[(apex + 2) % 3]);
+                    let ends = |s: &u32| self.segment_ends[*s as usize].contains(&w);
+                    let on = |v: u32| on_segs.get(&v).is_some_and(|ss| ss.iter().any(ends));
+                    if (w as usize) < self.num_input() && on(p) && on(r) {
+                        skipped.insert(key);
+                        continue;
+                    }
+                    bad.push((ratio, f, t));
+                }
+            }
+            if bad.is_empty() {
+                break;
+            }
+            bad.sort_by(|x, y| y.0.total_cmp(&x.0).then(x.1.cmp(&y.1)).then(x.2.cmp(&y.2)));
+            let before = added;
+            for (_, f, t) in bad {
+                if !self.facets[f].has_tri(t) {
+                    continue;
+                }
+                if !self.boundary_room() {
+                    return Ok(added);
+                }
+                let pts = self.dt.points();
+                let c = self.facets[f].circumcentre(t);
+                if let Some(k) = self.encroached_subseg(f, c) {
+                    self.split_subsegment(k)?;
+                } else if self.facets[f].contains(c, pts) {
+                    self.next_kind = "triangle";
+                    let v = match self.add_point(c) {
+                        Err(_) if self.last_duplicate => {
+                            self.last_duplicate = false;
+                            let mut key = t;
+                            key.sort_unstable();
+                            skipped.insert(key);
+                            continue;
+                        }
+                        r => r?,
+                    };
+                    self.steiner_on_facets += 1;
+                    let pts = self.dt.points();
+                    self.facets[f].insert_interior(v, pts);
+                    self.index_facet(f);
+                    self.pending.insert(f as u32);
+                } else {
+                    let mut key = t;
+                    key.sort_unstable();
+                    skipped.insert(key);
+                    continue;
+                }
+                added += 1;
+                self.recover_pending()?;
+            }
+            if added == before {
+                break;
+            }
+        }
+        Ok(added)
+    }
+
     /// The subsegment of facet `f` whose closed diametral ball holds `c`
     /// deepest (with a margin for rounding: a point on a subsegment, a right
     /// subfacet's circumcentre, splits the subsegment instead of landing next
@@ -458,6 +565,19 @@ impl Recovery {
         self.pending.insert(f as u32);
         Ok(())
     }
+}
+
+/// The radius-edge ratio of a triangle (circumradius over shortest edge) and
+/// the corner opposite its shortest edge.
+pub(crate) fn triangle_radius_edge(q: [Point; 3]) -> (f64, usize) {
+    let l = [0, 1, 2].map(|i| {
+        let d = sub(q[(i + 2) % 3], q[(i + 1) % 3]);
+        dot(d, d).sqrt()
+    });
+    let n = cross(sub(q[1], q[0]), sub(q[2], q[0]));
+    let area2 = dot(n, n).sqrt();
+    let apex = (0..3).fold(0, |b, i| if l[i] < l[b] { i } else { b });
+    (l[0] * l[1] * l[2] / (2.0 * area2) / l[apex], apex)
 }
 
 /// The circumcentre of a triangle in 3D.
