@@ -15,6 +15,7 @@
 //! (the engine's slider does not converge in the short step adaptive control
 //! takes right after the release). Long: step 3 (the whole library) took 840 s
 //! and each swap diagnosis several minutes on the shared 2-core machine.
+//! `-- --no-symptom --quick` runs steps 1 and 3 only.
 //!
 //! Steps:
 //! 1. every kappa > 1 candidate (diagnosis-details.md §1: plastic-slider,
@@ -95,6 +96,10 @@ fn print_where(d: &Diagnosis) {
 }
 
 fn print_candidates(d: &Diagnosis) {
+    match d.peak_stress_mpa {
+        Some(s) => println!("  peak nominal stress {s:.4e} MPa (the stress-valued references follow it)"),
+        None => println!("  peak nominal stress unknown: the registry's static references"),
+    }
     println!("  | candidate | LM | LR | crit | eligible | C | remaining flagged | parameters |");
     println!("  |---|---|---|---|---|---|---|---|");
     for c in &d.candidates {
