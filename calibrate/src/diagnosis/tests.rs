@@ -125,8 +125,10 @@ fn a_withheld_force_drift_is_named() {
 /// the diagnoser (the engine's slider does not converge on some adaptive steps
 /// right after a release; `DiagnosisOptions::fixed_dt_s`).
 ///
-/// Measured: score 251 and LR 261 (with the static references the score is
-/// exactly 0 and the refit falls back), sigma_y 0.5024 kPa. The 5 %: the
+/// Measured: score 251, LR 261, sigma_y 0.5024 kPa, verdict `plastic-slider`;
+/// with the static references (the code before the change) the score and the
+/// LR were exactly 0 (the refit stayed at sigma_y = 10 MPa, no yield), the
+/// Bingham threshold's score too, and the verdict was a `tie`. The 5 %: the
 /// diagnoser's 5 mm mesh is corrected by a 2.5 mm run while the truth ran on
 /// the 5 mm mesh, so the corrected model is not the generator (the correction
 /// moves the stress at the glued corners, where yield starts), and with force
@@ -139,7 +141,8 @@ fn a_weak_slider_below_the_static_reference_is_seen() {
     let fixed = Settings { fixed_dt_s: Some(0.25), ..Settings::default() };
     let effects = format!("[effects]\nplastic_yield_stress_MPa = {sigma_y}\n");
     let bundles = campaign_of(SOFT, &effects, 1e-3, 16, &fixed);
-    let library = [EffectId::PlasticSlider, EffectId::BinghamDashpot, EffectId::StressThinning, EffectId::DualViscosity];
+    let library =
+        [EffectId::PlasticSlider, EffectId::BinghamDashpot, EffectId::StressThinning, EffectId::DualViscosity];
     let opts = DiagnosisOptions { fixed_dt_s: Some(0.25), ..options(&library) };
     let d = diagnose(&bundles, &[], &BTreeMap::new(), &opts, &|_, _, _| {}).unwrap();
     let peak = d.peak_stress_mpa.expect("a block with a measured force");
