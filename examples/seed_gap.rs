@@ -131,7 +131,14 @@ fn print_closure(bundles: &[Bundle], start: &BTreeMap<String, MaterialSpec>, d: 
         Model::new(bundles, &campaign.materials, campaign.unknowns.clone(), o.size_mm, false, o.marker_sigma_mm)
             .expect("model");
     model.settings.fixed_dt_s = o.fixed_dt_s;
-    let values: Vec<f64> = c.parameters.iter().map(|p| p.value).collect();
+    // Every parameter of the effect: the fitted strength ones, the nuisance ones
+    // (the slider's hardening) at their registry defaults, as the refit ran them.
+    let mut values = id.null_values();
+    for p in &c.parameters {
+        if let Some((_, i)) = EffectId::from_key(p.key) {
+            values[i] = p.value;
+        }
+    }
     let (r1, _) = model.residuals(&c.theta, Some((*id, &values)), None).expect("refit residuals");
     let theta0 = &d.baseline.values;
     let (r0, _) = model.residuals(theta0, None, None).expect("baseline residuals");
