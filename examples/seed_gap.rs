@@ -14,6 +14,7 @@
 //! fixed 0.25 s steps, the diagnoser on 10 mm elements and fixed 0.5 s steps
 //! (the engine's slider does not converge in the short step adaptive control
 //! takes right after the release). Long: step 3 (the whole library) took 840 s
+//! (session 13; 2214 s in session 14 with the machine at load 12)
 //! and each swap diagnosis several minutes on the shared 2-core machine.
 //! `-- --no-symptom --quick` runs steps 1 and 3 only.
 //!
