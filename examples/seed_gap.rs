@@ -14,7 +14,9 @@
 //! fixed 0.25 s steps, the diagnoser on 10 mm elements and fixed 0.5 s steps
 //! (the engine's slider does not converge in the short step adaptive control
 //! takes right after the release). Long: step 3 (the whole library) took 840 s
+//! (session 13; 2214 s in session 14 with the machine at load 12)
 //! and each swap diagnosis several minutes on the shared 2-core machine.
+//! `-- --no-symptom --quick` runs steps 1 and 3 only.
 //!
 //! Steps:
 //! 1. every kappa > 1 candidate (diagnosis-details.md §1: plastic-slider,
@@ -95,6 +97,10 @@ fn print_where(d: &Diagnosis) {
 }
 
 fn print_candidates(d: &Diagnosis) {
+    match d.peak_stress_mpa {
+        Some(s) => println!("  peak nominal stress {s:.4e} MPa (the stress-valued references follow it)"),
+        None => println!("  peak nominal stress unknown: the registry's static references"),
+    }
     println!("  | candidate | LM | LR | crit | eligible | C | remaining flagged | parameters |");
     println!("  |---|---|---|---|---|---|---|---|");
     for c in &d.candidates {
@@ -126,7 +132,14 @@ fn print_closure(bundles: &[Bundle], start: &BTreeMap<String, MaterialSpec>, d: 
         Model::new(bundles, &campaign.materials, campaign.unknowns.clone(), o.size_mm, false, o.marker_sigma_mm)
             .expect("model");
     model.settings.fixed_dt_s = o.fixed_dt_s;
-    let values: Vec<f64> = c.parameters.iter().map(|p| p.value).collect();
+    // Every parameter of the effect: the fitted strength ones, the nuisance ones
+    // (the slider's hardening) at their registry defaults, as the refit ran them.
+    let mut values = id.null_values();
+    for p in &c.parameters {
+        if let Some((_, i)) = EffectId::from_key(p.key) {
+            values[i] = p.value;
+        }
+    }
     let (r1, _) = model.residuals(&c.theta, Some((*id, &values)), None).expect("refit residuals");
     let theta0 = &d.baseline.values;
     let (r0, _) = model.residuals(theta0, None, None).expect("baseline residuals");

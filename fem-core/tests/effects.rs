@@ -2,7 +2,7 @@
 //! null (bit for bit the baseline) and away from it (its physical signature and,
 //! where one exists, a closed form).
 
-use fem_core::effects::{EffectError, EffectId, Effects, HookPoint};
+use fem_core::effects::{EffectError, EffectId, Effects, HookPoint, StressScale};
 use fem_core::material::{Material, Rheology};
 use fem_core::mesh;
 use fem_core::press::{
@@ -88,6 +88,26 @@ fn registry_lists_the_twelve_effects() {
             assert!(p.bounds[0] <= p.bounds[1], "{}", p.key);
             assert!(p.admits(p.null) || p.null == f64::INFINITY, "{}: null {} outside bounds", p.key, p.null);
             assert!(p.admits(p.reference), "{}", p.key);
+            // A reference scaled by the stress level: a stress (or inverse
+            // stress) that carries the effect, admitted at any stress level,
+            // and the static one when the level is unknown.
+            match p.stress_scale {
+                StressScale::Fixed => assert_eq!(p.reference_at(Some(1.5e-3)), p.reference, "{}", p.key),
+                StressScale::Stress(f) | StressScale::InverseStress(f) => {
+                    let inverse = matches!(p.stress_scale, StressScale::InverseStress(_));
+                    assert_eq!(p.unit, if inverse { "1/MPa" } else { "MPa" }, "{}", p.key);
+                    assert!(!p.nuisance && f > 0.0, "{}", p.key);
+                    for s in [1e-4, 1.5e-3, 0.01, 1.0] {
+                        let r = p.reference_at(Some(s));
+                        assert!(p.admits(r) && r > 0.0, "{} at {s} MPa: {r}", p.key);
+                        let expected = if inverse { 1.0 / (f * s) } else { f * s };
+                        assert!((r / expected - 1.0).abs() < 1e-15, "{} at {s} MPa: {r}", p.key);
+                    }
+                    for unknown in [None, Some(0.0), Some(f64::NAN), Some(-1.0)] {
+                        assert_eq!(p.reference_at(unknown), p.reference, "{}", p.key);
+                    }
+                }
+            }
             if !p.nuisance {
                 assert_eq!(
                     p.one_sided,

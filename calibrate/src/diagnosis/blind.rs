@@ -61,7 +61,10 @@
 //! check as soon as they are implemented; except `adhesion`, see [`full_cycle`]), its nuisance parameters at their
 //! registry nulls and its strength coordinates (the diagnoser's
 //! [`Candidate`] coordinates: `1/sigma_y` for the slider) at
-//! `null + a dir (reference - null)`, with a unit direction `dir` drawn per
+//! `null + a dir (reference - null)` (the registry's static references,
+//! [`Candidate::new`]; the diagnoser's own stress-valued references follow the
+//! campaign's peak stress, [`Candidate::at_stress`], and the amplitude `a` is
+//! set by the strength anyway), with a unit direction `dir` drawn per
 //! campaign (signs free for two-sided coordinates; both coordinates for
 //! `force-offset` and `ageing`). Out-of-library ([`OutOfLibrary`]): a broad
 //! relaxation spectrum and poroelastic-like drainage, both as a second Voigt

@@ -60,7 +60,12 @@
 //!    [`EffectId::implemented`] says the engine simulates (others are listed as
 //!    not evaluated), in parallel (rayon; the result does not depend on the
 //!    number of threads): score test with projection and the one-sided rule;
-//!    refit with fallback to the null; `LR = 2 (Phi0 - Phi_j)` against the
+//!    refit with fallback to the null (the secant references and the refit's
+//!    extra starts of stress-valued parameters, a yield stress, a threshold, a
+//!    critical stress, a strength, follow the calibration trials' peak nominal
+//!    stress, [`model::peak_stress_mpa`] and `fem_core::effects::StressScale`,
+//!    so that a threshold below the registry's static reference is still
+//!    crossed); `LR = 2 (Phi0 - Phi_j)` against the
 //!    chi-bar-square with Holm over the candidates at `alpha_which` (0.01) and
 //!    the Bonferroni critical value reported; held-out non-inferiority
 //!    (`Delta_ho > -2 SE`, [`heldout`]); ranking `C_j = LR_j + Delta_ho_j - 2 d_j`.
@@ -386,6 +391,10 @@ pub struct Diagnosis {
     pub shapes: Vec<MarkerShapes>,
     /// The force noise model per calibration trial: (trial, sigma [N], lag-1 correlation).
     pub force_noise: Vec<(String, f64, f64)>,
+    /// The calibration trials' peak nominal stress [MPa] that the stress-valued
+    /// effect references follow ([`model::peak_stress_mpa`]; `None`: the
+    /// registry's static references).
+    pub peak_stress_mpa: Option<f64>,
 }
 
 impl Diagnosis {
@@ -587,7 +596,9 @@ pub fn diagnose(
             None => to_evaluate.push(effect),
         }
     }
+    let peak_stress_mpa = model::peak_stress_mpa(calibration);
     let at = AtBaseline {
+        peak_stress_mpa,
         theta: &theta,
         r0: &r0,
         j0: &j0,
@@ -709,6 +720,7 @@ pub fn diagnose(
         curves,
         shapes,
         force_noise: model.trials.iter().map(|t| (t.name.clone(), t.force_sigma_n, t.force_rho)).collect(),
+        peak_stress_mpa,
     })
 }
 
@@ -732,6 +744,8 @@ fn error_chain(e: &dyn std::error::Error) -> String {
 /// What every candidate starts from: the baseline fit and its runs.
 #[derive(Clone, Copy)]
 struct AtBaseline<'a> {
+    /// The stress level of the candidates' references ([`model::peak_stress_mpa`]).
+    peak_stress_mpa: Option<f64>,
     theta: &'a [f64],
     r0: &'a [f64],
     j0: &'a DMatrix<f64>,
@@ -750,8 +764,8 @@ fn evaluate(
     segments: &[cells::Segment],
     options: &DiagnosisOptions,
 ) -> Result<Evaluated, EvalError> {
-    let AtBaseline { theta, r0, j0, phi0, steps, r_frozen, r_adaptive, e_num } = *at;
-    let candidate = Candidate::new(effect);
+    let AtBaseline { peak_stress_mpa, theta, r0, j0, phi0, steps, r_frozen, r_adaptive, e_num } = *at;
+    let candidate = Candidate::at_stress(effect, peak_stress_mpa);
     let columns = which::effect_columns(model, theta, &candidate, steps, r_frozen, r_adaptive)?;
     let score = which::score(&candidate, &columns, r0, j0);
     let lm_num = which::absorbed(&score.projected, e_num);

@@ -28,7 +28,10 @@
 //! **Effect coordinates.** An effect parameter with a finite null is fitted as
 //! itself; one with an infinite null (a yield stress never reached) as its
 //! inverse `u = 1/phi` (null `u = 0`), so that the null is a bound the secant
-//! score and the refit can start from. A one-sided coordinate within 1e-4 of
+//! score and the refit can start from. Each coordinate carries its secant
+//! reference, the registry's or, for a stress-valued parameter, a fraction of
+//! the campaign's peak nominal stress ([`Candidate::at_stress`],
+//! [`peak_stress_mpa`]). A one-sided coordinate within 1e-4 of
 //! its reference distance from the null ([`DEADBAND`]) runs as the null: the
 //! effect of such values is far below any noise, and a refit creeping toward the
 //! null would otherwise spend runs on friction coefficients of order 1e-7 (the
@@ -44,6 +47,7 @@ use fem_core::press::{
 };
 use nalgebra::DMatrix;
 use rayon::prelude::*;
+use wagashi_io::bundle::Shape;
 use wagashi_io::{Bundle, MaterialSpec};
 
 use crate::lsq::{EvalError, Evaluation, LeastSquares, ParameterSpec};
@@ -159,6 +163,10 @@ pub struct Coord {
     pub index: usize,
     /// Fitted as `1/phi` (infinite null).
     pub inverse: bool,
+    /// The secant reference value of the parameter (not the coordinate): the
+    /// registry's, scaled to the campaign's stress level for stress-valued
+    /// parameters ([`Candidate::at_stress`]).
+    pub reference: f64,
 }
 
 impl Coord {
@@ -174,9 +182,9 @@ impl Coord {
     /// The coordinate of the secant reference.
     pub fn reference(&self) -> f64 {
         if self.inverse {
-            1.0 / self.spec.reference
+            1.0 / self.reference
         } else {
-            self.spec.reference
+            self.reference
         }
     }
 
@@ -224,14 +232,27 @@ pub struct Candidate {
 }
 
 impl Candidate {
-    /// The candidate of `effect`.
+    /// The candidate of `effect` with the registry's static references.
     pub fn new(effect: EffectId) -> Self {
+        Self::at_stress(effect, None)
+    }
+
+    /// The candidate of `effect` on a campaign of peak nominal stress
+    /// `sigma_peak_mpa` ([`peak_stress_mpa`]): stress-valued parameters take
+    /// their references from it ([`ParamSpec::reference_at`]), the others (and
+    /// all of them with `None`) the registry's static ones.
+    pub fn at_stress(effect: EffectId, sigma_peak_mpa: Option<f64>) -> Self {
         let coords = effect
             .params()
             .iter()
             .enumerate()
             .filter(|(_, p)| !p.nuisance)
-            .map(|(index, &spec)| Coord { spec, index, inverse: spec.null.is_infinite() })
+            .map(|(index, &spec)| Coord {
+                spec,
+                index,
+                inverse: spec.null.is_infinite(),
+                reference: spec.reference_at(sigma_peak_mpa),
+            })
             .collect();
         Self { effect, coords }
     }
@@ -332,6 +353,39 @@ fn phase_at(waypoints: &[[f64; 2]], release_s: f64, t: f64) -> Phase {
         _ if waypoints.windows(2).any(|w| w[1][1] > w[0][1]) => Phase::Release,
         _ => Phase::PreContact,
     }
+}
+
+/// The campaign's peak nominal stress [MPa], the stress level that
+/// stress-valued effect references follow ([`Candidate::at_stress`]): over the
+/// bundles with a measured force, the largest of (largest compressive force /
+/// nominal loaded area), the area being the block's `W x T` (the plate's face;
+/// in 2D the width times the thickness) or the cylinder's `pi r^2`. `None` when
+/// no bundle has both (markers only, or a `surface` specimen, whose loaded area
+/// the bundle does not state): the registry's static references then stand.
+///
+/// Why the measured force and not the baseline's stress field: it is the data
+/// itself, known before any fit, the same for every candidate, and does not
+/// move with the baseline's convergence or the mesh (a peak of the element
+/// stresses would, at the glued corners); the noise moves it by about sigma /
+/// F_peak (0.5 % in the seed's press), far below what a secant reference needs.
+pub fn peak_stress_mpa(bundles: &[Bundle]) -> Option<f64> {
+    bundles
+        .iter()
+        .filter_map(|b| {
+            let specimen = &b.experiment.specimen;
+            let area = match specimen.shape {
+                Shape::Block => {
+                    let s = specimen.size_mm.as_ref()?;
+                    s.first()? * s.get(2)?
+                }
+                Shape::Cylinder => std::f64::consts::PI * specimen.radius_mm?.powi(2),
+                Shape::Surface => return None,
+            };
+            let peak = b.force.as_ref()?.samples.iter().map(|s| s.force_n).fold(f64::NEG_INFINITY, f64::max);
+            let stress = peak / area;
+            (area > 0.0 && stress.is_finite() && stress > 0.0).then_some(stress)
+        })
+        .fold(None, |acc: Option<f64>, s| Some(acc.map_or(s, |a| a.max(s))))
 }
 
 /// Fewest no-contact force samples from which the AR(1) noise is estimated.

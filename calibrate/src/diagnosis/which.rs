@@ -2,7 +2,9 @@
 //! refit (diagnosis-details.md §5.4).
 //!
 //! **Score.** The effect's residual derivative `J_phi` at the baseline is a
-//! secant from the null to the registry's reference value for a one-sided
+//! secant from the null to the coordinate's reference value ([`Coord::reference`]:
+//! the registry's, or for a stress-valued parameter a fraction of the
+//! campaign's peak nominal stress, `Candidate::at_stress`) for a one-sided
 //! (boundary) parameter, and a small forward difference otherwise, both on the
 //! baseline's frozen discretisation. `J~ = (I - P_theta) J_phi` with `P_theta`
 //! the projector on the baseline Jacobian's columns, `s = J~^T r`,
@@ -13,9 +15,12 @@
 //! the remaining one-sided count.
 //!
 //! **Refit.** `(theta, u)` by Levenberg-Marquardt from `(theta0, clip(EPC))`
-//! (clipped to the bounds and to the registry's plausible range), and for
+//! (clipped to the bounds and to the registry's plausible range widened to
+//! hold the reference), and for
 //! non-smooth effects (contact, thresholds) also from `{0.3, 1, 3}` times the
-//! reference, for other boundary nulls also from the reference; the best start
+//! reference (in the coordinate: for the slider's `u = 1/sigma_y` with its
+//! reference `0.5 sigma_peak`, yield stresses of 1.7, 0.5 and 0.17
+//! `sigma_peak`), for other boundary nulls also from the reference; the best start
 //! is kept. The extra starts of non-smooth effects are screens of at most 15
 //! iterations. The extension is nested, so a refit
 //! that ends above the baseline's objective falls back to the null (`LR = 0`).
@@ -217,8 +222,11 @@ pub fn refit(
             if c.inverse {
                 return u;
             }
+            // A stress-scaled reference may lie outside the registry's range for
+            // foods (a material far softer than its 1 kPa low end): widened to it.
             let [p_lo, p_hi] = c.spec.plausible;
-            u.clamp(p_lo.min(c.null()), p_hi.max(c.null()))
+            let (lo, hi) = (p_lo.min(c.null()).min(c.reference()), p_hi.max(c.null()).max(c.reference()));
+            u.clamp(lo, hi)
         })
         .collect();
     let mut starts = vec![start_of(epc_start.clone())];

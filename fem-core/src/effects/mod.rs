@@ -390,5 +390,5 @@
 mod registry;
 mod set;
 
-pub use registry::{EffectId, HookPoint, ParamSpec};
+pub use registry::{EffectId, HookPoint, ParamSpec, StressScale};
 pub use set::{EffectError, Effects, AGE_KEY};
