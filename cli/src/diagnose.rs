@@ -6,7 +6,7 @@
 //!
 //! | file             | what                                                                 |
 //! |------------------|----------------------------------------------------------------------|
-//! | `diagnosis.json` | `verdict` (label, effects, sentence, separating experiment), `where` (one entry per cell), `candidates` (per effect id: score, LR, p-value, held-out gain, gap closure with its 90 % interval, fitted effect parameters), `numerical_error` (noise units), `marker_shapes` (per trial, the last photograph of the hold and of the recovery: measured, baseline and with the effect), the baseline, the candidates not evaluated and why, warnings |
+//! | `diagnosis.json` | `verdict` (label, effects, sentence, separating experiment), `where` (one entry per cell), `candidates` (per effect id: score, LR, p-value, held-out gain, gap closure with its 90 % interval, fitted effect parameters), `numerical_error` (noise units), `peak_stress_MPa` (the campaign's stress level, which the stress-valued effects' references follow), `marker_shapes` (per trial, the last photograph of the hold and of the recovery: measured, baseline and with the effect), the baseline, the candidates not evaluated and why, warnings |
 //! | `report.html`    | one self-contained page (inline SVG, no network): the verdict, measured against simulated force per trial and phase before and after the named effect, the marker shapes before and after (misfits magnified, RMS in mm), the WHERE heat table, the candidates as a bar chart, the recommended next experiment |
 //! | `summary.json`   | a short summary (and the mark of a wagashi output folder for `--force`) |
 
@@ -301,6 +301,7 @@ pub fn diagnosis_json(d: &Diagnosis) -> Value {
         "where": cells,
         "candidates": candidates,
         "not_evaluated": not_evaluated,
+        "peak_stress_MPa": d.peak_stress_mpa,
         "force_noise": d.force_noise.iter().map(|(t, s, r)| json!({"trial": t, "sigma_N": s, "lag1_correlation": r})).collect::<Vec<_>>(),
         "numerical_error": {
             "refinement": d.numerical_error.refinement,

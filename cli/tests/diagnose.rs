@@ -142,6 +142,13 @@ fn a_withheld_machine_compliance_is_named() {
     }
     assert!(cells.iter().any(|c| c["flagged"] == true), "a gap this size flags a cell");
     assert!(d["numerical_error"]["chi2_noise_units"].is_number());
+    // The campaign's stress level: the largest measured force over the 20 x 10 mm top face.
+    let peak = (0..3)
+        .flat_map(|k| read_force_csv(&cwd.join(format!("meas{k}/force.csv"))))
+        .map(|(_, f)| f)
+        .fold(f64::MIN, f64::max);
+    let sigma = d["peak_stress_MPa"].as_f64().unwrap();
+    assert!((sigma - peak / 200.0).abs() < 1e-9 * sigma, "{sigma} MPa against {peak} N / 200 mm^2");
     // Effects the engine does not simulate are listed, not evaluated.
     assert!(d["not_evaluated"]["plastic-slider"].is_string() || d["candidates"]["plastic-slider"].is_object());
     assert!(stdout(&o).contains("verdict: machine-compliance"), "{}", stdout(&o));
