@@ -116,16 +116,18 @@
 //! **Global iteration.** `g K u1 = f_body + f_hist + f_in(e_in1)`: modified Newton
 //! with the step's own linear factor (no new factorization), switching to full
 //! Newton with the assembled consistent tangent when an iteration reduces the
-//! residual by less than half; converged at 1e-12 of the step's force scale; not
-//! converged in 60 iterations: [`crate::press::PressError::NotConverged`], and the
+//! residual by less than half, each Newton step line-searched on the step's convex
+//! potential; converged at 1e-12 of the step's force scale; not
+//! converged in 100 iterations: [`crate::press::PressError::NotConverged`], and the
 //! step is retried from its old state at a quarter of the step (three times). E4's
 //! flags are frozen during the iteration and re-checked at convergence (at most
 //! three passes). Quasi-static integrator only; refused with contact tools (and
 //! `plate-friction`), `machine-compliance` (its exact step needs a step linear in
 //! the plate displacement), two material-point effects at once, and a dashpot law on
-//! a chain without `c3` (an elastic region). The slider's tangent is taken with
-//! at least 1 % of `g` as hardening ([`crate::material::TANGENT_HARDENING`]): with
-//! `H = 0` a yielded cell would make it singular. Perfect plasticity (`H = 0`) in
+//! a chain without `c3` (an elastic region). The slider's tangent is exact down to
+//! `H = 1e-8 g` ([`crate::material::TANGENT_HARDENING`], a floor only so that
+//! `H = 0` does not make it singular; the earlier floor of 1 % of `g` stalled the
+//! steps after an instant release, where `g ~ B2/dt`). Perfect plasticity (`H = 0`) in
 //! an inhomogeneous state can still fail to converge, or flow until a cell
 //! inverts (small strain); both end the run with a typed error naming the step.
 //! The dashpot laws need `g dt/c3` well below 1: true for chains whose `c3`

@@ -78,7 +78,8 @@ pub struct PointUpdate<const S: usize> {
     /// The stress image `tau1` at the step's end (the stress is `C1 tau1`).
     pub tau: SVector<f64, S>,
     /// `d tau1 / d tau_trial` (so `d s1 / d e1 = g C1 T`, symmetric); for a
-    /// slider with `H < TANGENT_HARDENING g` the tangent of `H = TANGENT_HARDENING g`.
+    /// slider with `H < TANGENT_HARDENING g` the tangent of `H = TANGENT_HARDENING g`
+    /// ([`TANGENT_HARDENING`] is 1e-8: in practice only `H = 0`).
     pub tangent: SMatrix<f64, S, S>,
 }
 
@@ -111,8 +112,18 @@ pub fn energy_norm<const S: usize>(c1: &SMatrix<f64, S, S>, x: &SVector<f64, S>)
 pub const MAX_DASHPOT_RATIO: f64 = 0.95;
 
 /// The least hardening, relative to the step factor `g`, the slider's tangent is
-/// taken with (the update itself uses the true `H`, 0 included).
-pub const TANGENT_HARDENING: f64 = 1e-2;
+/// taken with (the update itself uses the true `H`, 0 included). It only keeps
+/// the tangent of perfect plasticity (`H = 0`) from being exactly singular: any
+/// floor above the true `H` makes the tangent too stiff along the flow, and
+/// Newton's method then contracts only by about `1 - H / floor` an iteration.
+/// The floor was `1e-2 g` and stalled the steps right after an instant release:
+/// there `g` is the chain's instantaneous viscosity over the step (`B2 / dt`, 188
+/// to 3000 MPa on the seed's material at dt = 2e-4 to 1e-5 s), `H / g` was 5e-5
+/// to 3e-6, and the iteration stopped at 1e-7 of the force scale after 60
+/// iterations. At `1e-8 g` the tangent is exact for every `H / g` above 1e-8,
+/// and the factorization's conditioning (about `g / H` times the mesh's) stays
+/// far from double precision's limit.
+pub const TANGENT_HARDENING: f64 = 1e-8;
 
 impl InelasticLaw {
     /// Whether the law is at its null (gives back the linear chain exactly).
@@ -165,9 +176,9 @@ impl InelasticLaw {
                 let dl = (sigma - yield_mpa) / (g + h);
                 let de = n * dl;
                 // d(dl n)/dx = n (C1 n)^T / (g + H) + (dl / |x|) (I - n (C1 n)^T). With
-                // little hardening the radial part g H/(g + H) vanishes and a cell makes
-                // the tangent singular: it is taken with H at least TANGENT_HARDENING g
-                // (the Newton iteration then contracts by about that factor).
+                // H = 0 the radial part g H/(g + H) vanishes and a cell makes the tangent
+                // singular: it is taken with H at least TANGENT_HARDENING g (tiny, so that
+                // the tangent is exact for any real hardening; see the constant).
                 let nn = radial(&n);
                 let ht = h.max(TANGENT_HARDENING * g);
                 let d = nn / (g + ht) + (identity - nn) * (dl / sigma);
