@@ -149,11 +149,18 @@ impl Delaunay {
     /// triples, finite or not) that the insertion removed: those between two
     /// tets of its cavity.
     pub fn insert_reporting(&mut self, p: Point, destroyed: &mut Vec<[u32; 3]>) -> u32 {
+        let last = self.last;
+        self.insert_reporting_near(p, last, destroyed)
+    }
+
+    /// [`Self::insert_reporting`] with the location walk starting at the live
+    /// tet `hint` (one near `p`: the walk is then short; see the module docs).
+    pub fn insert_reporting_near(&mut self, p: Point, hint: u32, destroyed: &mut Vec<[u32; 3]>) -> u32 {
         destroyed.clear();
         let i = self.points.len() as u32;
         self.points.push(p);
         self.vertex_tet.push(NONE);
-        let start = self.locate(i);
+        let start = self.locate_from(i, hint);
         if !self.is_ghost(start) {
             for &v in &self.tets[start as usize] {
                 if self.points[v as usize] == p {
@@ -173,7 +180,8 @@ impl Delaunay {
     /// without inserting it; `false` (and nothing listed) when `p` is a vertex already.
     pub fn cavity_faces(&mut self, p: Point, out: &mut Vec<[u32; 3]>) -> bool {
         out.clear();
-        let dug = self.dig_probe(p);
+        let last = self.last;
+        let dug = self.dig_probe(p, last);
         if dug.is_some() {
             self.interior_faces(out);
         }
@@ -183,10 +191,10 @@ impl Delaunay {
 
     /// Pushes `p` as a provisional vertex and digs its cavity: its index, or
     /// `None` (nothing dug) when `p` is a vertex already. The caller pops it.
-    fn dig_probe(&mut self, p: Point) -> Option<u32> {
+    fn dig_probe(&mut self, p: Point, hint: u32) -> Option<u32> {
         let i = self.points.len() as u32;
         self.points.push(p);
-        let start = self.locate(i);
+        let start = self.locate_from(i, hint);
         let duplicate =
             !self.is_ghost(start) && self.tets[start as usize].iter().any(|&v| self.points[v as usize] == p);
         if duplicate {
@@ -201,9 +209,21 @@ impl Delaunay {
     /// the faces it would remove (see [`Self::insert_reporting`]), without
     /// inserting it; `false` (and nothing listed) when `p` is a vertex already.
     pub fn star_of(&mut self, p: Point, star: &mut Vec<[u32; 4]>, destroyed: &mut Vec<[u32; 3]>) -> bool {
+        let last = self.last;
+        self.star_of_near(p, last, star, destroyed)
+    }
+
+    /// [`Self::star_of`] with the location walk starting at the live tet `hint`.
+    pub fn star_of_near(
+        &mut self,
+        p: Point,
+        hint: u32,
+        star: &mut Vec<[u32; 4]>,
+        destroyed: &mut Vec<[u32; 3]>,
+    ) -> bool {
         star.clear();
         destroyed.clear();
-        let dug = self.dig_probe(p);
+        let dug = self.dig_probe(p, hint);
         if let Some(i) = dug {
             self.interior_faces(destroyed);
             for &(t, k, _, _) in &self.boundary {
@@ -228,6 +248,15 @@ impl Delaunay {
                     out.push(f);
                 }
             }
+        }
+    }
+
+    /// A live tet incident to vertex `v` (a start for walks to points near it),
+    /// or the last tet created when `v` is not inserted.
+    pub fn tet_at(&self, v: u32) -> u32 {
+        match self.vertex_tet.get(v as usize) {
+            Some(&t) if t != NONE => t,
+            _ => self.last,
         }
     }
 
@@ -442,10 +471,17 @@ impl Delaunay {
         p
     }
 
-    /// The walk of step 1 (module docs).
+    /// The walk of step 1 (module docs), from the last tet created.
     fn locate(&mut self, p: u32) -> u32 {
+        let last = self.last;
+        self.locate_from(p, last)
+    }
+
+    /// The walk of step 1 from tet `t` (any live tet; a dead one falls back to
+    /// the first live slot).
+    fn locate_from(&mut self, p: u32, t: u32) -> u32 {
         let pp = self.points[p as usize];
-        let mut t = self.last;
+        let mut t = t;
         if self.tets[t as usize] == DEAD {
             t = self.tets.iter().position(|x| *x != DEAD).unwrap_or(0) as u32;
         }

@@ -352,7 +352,14 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
         }
     }
     let delaunay_tets = rec.dt.finite_tets().count();
-    let (tets, num_components) = recover::interior_components(&rec.dt, &rec.face_owner);
+    let (mut tets, num_components) = recover::interior_components(&rec.dt, &rec.face_owner);
+    // In the order of their corners, not of their slots in the
+    // tetrahedralization: the slots depend on where each location walk ended
+    // (a point on a face or edge lies in several tets), which is machinery;
+    // the corners (vertex indices in insertion order, each tet's corner order
+    // inherited from the cavity tet it replaced) do not. Smoothing sums over
+    // stars in cell order, so the output depends on this order.
+    tets.sort_unstable_by_key(|&(_, t, _)| t);
     if tets.is_empty() {
         return Err(ConformingError::Internal { cause: "no tet is inside the surface".into() });
     }

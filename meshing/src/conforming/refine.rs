@@ -33,11 +33,14 @@
 //! The tetrahedralization stays Delaunay and conforming throughout; a budget of
 //! points ends the passes (the mesh is valid whenever they stop).
 
+use super::delaunay::GHOST;
 use super::order::SplitMix;
-use super::recover::{interior_components, Recovery};
+use std::hash::BuildHasherDefault;
+
+use super::recover::{interior_components, Recovery, WordHasher};
 use super::ConformingError;
 use crate::predicates::{cross, dot, sub, Point};
-use crate::quality::tet_quality;
+use crate::quality::dihedral_range_deg;
 
 /// Candidate points per bad tet (the circumcentre and points near it).
 pub const CANDIDATES: usize = 8;
@@ -121,39 +124,51 @@ impl Recovery {
         let start_points = self.dt.points().len();
         let mut star = Vec::new();
         let mut destroyed = Vec::new();
-        let mut skipped = std::collections::HashSet::new();
+        // Never iterated: its hasher cannot reach the output.
+        let mut skipped: std::collections::HashSet<[u32; 4], BuildHasherDefault<WordHasher>> = Default::default();
         // Cap splits at most as many as the points present when refinement
         // starts: on some inputs they would otherwise cascade along the surface.
         let mut caps_left = start_points;
+        // The corners of the tet last found good in each slot of the
+        // tetrahedralization: a pass evaluates only the tets created since
+        // (the passes rescanned every tet, about 1e6 on the armadillo).
+        let mut good: Vec<[u32; 4]> = Vec::new();
         for _pass in 0..64 {
             stats.passes += 1;
             let (inside, _) = interior_components(&self.dt, &self.face_owner);
             let pts = self.dt.points();
-            let mut bad: Vec<(f64, u32, [u32; 4], bool, bool, f64)> = inside
-                .iter()
-                .filter_map(|&(t, v, _)| {
-                    let q = v.map(|i| pts[i as usize]);
-                    let (_, re, vol) = circumsphere(q);
-                    let too_big = vol / bounds.max_volume;
-                    let size = (re / bounds.radius_edge).max(too_big);
-                    let sliver = if bounds.min_dihedral_deg > 0.0 {
-                        let d = tet_quality(&q).min_dihedral_deg;
-                        if d < bounds.min_dihedral_deg {
-                            bounds.min_dihedral_deg / d.max(1e-6)
-                        } else {
-                            0.0
-                        }
+            let mut bad: Vec<(f64, u32, [u32; 4], bool, bool, f64)> = Vec::new();
+            for &(t, v, _) in &inside {
+                // A tet found good in an earlier pass is still there, with
+                // the same corners (refinement never moves a point): good still.
+                if good.get(t as usize) == Some(&v) {
+                    continue;
+                }
+                let q = v.map(|i| pts[i as usize]);
+                let (_, re, vol) = circumsphere(q);
+                let too_big = vol / bounds.max_volume;
+                let size = (re / bounds.radius_edge).max(too_big);
+                let sliver = if bounds.min_dihedral_deg > 0.0 {
+                    let d = dihedral_range_deg(&q).0;
+                    if d < bounds.min_dihedral_deg {
+                        bounds.min_dihedral_deg / d.max(1e-6)
                     } else {
                         0.0
-                    };
-                    let only_sliver = size <= 1.0;
-                    if skipped.contains(&v) {
-                        return None;
                     }
-                    let badness = size.max(sliver);
-                    (badness > 1.0).then_some((badness, t, v, only_sliver, too_big > 1.0, re))
-                })
-                .collect();
+                } else {
+                    0.0
+                };
+                let only_sliver = size <= 1.0;
+                let badness = size.max(sliver);
+                if badness <= 1.0 {
+                    if good.len() <= t as usize {
+                        good.resize(t as usize + 1, [GHOST; 4]);
+                    }
+                    good[t as usize] = v;
+                } else if !skipped.contains(&v) {
+                    bad.push((badness, t, v, only_sliver, too_big > 1.0, re));
+                }
+            }
             stats.bad_left = bad.len();
             if bad.is_empty() {
                 break;
@@ -181,7 +196,7 @@ impl Recovery {
                 } else {
                     ([0, 1, 2].map(|k| (q[0][k] + q[1][k] + q[2][k] + q[3][k]) / 4.0), 0.5 * longest)
                 };
-                let own = tet_quality(&q).min_dihedral_deg;
+                let own = dihedral_range_deg(&q).0;
                 let mut rng = SplitMix(v.iter().fold(0x9E37_79B9u64, |h, &x| h.rotate_left(17) ^ u64::from(x)));
                 let mut best: Option<(f64, Point)> = None;
                 let mut blocked_by: Option<[u32; 3]> = None;
@@ -192,7 +207,7 @@ impl Recovery {
                         k if k < CANDIDATES => near(c, OFF_CENTRE * r, &mut rng),
                         k => off[k - CANDIDATES],
                     };
-                    match self.try_candidate(p, &mut star, &mut destroyed) {
+                    match self.try_candidate(p, t, &mut star, &mut destroyed) {
                         Candidate::Free(quality) => {
                             if best.is_none_or(|(b, _)| quality > b) {
                                 best = Some((quality, p));
@@ -212,7 +227,7 @@ impl Recovery {
                         stats.slivers_skipped += 1;
                     }
                     (Some((_, p)), _) => {
-                        self.insert_free(p)?;
+                        self.insert_free(p, t)?;
                         stats.circumcentres += 1;
                     }
                     // Refine the subfacet the circumcentre encroaches
@@ -337,7 +352,7 @@ impl Recovery {
         // A flat cap (on coplanar input triangles) is removed after refinement
         // (`drop_flat_caps`); splitting its edge would make more flat caps.
         let pts = self.dt.points();
-        if tet_quality(&v.map(|i| pts[i as usize])).min_dihedral_deg < super::FLAT_DEG {
+        if dihedral_range_deg(&v.map(|i| pts[i as usize])).0 < super::FLAT_DEG {
             return None;
         }
         let shared: Vec<u32> = f.iter().copied().filter(|x| g.contains(x)).collect();
@@ -365,9 +380,16 @@ impl Recovery {
 
     /// Whether `p` may be inserted (module docs): its star's smallest dihedral
     /// angle, or the subfacet it blocks on (the one whose equatorial ball holds
-    /// it deepest; ties: lowest key).
-    fn try_candidate(&mut self, p: Point, star: &mut Vec<[u32; 4]>, destroyed: &mut Vec<[u32; 3]>) -> Candidate {
-        if !self.dt.star_of(p, star, destroyed) {
+    /// it deepest; ties: lowest key). The location walk starts at tet `hint`
+    /// (the bad tet, near `p`).
+    fn try_candidate(
+        &mut self,
+        p: Point,
+        hint: u32,
+        star: &mut Vec<[u32; 4]>,
+        destroyed: &mut Vec<[u32; 3]>,
+    ) -> Candidate {
+        if !self.dt.star_of_near(p, hint, star, destroyed) {
             return Candidate::Duplicate;
         }
         let pts = self.dt.points();
@@ -409,7 +431,7 @@ impl Recovery {
         let mut worst = f64::INFINITY;
         for t in star.iter() {
             let q = t.map(|v| if v == n { p } else { pts[v as usize] });
-            worst = worst.min(tet_quality(&q).min_dihedral_deg);
+            worst = worst.min(dihedral_range_deg(&q).0);
         }
         Candidate::Free(worst)
     }
