@@ -13,10 +13,21 @@
 //!
 //! ## Insertion
 //!
-//! 1. **Location**: a visibility walk from the last tet created (stochastic:
-//!    faces tried from a pseudo-random start, so it cannot cycle), stepping across
-//!    any face that has the point strictly on its far side. It ends in a finite
-//!    tet containing the point (closed) or in a ghost tet whose hull face sees it.
+//! 1. **Location**: a visibility walk (stochastic: faces tried from a
+//!    pseudo-random start, so it cannot cycle), stepping across any face that
+//!    has the point strictly on its far side. It ends in a finite tet
+//!    containing the point (closed) or in a ghost tet whose hull face sees it.
+//!    It starts from the last tet created (right for the BRIO order of the
+//!    initial points) or, in the `_near` variants, from a tet the caller knows
+//!    to be near the point: refinement's candidates lie about a bad tet and
+//!    boundary recovery's Steiner points next to a subsegment's or subfacet's
+//!    corner, while the last tet created can be anywhere. Walking from the
+//!    last tet took 36 % of the armadillo's run (a walk crosses about
+//!    `n^(1/3)` tets of `n`, some 100 at 1e6 tets, for each of the ten
+//!    candidate points of a bad tet); from the hint it is a few steps. Where a
+//!    walk ends changes nothing but slot numbers when the point lies on a face
+//!    or edge (the cavity is the same set of tets; see `conforming`'s module
+//!    docs for why the output does not depend on slot numbers).
 //! 2. **Cavity**: the tets in conflict with the point (their perturbed
 //!    circumsphere, or for a ghost tet the open half-space beyond its hull face
 //!    plus, on its plane, the perturbed circumcircle) grown by a search from the
@@ -32,8 +43,12 @@
 
 #![allow(clippy::needless_range_loop)] // Corner loops index several parallel arrays.
 
+use std::collections::HashMap;
+use std::hash::BuildHasherDefault;
+
 use super::order::{brio_hilbert, SplitMix};
-use super::perturb::{incircle_perturbed, insphere_perturbed};
+use super::perturb::{incircle_perturbed_at, insphere_perturbed_at};
+use super::recover::WordHasher;
 use crate::predicates::{orient3d, Point};
 
 /// The vertex at infinity of ghost tets.
@@ -70,6 +85,17 @@ pub enum DelaunayError {
         /// How many distinct points there are.
         count: usize,
     },
+}
+
+/// Scratch of [`Delaunay::probe_star`], one per thread.
+#[derive(Debug, Default, Clone)]
+pub struct ProbeScratch {
+    /// Tets tested: in conflict or not.
+    inside: HashMap<u32, bool, BuildHasherDefault<WordHasher>>,
+    stack: Vec<u32>,
+    cavity: Vec<u32>,
+    /// Cavity boundary faces: cavity tet, face index.
+    boundary: Vec<(u32, usize)>,
 }
 
 /// A Delaunay tetrahedralization of a growing point set (see the module docs).
@@ -234,6 +260,74 @@ impl Delaunay {
         }
         self.points.pop();
         dug.is_some()
+    }
+
+    /// [`Self::star_of_near`] without changing the tetrahedralization or its
+    /// scratch (`&self`: probes of several points can run in parallel, each
+    /// thread with its own `scratch`). The walk's face order comes from a
+    /// generator seeded by `hint`; where it ends does not change the lists,
+    /// only their order (the cavity of a point is one set of tets). The
+    /// star's tets hold the point as vertex `self.points().len()`.
+    pub fn probe_star(
+        &self,
+        p: Point,
+        hint: u32,
+        scratch: &mut ProbeScratch,
+        star: &mut Vec<[u32; 4]>,
+        destroyed: &mut Vec<[u32; 3]>,
+    ) -> bool {
+        star.clear();
+        destroyed.clear();
+        let start = self.walk(p, hint, &mut SplitMix(0x9B0B ^ u64::from(hint)));
+        if !self.is_ghost(start) && self.tets[start as usize].iter().any(|&v| self.points[v as usize] == p) {
+            return false;
+        }
+        let ProbeScratch { inside, stack, cavity, boundary } = scratch;
+        inside.clear();
+        stack.clear();
+        cavity.clear();
+        boundary.clear();
+        inside.insert(start, true);
+        cavity.push(start);
+        stack.push(start);
+        while let Some(t) = stack.pop() {
+            for i in 0..4 {
+                let n = self.nbrs[t as usize][i];
+                let conflict = match inside.get(&n) {
+                    Some(&c) => c,
+                    None => {
+                        let c = self.in_conflict_at(n, p);
+                        inside.insert(n, c);
+                        if c {
+                            cavity.push(n);
+                            stack.push(n);
+                        }
+                        c
+                    }
+                };
+                if !conflict {
+                    boundary.push((t, i));
+                }
+            }
+        }
+        for &t in cavity.iter() {
+            for i in 0..4 {
+                let n = self.nbrs[t as usize][i];
+                if n > t && inside.get(&n) == Some(&true) {
+                    let v = self.tets[t as usize];
+                    let mut f = FACE[i].map(|j| v[j]);
+                    f.sort_unstable();
+                    destroyed.push(f);
+                }
+            }
+        }
+        let new = self.points.len() as u32;
+        for &(t, i) in boundary.iter() {
+            let mut c = self.tets[t as usize];
+            c[i] = new;
+            star.push(c);
+        }
+        true
     }
 
     /// After `dig_cavity`: the faces between two cavity tets.
@@ -480,7 +574,14 @@ impl Delaunay {
     /// The walk of step 1 from tet `t` (any live tet; a dead one falls back to
     /// the first live slot).
     fn locate_from(&mut self, p: u32, t: u32) -> u32 {
-        let pp = self.points[p as usize];
+        let mut rng = self.rng.clone();
+        let t = self.walk(self.points[p as usize], t, &mut rng);
+        self.rng = rng;
+        t
+    }
+
+    /// The walk to point `pp` from tet `t`, its face order drawn from `rng`.
+    fn walk(&self, pp: Point, t: u32, rng: &mut SplitMix) -> u32 {
         let mut t = t;
         if self.tets[t as usize] == DEAD {
             t = self.tets.iter().position(|x| *x != DEAD).unwrap_or(0) as u32;
@@ -494,7 +595,7 @@ impl Delaunay {
             if v.contains(&GHOST) {
                 return t;
             }
-            let r = (self.rng.next_u64() & 3) as usize;
+            let r = (rng.next_u64() & 3) as usize;
             for k in 0..4 {
                 let i = (r + k) & 3;
                 let f = FACE[i];
@@ -509,17 +610,22 @@ impl Delaunay {
     }
 
     fn in_conflict(&self, t: u32, p: u32) -> bool {
+        self.in_conflict_at(t, self.points[p as usize])
+    }
+
+    /// Whether tet `t` is in conflict with the point `pp` (module docs, step 2).
+    fn in_conflict_at(&self, t: u32, pp: Point) -> bool {
         let v = self.tets[t as usize];
         if let Some(gi) = v.iter().position(|&x| x == GHOST) {
             let f = FACE[gi].map(|j| v[j]);
             let q = |j: usize| self.points[f[j] as usize];
-            let o = orient3d(q(0), q(1), q(2), self.points[p as usize]);
+            let o = orient3d(q(0), q(1), q(2), pp);
             if o != 0 {
                 return o > 0;
             }
-            incircle_perturbed(&self.points, f, p) > 0
+            incircle_perturbed_at(&self.points, f, pp) > 0
         } else {
-            insphere_perturbed(&self.points, v, p) > 0
+            insphere_perturbed_at(&self.points, v, pp) > 0
         }
     }
 

@@ -73,6 +73,9 @@ pub(crate) struct Recovery {
     destroyed: Vec<[u32; 3]>,
     /// What made each Steiner point (for messages): "edge", "triangle", "interior".
     kinds: Vec<&'static str>,
+    /// Whether each Steiner point lies on the input surface (kind "edge" or
+    /// "triangle"): only those and input vertices can be corners of subfacets.
+    on_surface: Vec<bool>,
     /// The kind of the next point added.
     pub next_kind: &'static str,
     /// Whether the last point refused was a duplicate of a vertex (the
@@ -158,6 +161,7 @@ impl Recovery {
             pending: BTreeSet::new(),
             destroyed: Vec::new(),
             kinds: Vec::new(),
+            on_surface: Vec::new(),
             last_duplicate: false,
             recover_limit: usize::MAX,
             next_kind: "edge",
@@ -223,6 +227,7 @@ impl Recovery {
             });
         }
         self.kinds.push(self.next_kind);
+        self.on_surface.push(self.next_kind != "interior");
         Ok(v)
     }
 
@@ -269,6 +274,14 @@ impl Recovery {
             self.pending.insert(f);
         }
         Ok(())
+    }
+
+    /// Whether vertex `v` lies on the input surface (an input vertex or a
+    /// Steiner point on an input edge or triangle): a face with a corner that
+    /// does not (or a ghost corner) is no subfacet, with no map look-up.
+    pub fn on_surface(&self, v: u32) -> bool {
+        let first = self.num_input();
+        (v as usize) < first || self.on_surface.get((v as usize).wrapping_sub(first)).copied().unwrap_or(false)
     }
 
     /// The number of input vertices (the first points of the tetrahedralization).
