@@ -87,6 +87,17 @@ pub enum DelaunayError {
     },
 }
 
+/// What [`Delaunay::probe_star`] found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Probe {
+    /// The point is a vertex already: nothing listed.
+    Duplicate,
+    /// The caller's `stop` said yes to this face of the cavity: lists incomplete.
+    Stopped([u32; 3]),
+    /// The star and the removed faces are listed.
+    Star,
+}
+
 /// Scratch of [`Delaunay::probe_star`], one per thread.
 #[derive(Debug, Default, Clone)]
 pub struct ProbeScratch {
@@ -268,6 +279,13 @@ impl Delaunay {
     /// generator seeded by `hint`; where it ends does not change the lists,
     /// only their order (the cavity of a point is one set of tets). The
     /// star's tets hold the point as vertex `self.points().len()`.
+    ///
+    /// `stop` is asked about each face found between two tets of the cavity
+    /// (sorted corners) as the cavity grows: when it says yes the probe ends
+    /// there ([`Probe::Stopped`], the lists incomplete). A caller that only
+    /// needs to know whether the insertion would remove some face of a kind
+    /// (a subfacet) so saves digging the rest of the cavity, which for a point
+    /// beyond the boundary spreads over the large tets outside the domain.
     pub fn probe_star(
         &self,
         p: Point,
@@ -275,12 +293,13 @@ impl Delaunay {
         scratch: &mut ProbeScratch,
         star: &mut Vec<[u32; 4]>,
         destroyed: &mut Vec<[u32; 3]>,
-    ) -> bool {
+        stop: impl Fn([u32; 3]) -> bool,
+    ) -> Probe {
         star.clear();
         destroyed.clear();
         let start = self.walk(p, hint, &mut SplitMix(0x9B0B ^ u64::from(hint)));
         if !self.is_ghost(start) && self.tets[start as usize].iter().any(|&v| self.points[v as usize] == p) {
-            return false;
+            return Probe::Duplicate;
         }
         let ProbeScratch { inside, stack, cavity, boundary } = scratch;
         inside.clear();
@@ -307,6 +326,13 @@ impl Delaunay {
                 };
                 if !conflict {
                     boundary.push((t, i));
+                } else {
+                    let v = self.tets[t as usize];
+                    let mut f = FACE[i].map(|j| v[j]);
+                    f.sort_unstable();
+                    if stop(f) {
+                        return Probe::Stopped(f);
+                    }
                 }
             }
         }
@@ -327,7 +353,7 @@ impl Delaunay {
             c[i] = new;
             star.push(c);
         }
-        true
+        Probe::Star
     }
 
     /// After `dig_cavity`: the faces between two cavity tets.

@@ -181,7 +181,7 @@ use fem_core::mesh::TetMesh;
 use serde::Serialize;
 use thiserror::Error;
 
-pub use delaunay::{Delaunay, DelaunayError, ProbeScratch, FACE, GHOST};
+pub use delaunay::{Delaunay, DelaunayError, Probe, ProbeScratch, FACE, GHOST};
 pub use perturb::insphere;
 pub use refine::RefineStats;
 pub use smooth::SmoothStats;

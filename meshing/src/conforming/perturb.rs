@@ -158,7 +158,7 @@ mod tests {
                 if t.contains(&e) {
                     continue;
                 }
-                let s = insphere_perturbed(&pts, t, e);
+                let s = insphere_perturbed_at(&pts, t, pts[e as usize]);
                 assert_ne!(s, 0);
                 // Swapping the roles: e replaces the corner x, x is tested.
                 for k in 0..4 {
@@ -171,7 +171,7 @@ mod tests {
                     }
                     // The lifted five points: x inside sphere(u) iff e outside sphere(t)
                     // when e and x are on the same side of their common face.
-                    assert_eq!(insphere_perturbed(&pts, u, x), -s, "t {t:?} e {e} k {k}");
+                    assert_eq!(insphere_perturbed_at(&pts, u, pts[x as usize]), -s, "t {t:?} e {e} k {k}");
                 }
             }
         }

@@ -34,7 +34,7 @@
 //! The tetrahedralization stays Delaunay and conforming throughout; a budget of
 //! points ends the passes (the mesh is valid whenever they stop).
 
-use super::delaunay::{ProbeScratch, GHOST};
+use super::delaunay::{Probe, ProbeScratch, GHOST};
 use super::order::SplitMix;
 use std::cell::RefCell;
 use std::hash::BuildHasherDefault;
@@ -218,12 +218,17 @@ impl Recovery {
                 // so they are found in parallel and read in candidate order:
                 // the same choice whatever the number of threads.
                 let this = &*self;
+                // Only the circumcentre's blocking subfacet is used (to
+                // refine it); the other candidates need only know whether
+                // they are free, and their probes stop at the first subfacet
+                // they would remove.
                 let verdicts: Vec<Candidate> = candidates
                     .par_iter()
-                    .map(|&p| {
+                    .enumerate()
+                    .map(|(k, &p)| {
                         PROBE.with(|s| {
                             let (scratch, star, destroyed) = &mut *s.borrow_mut();
-                            this.try_candidate(p, t, scratch, star, destroyed)
+                            this.try_candidate(p, t, k > 0, scratch, star, destroyed)
                         })
                     })
                     .collect();
@@ -403,16 +408,24 @@ impl Recovery {
     /// angle, or the subfacet it blocks on (the one whose equatorial ball holds
     /// it deepest; ties: lowest key). The location walk starts at tet `hint`
     /// (the bad tet, near `p`).
+    ///
+    /// With `first_blocking`, the subfacet reported for a blocked candidate
+    /// is the first removed one the probe meets, not the deepest: whether the
+    /// candidate is free is the same.
     fn try_candidate(
         &self,
         p: Point,
         hint: u32,
+        first_blocking: bool,
         scratch: &mut ProbeScratch,
         star: &mut Vec<[u32; 4]>,
         destroyed: &mut Vec<[u32; 3]>,
     ) -> Candidate {
-        if !self.dt.probe_star(p, hint, scratch, star, destroyed) {
-            return Candidate::Duplicate;
+        let subfacet = |f: [u32; 3]| f.iter().all(|&v| self.on_surface(v)) && self.face_owner.contains_key(&f);
+        match self.dt.probe_star(p, hint, scratch, star, destroyed, |f| first_blocking && subfacet(f)) {
+            Probe::Duplicate => return Candidate::Duplicate,
+            Probe::Stopped(f) => return Candidate::Blocked(f),
+            Probe::Star => {}
         }
         let pts = self.dt.points();
         let n = pts.len() as u32;
