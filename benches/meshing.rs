@@ -68,7 +68,9 @@ fn parse_off(text: &str) -> Option<Surface> {
 /// The bench models that are present: name, surface, size [mm].
 fn models() -> Vec<(&'static str, Surface, f64)> {
     let mut out = Vec::new();
-    let read = |path: &str| wagashi_io::surface::read_surface(path, &wagashi_io::surface::SurfaceOptions::default()).map(|s| s.surface);
+    let read = |path: &str| {
+        wagashi_io::surface::read_surface(path, &wagashi_io::surface::SurfaceOptions::default()).map(|s| s.surface)
+    };
     match read("../shared/data/meshes/npm_bunny.obj") {
         Ok(s) => out.push(("bunny_0.3", s, 0.3)),
         Err(e) => eprintln!("bunny skipped: {e}"),

@@ -474,9 +474,12 @@ impl Recovery {
     }
 }
 
+/// A thread's scratch for `try_candidate`: the probe's, the star, the removed faces.
+type CandidateScratch = (ProbeScratch, Vec<[u32; 4]>, Vec<[u32; 3]>);
+
 thread_local! {
     /// Each thread's scratch for `try_candidate`.
-    static PROBE: RefCell<(ProbeScratch, Vec<[u32; 4]>, Vec<[u32; 3]>)> = RefCell::default();
+    static PROBE: RefCell<CandidateScratch> = RefCell::default();
 }
 
 /// What inserting a candidate point would do.
