@@ -100,7 +100,10 @@
 //!    boundary stays exact.
 //!
 //! Everything is deterministic (candidate points come from generators seeded by
-//! the tet's or vertex's indices) and single-threaded. The output's cells are
+//! the tet's or vertex's indices). The one parallel step is the probing of a
+//! bad tet's candidate points (`refine.rs`): each verdict is a function of
+//! the tetrahedralization and the point, read in candidate order, so the
+//! result does not depend on the number of threads. The output's cells are
 //! sorted by their corners (vertex indices, in insertion order), not taken in
 //! the order of their slots in the tetrahedralization: which slot a new tet
 //! gets depends on where the location walk of its point ended when the point
