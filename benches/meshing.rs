@@ -5,10 +5,21 @@
 //!   random points in the unit cube (BRIO/Hilbert order, exact perturbed predicates).
 //! - `delaunay/grid_46`: a 46^3 grid (97 336 points, every cube's corners
 //!   cospherical): the fully degenerate case, decided by the perturbation.
+//! - `conforming/...`: the whole conforming mesher (`conforming_mesh`, default
+//!   quality bounds) at the sizes of the TetGen comparison
+//!   (`meshing/tests/tetgen_golden.rs`): the shared Stanford bunny at 0.3 mm,
+//!   and the CAD models from Debian packages, CGAL's fandisk at 0.05 mm
+//!   (`libcgal-demo`'s `data.tar.gz`, read with `tar`) and Netgen's hinge at
+//!   2 mm (`netgen-doc`); a model whose package is absent is skipped with a
+//!   message. TetGen's times for the same runs are in BENCHMARKS.md.
+
+use std::path::Path;
+use std::process::Command;
+use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use meshing::conforming::Delaunay;
-use std::time::Duration;
+use meshing::conforming::{conforming_mesh, ConformingOptions, Delaunay};
+use meshing::Surface;
 
 fn random_points(n: usize) -> Vec<[f64; 3]> {
     let mut s = 0x1234_5678_u64;
@@ -34,5 +45,65 @@ fn delaunay(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, delaunay);
+/// An OFF file's polygons as triangle fans, one region.
+fn parse_off(text: &str) -> Option<Surface> {
+    let mut tok = text.lines().map(|l| l.split('#').next().unwrap_or("")).flat_map(str::split_whitespace).skip(1);
+    let mut num = || tok.next()?.parse::<f64>().ok();
+    let (nv, nf, _) = (num()? as usize, num()? as usize, num()?);
+    let mut s = Surface { region_names: vec!["default".into()], ..Surface::default() };
+    for _ in 0..nv {
+        s.vertices.push([num()?, num()?, num()?]);
+    }
+    for _ in 0..nf {
+        let n = num()? as usize;
+        let c: Vec<u32> = (0..n).map(|_| num().map(|x| x as u32)).collect::<Option<_>>()?;
+        for k in 1..n.saturating_sub(1) {
+            s.triangles.push([c[0], c[k], c[k + 1]]);
+            s.triangle_regions.push(0);
+        }
+    }
+    Some(s)
+}
+
+/// The bench models that are present: name, surface, size [mm].
+fn models() -> Vec<(&'static str, Surface, f64)> {
+    let mut out = Vec::new();
+    let read = |path: &str| {
+        wagashi_io::surface::read_surface(path, &wagashi_io::surface::SurfaceOptions::default()).map(|s| s.surface)
+    };
+    match read("../shared/data/meshes/npm_bunny.obj") {
+        Ok(s) => out.push(("bunny_0.3", s, 0.3)),
+        Err(e) => eprintln!("bunny skipped: {e}"),
+    }
+    let cgal = "/usr/share/doc/libcgal-dev/data.tar.gz";
+    let fandisk = Path::new(cgal)
+        .exists()
+        .then(|| Command::new("tar").args(["-xzOf", cgal, "data/meshes/fandisk.off"]).output().ok())
+        .flatten()
+        .filter(|o| o.status.success())
+        .and_then(|o| parse_off(&String::from_utf8_lossy(&o.stdout)));
+    match fandisk {
+        Some(s) => out.push(("fandisk_0.05", s, 0.05)),
+        None => eprintln!("fandisk skipped: {cgal} absent or unreadable (apt-get install libcgal-demo)"),
+    }
+    match read("/usr/share/doc/netgen/examples/hinge.stl") {
+        Ok(s) => out.push(("hinge_2", s, 2.0)),
+        Err(e) => eprintln!("hinge skipped (apt-get install netgen-doc): {e}"),
+    }
+    out
+}
+
+fn conforming(c: &mut Criterion) {
+    let mut g = c.benchmark_group("conforming");
+    g.sample_size(10).measurement_time(Duration::from_secs(30));
+    for (name, surface, h) in models() {
+        let options = ConformingOptions::new(h);
+        g.bench_function(name, |b| {
+            b.iter(|| conforming_mesh(&surface, &options).map(|m| m.mesh.cells.len()).unwrap_or(0))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, delaunay, conforming);
 criterion_main!(benches);

@@ -14,6 +14,8 @@
 //! corners and the `PROBE_TOP` (30) tets of largest ratio with the kinds of
 //! their corners (I input vertex, S on a sharp input edge, F on the surface,
 //! V inside) and of their shortest edge's ends.
+//! The mesh's fingerprints (hashes of its nodes and cells, with the cells
+//! sorted and as output) tell identical meshes apart from merely similar ones.
 //!
 //! ```text
 //! ```
@@ -92,15 +94,18 @@ fn main() {
     let defaults = ConformingOptions::default();
     let (q, sliver) = (arg(3).unwrap_or(defaults.radius_edge), arg(4).unwrap_or(defaults.sliver_deg));
     let (s, sizes) = match args.get(1) {
-        Some(path) if path.ends_with(".obj") && std::env::var("PROBE_REPAIR").is_ok() => (
-            meshing::repair::repair(&read_obj(path), &meshing::repair::RepairOptions::default())
-                .unwrap_or_else(|e| panic!("{path}: {e}"))
-                .surface,
-            vec![arg(2)],
-        ),
         Some(path) if path.ends_with(".obj") => (read_obj(path), vec![arg(2)]),
         Some(path) => (read_off_or_stl(path), vec![arg(2)]),
         None => (Surface::cuboid([0.0; 3], [10.0, 20.0, 5.0], "box"), vec![None, Some(4.0), Some(2.0), Some(1.0)]),
+    };
+    // `PROBE_REPAIR=1`: repaired first (the shared two-boxes fixture needs it;
+    // any format).
+    let s = if std::env::var_os("PROBE_REPAIR").is_some() {
+        meshing::repair::repair(&s, &meshing::repair::RepairOptions::default())
+            .unwrap_or_else(|e| panic!("{e}"))
+            .surface
+    } else {
+        s
     };
     for h in sizes {
         let o = ConformingOptions { size_mm: h, radius_edge: q, sliver_deg: sliver, ..defaults.clone() };
@@ -111,6 +116,10 @@ fn main() {
                 if let Some(n) = std::env::var("PROBE_WORST").ok().and_then(|x| x.parse().ok()) {
                     diagnose(&m.mesh, &s, n);
                 }
+                let (canonical, ordered, cells) = fingerprints(&m.mesh);
+                println!(
+                    "mesh fingerprint {canonical:016x} (cells sorted), {ordered:016x} (as output), {cells:016x} (sorted cells alone)"
+                );
                 let r = report(&m.mesh, &s, t);
                 println!(
                     "h {h:?} q {q} sliver {sliver}: {} tets, dihedral {:.2}..{:.2}, <10deg {:.3} %, r-e max {:.2} p99.9 {:.3}, \
@@ -129,6 +138,26 @@ fn main() {
             Err(e) => println!("h {h:?}: {e}"),
         }
     }
+}
+
+/// FNV-1a hashes of the mesh (node coordinates' bits, cells with their
+/// regions): with the cells sorted (the same mesh whatever their order) and as
+/// output (byte-identical meshes), and of the sorted cells alone (the
+/// connectivity, which smoothing does not change).
+fn fingerprints(mesh: &fem_core::mesh::TetMesh) -> (u64, u64, u64) {
+    let fnv = |words: &mut dyn Iterator<Item = u64>| {
+        words.fold(0xcbf2_9ce4_8422_2325u64, |h, w| (h ^ w).wrapping_mul(0x0100_0000_01b3))
+    };
+    let mut cells: Vec<([u32; 4], u16)> = mesh.cells.iter().copied().zip(mesh.cell_regions.iter().copied()).collect();
+    let nodes = || mesh.nodes.iter().flat_map(|p| p.map(f64::to_bits));
+    let words = |cells: &[([u32; 4], u16)]| {
+        let c: Vec<u64> =
+            cells.iter().flat_map(|(c, r)| c.iter().map(|&v| u64::from(v)).chain([u64::from(*r)])).collect();
+        c
+    };
+    let ordered = fnv(&mut nodes().chain(words(&cells)));
+    cells.sort_unstable();
+    (fnv(&mut nodes().chain(words(&cells))), ordered, fnv(&mut words(&cells).into_iter()))
 }
 
 fn seg_dist(p: [f64; 3], a: [f64; 3], b: [f64; 3]) -> f64 {

@@ -107,8 +107,8 @@ pub fn tet_quality(p: &[P; 4]) -> TetQuality {
     let a = sub(p[1], p[0]);
     let b = sub(p[2], p[0]);
     let c = sub(p[3], p[0]);
+    let volume = tet_volume(p);
     let det = dot(a, cross(b, c));
-    let volume = det / 6.0;
     let num = [
         dot(a, a) * cross(b, c)[0] + dot(b, b) * cross(c, a)[0] + dot(c, c) * cross(a, b)[0],
         dot(a, a) * cross(b, c)[1] + dot(b, b) * cross(c, a)[1] + dot(c, c) * cross(a, b)[1],
@@ -125,6 +125,50 @@ pub fn tet_quality(p: &[P; 4]) -> TetQuality {
     let radius_ratio = if circumradius.is_finite() && circumradius > 0.0 { 3.0 * inradius / circumradius } else { 0.0 };
     let radius_edge = if l_min > 0.0 { circumradius / l_min } else { f64::INFINITY };
     TetQuality { min_dihedral_deg: min_d, max_dihedral_deg: max_d, radius_edge, radius_ratio, volume_mm3: volume }
+}
+
+/// The signed volume [mm^3] of the tet with corners `p` (`tet_quality`'s `volume_mm3`).
+pub fn tet_volume(p: &[P; 4]) -> f64 {
+    dot(sub(p[1], p[0]), cross(sub(p[2], p[0]), sub(p[3], p[0]))) / 6.0
+}
+
+/// The smallest and largest dihedral angles [deg] of the tet with corners
+/// `p`: the same values, bit for bit, as [`tet_quality`]'s
+/// `min_dihedral_deg` and `max_dihedral_deg`, for the refinement and
+/// smoothing loops that need only those. Each angle's cosine is computed as
+/// there, and only the extreme cosines go through `acos` (2 calls instead of
+/// 6; `acos` and the conversion to degrees are monotone, so the extremes of
+/// the angles are the angles of the extreme cosines). A degenerate edge or
+/// face counts as an angle of 0 (a cosine of 1), as there; NaN cosines are
+/// ignored, as `f64::min` ignores them there.
+pub fn dihedral_range_deg(p: &[P; 4]) -> (f64, f64) {
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    for (i, j, k, l) in [(0, 1, 2, 3), (0, 2, 1, 3), (0, 3, 1, 2), (1, 2, 0, 3), (1, 3, 0, 2), (2, 3, 0, 1)] {
+        let e = sub(p[j], p[i]);
+        let le = norm(e);
+        let cos = if le > 0.0 {
+            let e = scale(e, 1.0 / le);
+            let u = sub(p[k], p[i]);
+            let v = sub(p[l], p[i]);
+            let u = sub(u, scale(e, dot(u, e)));
+            let v = sub(v, scale(e, dot(v, e)));
+            let (nu, nv) = (norm(u), norm(v));
+            if nu > 0.0 && nv > 0.0 {
+                (dot(u, v) / (nu * nv)).clamp(-1.0, 1.0)
+            } else {
+                1.0
+            }
+        } else {
+            1.0
+        };
+        lo = lo.min(cos);
+        hi = hi.max(cos);
+    }
+    // No finite cosine: `tet_quality`'s starting values.
+    let min_deg = if hi == f64::NEG_INFINITY { f64::INFINITY } else { hi.acos().to_degrees() };
+    let max_deg = if lo == f64::INFINITY { 0.0 } else { lo.acos().to_degrees() };
+    (min_deg, max_deg)
 }
 
 /// One region's share of the mesh.
@@ -417,6 +461,36 @@ mod tests {
         assert!((q.radius_edge - 6f64.sqrt() / 4.0).abs() < 1e-12);
         assert!((q.radius_ratio - 1.0).abs() < 1e-12);
         assert!(q.volume_mm3.abs() > 0.0);
+    }
+
+    #[test]
+    fn dihedral_range_is_tet_qualitys_angles_bit_for_bit() {
+        // Random tets, slivers (a corner near the opposite face), needles and
+        // degenerate ones (repeated corners, collinear corners).
+        let mut state = 0x1234_5678_9abc_def0u64;
+        let mut rand = || {
+            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let mut cases: Vec<[P; 4]> = Vec::new();
+        for n in 0..20_000 {
+            let mut p = [[0.0; 3]; 4].map(|_| [rand(), rand(), rand()]);
+            match n % 5 {
+                1 => p[3] = [0, 1, 2].map(|k| (p[0][k] + p[1][k] + p[2][k]) / 3.0 + 1e-9 * rand()),
+                2 => p[1] = [0, 1, 2].map(|k| p[0][k] + 1e-7 * rand()),
+                3 => p[2] = p[1],
+                4 => p[2] = [0, 1, 2].map(|k| 0.5 * (p[0][k] + p[1][k])),
+                _ => {}
+            }
+            cases.push(p);
+        }
+        cases.push([[0.0; 3]; 4]);
+        for p in &cases {
+            let q = tet_quality(p);
+            let (lo, hi) = dihedral_range_deg(p);
+            assert_eq!(lo.to_bits(), q.min_dihedral_deg.to_bits(), "{p:?}: {lo} against {q:?}");
+            assert_eq!(hi.to_bits(), q.max_dihedral_deg.to_bits(), "{p:?}: {hi} against {q:?}");
+        }
     }
 
     #[test]

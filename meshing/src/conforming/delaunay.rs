@@ -13,10 +13,21 @@
 //!
 //! ## Insertion
 //!
-//! 1. **Location**: a visibility walk from the last tet created (stochastic:
-//!    faces tried from a pseudo-random start, so it cannot cycle), stepping across
-//!    any face that has the point strictly on its far side. It ends in a finite
-//!    tet containing the point (closed) or in a ghost tet whose hull face sees it.
+//! 1. **Location**: a visibility walk (stochastic: faces tried from a
+//!    pseudo-random start, so it cannot cycle), stepping across any face that
+//!    has the point strictly on its far side. It ends in a finite tet
+//!    containing the point (closed) or in a ghost tet whose hull face sees it.
+//!    It starts from the last tet created (right for the BRIO order of the
+//!    initial points) or, in the `_near` variants, from a tet the caller knows
+//!    to be near the point: refinement's candidates lie about a bad tet and
+//!    boundary recovery's Steiner points next to a subsegment's or subfacet's
+//!    corner, while the last tet created can be anywhere. Walking from the
+//!    last tet took 36 % of the armadillo's run (a walk crosses about
+//!    `n^(1/3)` tets of `n`, some 100 at 1e6 tets, for each of the ten
+//!    candidate points of a bad tet); from the hint it is a few steps. Where a
+//!    walk ends changes nothing but slot numbers when the point lies on a face
+//!    or edge (the cavity is the same set of tets; see `conforming`'s module
+//!    docs for why the output does not depend on slot numbers).
 //! 2. **Cavity**: the tets in conflict with the point (their perturbed
 //!    circumsphere, or for a ghost tet the open half-space beyond its hull face
 //!    plus, on its plane, the perturbed circumcircle) grown by a search from the
@@ -32,8 +43,12 @@
 
 #![allow(clippy::needless_range_loop)] // Corner loops index several parallel arrays.
 
+use std::collections::HashMap;
+use std::hash::BuildHasherDefault;
+
 use super::order::{brio_hilbert, SplitMix};
-use super::perturb::{incircle_perturbed, insphere_perturbed};
+use super::perturb::{incircle_perturbed_at, insphere_perturbed_at};
+use super::recover::WordHasher;
 use crate::predicates::{orient3d, Point};
 
 /// The vertex at infinity of ghost tets.
@@ -70,6 +85,28 @@ pub enum DelaunayError {
         /// How many distinct points there are.
         count: usize,
     },
+}
+
+/// What [`Delaunay::probe_star`] found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Probe {
+    /// The point is a vertex already: nothing listed.
+    Duplicate,
+    /// The caller's `stop` said yes to this face of the cavity: lists incomplete.
+    Stopped([u32; 3]),
+    /// The star and the removed faces are listed.
+    Star,
+}
+
+/// Scratch of [`Delaunay::probe_star`], one per thread.
+#[derive(Debug, Default, Clone)]
+pub struct ProbeScratch {
+    /// Tets tested: in conflict or not.
+    inside: HashMap<u32, bool, BuildHasherDefault<WordHasher>>,
+    stack: Vec<u32>,
+    cavity: Vec<u32>,
+    /// Cavity boundary faces: cavity tet, face index.
+    boundary: Vec<(u32, usize)>,
 }
 
 /// A Delaunay tetrahedralization of a growing point set (see the module docs).
@@ -149,11 +186,18 @@ impl Delaunay {
     /// triples, finite or not) that the insertion removed: those between two
     /// tets of its cavity.
     pub fn insert_reporting(&mut self, p: Point, destroyed: &mut Vec<[u32; 3]>) -> u32 {
+        let last = self.last;
+        self.insert_reporting_near(p, last, destroyed)
+    }
+
+    /// [`Self::insert_reporting`] with the location walk starting at the live
+    /// tet `hint` (one near `p`: the walk is then short; see the module docs).
+    pub fn insert_reporting_near(&mut self, p: Point, hint: u32, destroyed: &mut Vec<[u32; 3]>) -> u32 {
         destroyed.clear();
         let i = self.points.len() as u32;
         self.points.push(p);
         self.vertex_tet.push(NONE);
-        let start = self.locate(i);
+        let start = self.locate_from(i, hint);
         if !self.is_ghost(start) {
             for &v in &self.tets[start as usize] {
                 if self.points[v as usize] == p {
@@ -173,7 +217,8 @@ impl Delaunay {
     /// without inserting it; `false` (and nothing listed) when `p` is a vertex already.
     pub fn cavity_faces(&mut self, p: Point, out: &mut Vec<[u32; 3]>) -> bool {
         out.clear();
-        let dug = self.dig_probe(p);
+        let last = self.last;
+        let dug = self.dig_probe(p, last);
         if dug.is_some() {
             self.interior_faces(out);
         }
@@ -183,10 +228,10 @@ impl Delaunay {
 
     /// Pushes `p` as a provisional vertex and digs its cavity: its index, or
     /// `None` (nothing dug) when `p` is a vertex already. The caller pops it.
-    fn dig_probe(&mut self, p: Point) -> Option<u32> {
+    fn dig_probe(&mut self, p: Point, hint: u32) -> Option<u32> {
         let i = self.points.len() as u32;
         self.points.push(p);
-        let start = self.locate(i);
+        let start = self.locate_from(i, hint);
         let duplicate =
             !self.is_ghost(start) && self.tets[start as usize].iter().any(|&v| self.points[v as usize] == p);
         if duplicate {
@@ -201,9 +246,21 @@ impl Delaunay {
     /// the faces it would remove (see [`Self::insert_reporting`]), without
     /// inserting it; `false` (and nothing listed) when `p` is a vertex already.
     pub fn star_of(&mut self, p: Point, star: &mut Vec<[u32; 4]>, destroyed: &mut Vec<[u32; 3]>) -> bool {
+        let last = self.last;
+        self.star_of_near(p, last, star, destroyed)
+    }
+
+    /// [`Self::star_of`] with the location walk starting at the live tet `hint`.
+    pub fn star_of_near(
+        &mut self,
+        p: Point,
+        hint: u32,
+        star: &mut Vec<[u32; 4]>,
+        destroyed: &mut Vec<[u32; 3]>,
+    ) -> bool {
         star.clear();
         destroyed.clear();
-        let dug = self.dig_probe(p);
+        let dug = self.dig_probe(p, hint);
         if let Some(i) = dug {
             self.interior_faces(destroyed);
             for &(t, k, _, _) in &self.boundary {
@@ -214,6 +271,89 @@ impl Delaunay {
         }
         self.points.pop();
         dug.is_some()
+    }
+
+    /// [`Self::star_of_near`] without changing the tetrahedralization or its
+    /// scratch (`&self`: probes of several points can run in parallel, each
+    /// thread with its own `scratch`). The walk's face order comes from a
+    /// generator seeded by `hint`; where it ends does not change the lists,
+    /// only their order (the cavity of a point is one set of tets). The
+    /// star's tets hold the point as vertex `self.points().len()`.
+    ///
+    /// `stop` is asked about each face found between two tets of the cavity
+    /// (sorted corners) as the cavity grows: when it says yes the probe ends
+    /// there ([`Probe::Stopped`], the lists incomplete). A caller that only
+    /// needs to know whether the insertion would remove some face of a kind
+    /// (a subfacet) so saves digging the rest of the cavity, which for a point
+    /// beyond the boundary spreads over the large tets outside the domain.
+    pub fn probe_star(
+        &self,
+        p: Point,
+        hint: u32,
+        scratch: &mut ProbeScratch,
+        star: &mut Vec<[u32; 4]>,
+        destroyed: &mut Vec<[u32; 3]>,
+        stop: impl Fn([u32; 3]) -> bool,
+    ) -> Probe {
+        star.clear();
+        destroyed.clear();
+        let start = self.walk(p, hint, &mut SplitMix(0x9B0B ^ u64::from(hint)));
+        if !self.is_ghost(start) && self.tets[start as usize].iter().any(|&v| self.points[v as usize] == p) {
+            return Probe::Duplicate;
+        }
+        let ProbeScratch { inside, stack, cavity, boundary } = scratch;
+        inside.clear();
+        stack.clear();
+        cavity.clear();
+        boundary.clear();
+        inside.insert(start, true);
+        cavity.push(start);
+        stack.push(start);
+        while let Some(t) = stack.pop() {
+            for i in 0..4 {
+                let n = self.nbrs[t as usize][i];
+                let conflict = match inside.get(&n) {
+                    Some(&c) => c,
+                    None => {
+                        let c = self.in_conflict_at(n, p);
+                        inside.insert(n, c);
+                        if c {
+                            cavity.push(n);
+                            stack.push(n);
+                        }
+                        c
+                    }
+                };
+                if !conflict {
+                    boundary.push((t, i));
+                } else {
+                    let v = self.tets[t as usize];
+                    let mut f = FACE[i].map(|j| v[j]);
+                    f.sort_unstable();
+                    if stop(f) {
+                        return Probe::Stopped(f);
+                    }
+                }
+            }
+        }
+        for &t in cavity.iter() {
+            for i in 0..4 {
+                let n = self.nbrs[t as usize][i];
+                if n > t && inside.get(&n) == Some(&true) {
+                    let v = self.tets[t as usize];
+                    let mut f = FACE[i].map(|j| v[j]);
+                    f.sort_unstable();
+                    destroyed.push(f);
+                }
+            }
+        }
+        let new = self.points.len() as u32;
+        for &(t, i) in boundary.iter() {
+            let mut c = self.tets[t as usize];
+            c[i] = new;
+            star.push(c);
+        }
+        Probe::Star
     }
 
     /// After `dig_cavity`: the faces between two cavity tets.
@@ -228,6 +368,15 @@ impl Delaunay {
                     out.push(f);
                 }
             }
+        }
+    }
+
+    /// A live tet incident to vertex `v` (a start for walks to points near it),
+    /// or the last tet created when `v` is not inserted.
+    pub fn tet_at(&self, v: u32) -> u32 {
+        match self.vertex_tet.get(v as usize) {
+            Some(&t) if t != NONE => t,
+            _ => self.last,
         }
     }
 
@@ -442,10 +591,24 @@ impl Delaunay {
         p
     }
 
-    /// The walk of step 1 (module docs).
+    /// The walk of step 1 (module docs), from the last tet created.
     fn locate(&mut self, p: u32) -> u32 {
-        let pp = self.points[p as usize];
-        let mut t = self.last;
+        let last = self.last;
+        self.locate_from(p, last)
+    }
+
+    /// The walk of step 1 from tet `t` (any live tet; a dead one falls back to
+    /// the first live slot).
+    fn locate_from(&mut self, p: u32, t: u32) -> u32 {
+        let mut rng = self.rng.clone();
+        let t = self.walk(self.points[p as usize], t, &mut rng);
+        self.rng = rng;
+        t
+    }
+
+    /// The walk to point `pp` from tet `t`, its face order drawn from `rng`.
+    fn walk(&self, pp: Point, t: u32, rng: &mut SplitMix) -> u32 {
+        let mut t = t;
         if self.tets[t as usize] == DEAD {
             t = self.tets.iter().position(|x| *x != DEAD).unwrap_or(0) as u32;
         }
@@ -458,7 +621,7 @@ impl Delaunay {
             if v.contains(&GHOST) {
                 return t;
             }
-            let r = (self.rng.next_u64() & 3) as usize;
+            let r = (rng.next_u64() & 3) as usize;
             for k in 0..4 {
                 let i = (r + k) & 3;
                 let f = FACE[i];
@@ -473,17 +636,22 @@ impl Delaunay {
     }
 
     fn in_conflict(&self, t: u32, p: u32) -> bool {
+        self.in_conflict_at(t, self.points[p as usize])
+    }
+
+    /// Whether tet `t` is in conflict with the point `pp` (module docs, step 2).
+    fn in_conflict_at(&self, t: u32, pp: Point) -> bool {
         let v = self.tets[t as usize];
         if let Some(gi) = v.iter().position(|&x| x == GHOST) {
             let f = FACE[gi].map(|j| v[j]);
             let q = |j: usize| self.points[f[j] as usize];
-            let o = orient3d(q(0), q(1), q(2), self.points[p as usize]);
+            let o = orient3d(q(0), q(1), q(2), pp);
             if o != 0 {
                 return o > 0;
             }
-            incircle_perturbed(&self.points, f, p) > 0
+            incircle_perturbed_at(&self.points, f, pp) > 0
         } else {
-            insphere_perturbed(&self.points, v, p) > 0
+            insphere_perturbed_at(&self.points, v, pp) > 0
         }
     }
 

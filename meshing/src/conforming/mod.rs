@@ -113,7 +113,23 @@
 //!    ratio 1.74 to 1.47; fandisk 2.23 to 1.74; bunny 1.75 to 1.41).
 //!
 //! Everything is deterministic (candidate points come from generators seeded by
-//! the tet's or vertex's indices) and single-threaded.
+//! the tet's or vertex's indices). The one parallel step is the probing of a
+//! bad tet's candidate points (`refine.rs`): each verdict is a function of
+//! the tetrahedralization and the point, read in candidate order, so the
+//! result does not depend on the number of threads. The output's cells are
+//! sorted by their corners (vertex indices, in insertion order), not taken in
+//! the order of their slots in the tetrahedralization: which slot a new tet
+//! gets depends on where the location walk of its point ended when the point
+//! lies on a face or edge (a midpoint of an input edge with coordinates read
+//! from single precision is exactly on it), which depends on the walk's start
+//! and random face order, i.e. on machinery; the corners do not, and
+//! smoothing sums over each vertex's star in cell order, so its result
+//! (rounding, then which move wins) depends on that order. Sorting made the
+//! meshes independent of how points are located; it changed the smoothed
+//! coordinates of the meshes of session 13 (same cells, same refinement:
+//! measured with `conforming_probe`'s fingerprints) and their quality within
+//! the noise of smoothing, every gate still holding (BENCHMARKS.md,
+//! session 14).
 //!
 //! ## What is not done, and why
 //!
@@ -180,7 +196,7 @@ use fem_core::mesh::TetMesh;
 use serde::Serialize;
 use thiserror::Error;
 
-pub use delaunay::{Delaunay, DelaunayError, FACE, GHOST};
+pub use delaunay::{Delaunay, DelaunayError, Probe, ProbeScratch, FACE, GHOST};
 pub use perturb::insphere;
 pub use refine::RefineStats;
 pub use smooth::SmoothStats;
@@ -368,7 +384,14 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
         }
     }
     let delaunay_tets = rec.dt.finite_tets().count();
-    let (tets, num_components) = recover::interior_components(&rec.dt, &rec.face_owner);
+    let (mut tets, num_components) = recover::interior_components(&rec.dt, &rec.face_owner);
+    // In the order of their corners, not of their slots in the
+    // tetrahedralization: the slots depend on where each location walk ended
+    // (a point on a face or edge lies in several tets), which is machinery;
+    // the corners (vertex indices in insertion order, each tet's corner order
+    // inherited from the cavity tet it replaced) do not. Smoothing sums over
+    // stars in cell order, so the output depends on this order.
+    tets.sort_unstable_by_key(|&(_, t, _)| t);
     if tets.is_empty() {
         return Err(ConformingError::Internal { cause: "no tet is inside the surface".into() });
     }

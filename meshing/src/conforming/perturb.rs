@@ -39,23 +39,24 @@ pub fn insphere(a: Point, b: Point, c: Point, d: Point, e: Point) -> i8 {
 }
 
 /// [`insphere`] with the symbolic perturbation: never `0` for a non-flat tet
-/// and `e` not one of its corners. `pts` are the coordinates of the tet's
-/// corners `v` and of `e`.
-pub(crate) fn insphere_perturbed(pts: &[Point], v: [u32; 4], e: u32) -> i8 {
+/// and `pe` not one of its corners. `pts` are the coordinates of the tet's
+/// corners `v`; `pe` is given by its coordinates (it need not be a vertex of
+/// `pts`: a probe), the perturbation depending on coordinates only.
+pub(crate) fn insphere_perturbed_at(pts: &[Point], v: [u32; 4], pe: Point) -> i8 {
     let q = v.map(|i| pts[i as usize]);
-    let pe = pts[e as usize];
     let s = insphere(q[0], q[1], q[2], q[3], pe);
     if s != 0 {
         return s;
     }
-    let mut ids = [v[0], v[1], v[2], v[3], e];
-    ids.sort_by(|&i, &j| lex(&pts[i as usize], &pts[j as usize]));
+    // Slots 0..4: the corners; 4: the query point.
+    let at = |k: usize| if k == 4 { pe } else { q[k] };
+    let mut ids = [0, 1, 2, 3, 4];
+    ids.sort_by(|&i, &j| lex(&at(i), &at(j)));
     for k in (2..5).rev() {
-        let m = ids[k];
-        if m == e {
+        let pos = ids[k];
+        if pos == 4 {
             return -1;
         }
-        let pos = v.iter().position(|&x| x == m).unwrap_or(0);
         let mut w = q;
         w[pos] = pe;
         let o = orient3d(w[0], w[1], w[2], w[3]);
@@ -70,9 +71,8 @@ pub(crate) fn insphere_perturbed(pts: &[Point], v: [u32; 4], e: u32) -> i8 {
 /// For `e` coplanar with the non-degenerate triangle `f = (a, b, c)`: `+1` when
 /// `e` is inside its circumcircle under the perturbation, `-1` outside (never
 /// `0` unless `e` is a corner).
-pub(crate) fn incircle_perturbed(pts: &[Point], f: [u32; 3], e: u32) -> i8 {
+pub(crate) fn incircle_perturbed_at(pts: &[Point], f: [u32; 3], pe: Point) -> i8 {
     let q = f.map(|i| pts[i as usize]);
-    let pe = pts[e as usize];
     let Some(drop) = projection_for(q[0], q[1], q[2]) else {
         debug_assert!(false, "incircle_perturbed: degenerate face {f:?}");
         return -1;
@@ -90,14 +90,15 @@ pub(crate) fn incircle_perturbed(pts: &[Point], f: [u32; 3], e: u32) -> i8 {
     if s != 0 {
         return s;
     }
-    let mut ids = [f[0], f[1], f[2], e];
-    ids.sort_by(|&x, &y| lex(&pts[x as usize], &pts[y as usize]));
+    // Slots 0..3: the corners; 3: the query point.
+    let at = |k: usize| if k == 3 { pe } else { q[k] };
+    let mut ids = [0, 1, 2, 3];
+    ids.sort_by(|&x, &y| lex(&at(x), &at(y)));
     for k in (1..4).rev() {
-        let m = ids[k];
-        if m == e {
+        let pos = ids[k];
+        if pos == 3 {
             return -1;
         }
-        let pos = f.iter().position(|&x| x == m).unwrap_or(0);
         let mut w = q;
         w[pos] = pe;
         let o = orient2d(w[0], w[1], w[2], drop);
@@ -157,7 +158,7 @@ mod tests {
                 if t.contains(&e) {
                     continue;
                 }
-                let s = insphere_perturbed(&pts, t, e);
+                let s = insphere_perturbed_at(&pts, t, pts[e as usize]);
                 assert_ne!(s, 0);
                 // Swapping the roles: e replaces the corner x, x is tested.
                 for k in 0..4 {
@@ -170,7 +171,7 @@ mod tests {
                     }
                     // The lifted five points: x inside sphere(u) iff e outside sphere(t)
                     // when e and x are on the same side of their common face.
-                    assert_eq!(insphere_perturbed(&pts, u, x), -s, "t {t:?} e {e} k {k}");
+                    assert_eq!(insphere_perturbed_at(&pts, u, pts[x as usize]), -s, "t {t:?} e {e} k {k}");
                 }
             }
         }

@@ -4,11 +4,44 @@
 //! See the module docs of [`crate::conforming`] for the design and why.
 
 use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::hash::{BuildHasherDefault, Hasher};
 
 use super::delaunay::{Delaunay, FACE, GHOST};
 use super::facet::Facet;
 use super::ConformingError;
 use crate::predicates::{cross, dot, sub, Point};
+
+/// A fast hasher for small integer keys (faces, vertex pairs): a
+/// multiply-rotate mix per word (FxHash's), far cheaper than the default
+/// SipHash on the millions of face look-ups of refinement. Used only for
+/// maps that are never iterated, so their order cannot reach the output.
+#[derive(Default, Clone, Copy)]
+pub(crate) struct WordHasher(u64);
+
+impl Hasher for WordHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for c in bytes.chunks(4) {
+            let mut w = [0u8; 4];
+            w[..c.len()].copy_from_slice(c);
+            self.write_u32(u32::from_le_bytes(w));
+        }
+    }
+    fn write_u32(&mut self, x: u32) {
+        self.write_u64(u64::from(x));
+    }
+    fn write_usize(&mut self, x: usize) {
+        self.write_u64(x as u64);
+    }
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x517c_c1b7_2722_0a95);
+    }
+}
+
+/// A map keyed by sorted face corners, hashed with [`WordHasher`].
+pub(crate) type FaceMap<V> = HashMap<[u32; 3], V, BuildHasherDefault<WordHasher>>;
 
 /// The input as a piecewise-linear complex: vertices, the input edges between
 /// facets (*segments*) and the *facets* (planar polygons of coplanar input
@@ -18,6 +51,8 @@ pub(crate) struct Recovery {
     pub dt: Delaunay,
     /// Subsegments: `(a, b, segment id)`.
     subsegs: Vec<(u32, u32, u32)>,
+    /// The subsegment with each pair of ends (smaller index first).
+    subseg_at: HashMap<(u32, u32), usize, BuildHasherDefault<WordHasher>>,
     /// The subsegments of each segment.
     seg_subs: Vec<Vec<usize>>,
     /// Input vertex at each end of each segment (for the concentric-shell rule).
@@ -32,12 +67,15 @@ pub(crate) struct Recovery {
     max_steiner: usize,
     star: Vec<u32>,
     /// The facet of each subfacet (sorted corners).
-    pub face_owner: HashMap<[u32; 3], u32>,
+    pub face_owner: FaceMap<u32>,
     /// Facets to check for missing subsegments and subfacets.
     pending: BTreeSet<u32>,
     destroyed: Vec<[u32; 3]>,
     /// What made each Steiner point (for messages): "edge", "triangle", "interior".
     kinds: Vec<&'static str>,
+    /// Whether each Steiner point lies on the input surface (kind "edge" or
+    /// "triangle"): only those and input vertices can be corners of subfacets.
+    on_surface: Vec<bool>,
     /// The kind of the next point added.
     pub next_kind: &'static str,
     /// Whether the last point refused was a duplicate of a vertex (the
@@ -102,11 +140,14 @@ impl Recovery {
                 Facet::new(members.iter().map(|&f| triangles[f]).collect(), &sides, vertices)
             })
             .collect();
-        let subsegs = segment_ends.iter().enumerate().map(|(i, e)| (e[0], e[1], i as u32)).collect();
+        let subsegs: Vec<(u32, u32, u32)> =
+            segment_ends.iter().enumerate().map(|(i, e)| (e[0], e[1], i as u32)).collect();
+        let subseg_at = subsegs.iter().enumerate().map(|(k, &(a, b, _))| ((a.min(b), a.max(b)), k)).collect();
         let seg_subs = (0..segment_ends.len()).map(|i| vec![i]).collect();
         Ok(Recovery {
             dt,
             subsegs,
+            subseg_at,
             seg_subs,
             segment_ends,
             segment_facets,
@@ -116,10 +157,11 @@ impl Recovery {
             steiner_on_facets: 0,
             max_steiner,
             star: Vec::new(),
-            face_owner: HashMap::new(),
+            face_owner: FaceMap::default(),
             pending: BTreeSet::new(),
             destroyed: Vec::new(),
             kinds: Vec::new(),
+            on_surface: Vec::new(),
             last_duplicate: false,
             recover_limit: usize::MAX,
             next_kind: "edge",
@@ -155,7 +197,8 @@ impl Recovery {
         self.steiner_on_segments + self.steiner_on_facets
     }
 
-    fn add_point(&mut self, p: Point) -> Result<u32, ConformingError> {
+    /// Inserts `p`, its location walk starting at tet `hint` (one near it).
+    fn add_point(&mut self, p: Point, hint: u32) -> Result<u32, ConformingError> {
         if self.steiner() >= self.max_steiner {
             return Err(ConformingError::RecoveryFailed {
                 steiner_points: self.steiner(),
@@ -164,7 +207,7 @@ impl Recovery {
         }
         let n = self.dt.points().len() as u32;
         let mut destroyed = std::mem::take(&mut self.destroyed);
-        let v = self.dt.insert_reporting(p, &mut destroyed);
+        let v = self.dt.insert_reporting_near(p, hint, &mut destroyed);
         for f in &destroyed {
             if let Some(&owner) = self.face_owner.get(f) {
                 self.pending.insert(owner);
@@ -184,6 +227,7 @@ impl Recovery {
             });
         }
         self.kinds.push(self.next_kind);
+        self.on_surface.push(self.next_kind != "interior");
         Ok(v)
     }
 
@@ -214,10 +258,13 @@ impl Recovery {
         };
         let m = [pa[0] + t * d[0], pa[1] + t * d[1], pa[2] + t * d[2]];
         self.next_kind = "edge";
-        let v = self.add_point(m)?;
+        let v = self.add_point(m, self.dt.tet_at(a))?;
         self.steiner_on_segments += 1;
         self.subsegs[k] = (a, v, s);
         self.subsegs.push((v, b, s));
+        self.subseg_at.remove(&(a.min(b), a.max(b)));
+        self.subseg_at.insert((a.min(v), a.max(v)), k);
+        self.subseg_at.insert((v.min(b), v.max(b)), self.subsegs.len() - 1);
         self.seg_subs[s as usize].push(self.subsegs.len() - 1);
         let facets = self.segment_facets[s as usize].clone();
         for f in facets {
@@ -227,6 +274,14 @@ impl Recovery {
             self.pending.insert(f);
         }
         Ok(())
+    }
+
+    /// Whether vertex `v` lies on the input surface (an input vertex or a
+    /// Steiner point on an input edge or triangle): a face with a corner that
+    /// does not (or a ghost corner) is no subfacet, with no map look-up.
+    pub fn on_surface(&self, v: u32) -> bool {
+        let first = self.num_input();
+        (v as usize) < first || self.on_surface.get((v as usize).wrapping_sub(first)).copied().unwrap_or(false)
     }
 
     /// The number of input vertices (the first points of the tetrahedralization).
@@ -243,7 +298,7 @@ impl Recovery {
     /// Splits the subsegment with ends `a` and `b` (either order), if there is
     /// one; whether there was.
     pub fn split_subsegment_between(&mut self, a: u32, b: u32) -> Result<bool, ConformingError> {
-        let Some(k) = self.subsegs.iter().position(|&(x, y, _)| (x == a && y == b) || (x == b && y == a)) else {
+        let Some(&k) = self.subseg_at.get(&(a.min(b), a.max(b))) else {
             return Ok(false);
         };
         self.split_subsegment(k)?;
@@ -383,10 +438,11 @@ impl Recovery {
         out
     }
 
-    /// Inserts a point that removes no subfacet (checked by the caller).
-    pub fn insert_free(&mut self, p: Point) -> Result<u32, ConformingError> {
+    /// Inserts a point that removes no subfacet (checked by the caller), its
+    /// location walk starting at tet `hint` (one near it).
+    pub fn insert_free(&mut self, p: Point, hint: u32) -> Result<u32, ConformingError> {
         self.next_kind = "interior";
-        self.add_point(p)
+        self.add_point(p, hint)
     }
 
     /// [`Self::refine_subfacet`] for refinement.
@@ -470,7 +526,7 @@ impl Recovery {
                     self.split_subsegment(k)?;
                 } else if self.facets[f].contains(c, pts) {
                     self.next_kind = "triangle";
-                    let v = match self.add_point(c) {
+                    let v = match self.add_point(c, self.dt.tet_at(t[0])) {
                         Err(_) if self.last_duplicate => {
                             self.last_duplicate = false;
                             let mut key = t;
@@ -553,8 +609,9 @@ impl Recovery {
         self.next_kind = "triangle";
         // A circumcentre that is a vertex already (one placed on a neighbouring,
         // nearly coplanar facet): the centroid, inside the subfacet, instead.
-        let v = match self.add_point(p) {
-            Err(_) if self.last_duplicate && p != centroid => self.add_point(centroid)?,
+        let hint = self.dt.tet_at(t[0]);
+        let v = match self.add_point(p, hint) {
+            Err(_) if self.last_duplicate && p != centroid => self.add_point(centroid, self.dt.tet_at(t[0]))?,
             r => r?,
         };
 
@@ -596,10 +653,7 @@ pub(crate) fn circumcentre(q: [Point; 3]) -> Point {
 /// The finite tets not reachable from the outside (the ghosts) without
 /// crossing a constrained face, grouped into the components that constrained
 /// faces separate: `(tet corners, component)` and the number of components.
-pub(crate) fn interior_components(
-    dt: &Delaunay,
-    constrained: &HashMap<[u32; 3], u32>,
-) -> (Vec<(u32, [u32; 4], u32)>, usize) {
+pub(crate) fn interior_components(dt: &Delaunay, constrained: &FaceMap<u32>) -> (Vec<(u32, [u32; 4], u32)>, usize) {
     let live: Vec<(u32, [u32; 4])> = dt.live_tets().collect();
     let slots = live.iter().map(|(t, _)| *t as usize + 1).max().unwrap_or(0);
     const UNSEEN: u32 = u32::MAX;

@@ -14,7 +14,8 @@
 //! radius-edge ratio from 4.10 to 3.95 and the largest from 18.3 to 7.4) (for a flat tet, whose circumcentre is at
 //! infinity or far off, `c` is its centroid and `r` half its longest edge) (a generator seeded by the tet's corners: the run
 //! is deterministic). The star each candidate would create is computed without
-//! inserting it (`Delaunay::star_of`), and a candidate is *blocked* when its
+//! inserting it (`Delaunay::probe_star`, the candidates of a tet in
+//! parallel), and a candidate is *blocked* when its
 //! insertion would remove a subfacet (it lies beyond the boundary or too near
 //! it) or when it encroaches a subfacet among the faces of its cavity (lies in
 //! the subfacet's equatorial ball): Shewchuk's rule, which keeps interior points
@@ -38,11 +39,17 @@
 //! The tetrahedralization stays Delaunay and conforming throughout; a budget of
 //! points ends the passes (the mesh is valid whenever they stop).
 
+use super::delaunay::{Probe, ProbeScratch, GHOST};
 use super::order::SplitMix;
-use super::recover::{interior_components, Recovery};
+use std::cell::RefCell;
+use std::hash::BuildHasherDefault;
+
+use rayon::prelude::*;
+
+use super::recover::{interior_components, Recovery, WordHasher};
 use super::ConformingError;
 use crate::predicates::{cross, dot, sub, Point};
-use crate::quality::tet_quality;
+use crate::quality::dihedral_range_deg;
 
 /// Candidate points per bad tet (the circumcentre and points near it).
 pub const CANDIDATES: usize = 8;
@@ -138,9 +145,8 @@ impl Recovery {
     pub fn refine(&mut self, bounds: Bounds, budget: usize) -> Result<RefineStats, ConformingError> {
         let mut stats = RefineStats::default();
         let start_points = self.dt.points().len();
-        let mut star = Vec::new();
-        let mut destroyed = Vec::new();
-        let mut skipped = std::collections::HashSet::new();
+        // Never iterated: its hasher cannot reach the output.
+        let mut skipped: std::collections::HashSet<[u32; 4], BuildHasherDefault<WordHasher>> = Default::default();
         // Cap splits at most as many as the points present when refinement
         // starts: on some inputs they would otherwise cascade along the surface.
         let mut caps_left = start_points;
@@ -150,35 +156,46 @@ impl Recovery {
             let h = (bounds.max_volume * 6.0 * 2f64.sqrt()).cbrt();
             stats.facet_points = self.refine_facet_quality(bounds.radius_edge, FACET_QUALITY_EDGE * h, 16)?;
         }
+        // The corners of the tet last found good in each slot of the
+        // tetrahedralization: a pass evaluates only the tets created since
+        // (the passes rescanned every tet, about 1e6 on the armadillo).
+        let mut good: Vec<[u32; 4]> = Vec::new();
         for _pass in 0..64 {
             stats.passes += 1;
             let (inside, _) = interior_components(&self.dt, &self.face_owner);
             let pts = self.dt.points();
-            let mut bad: Vec<(f64, u32, [u32; 4], bool, bool, f64)> = inside
-                .iter()
-                .filter_map(|&(t, v, _)| {
-                    let q = v.map(|i| pts[i as usize]);
-                    let (_, re, vol) = circumsphere(q);
-                    let too_big = vol / bounds.max_volume;
-                    let size = (re / bounds.radius_edge).max(too_big);
-                    let sliver = if bounds.min_dihedral_deg > 0.0 {
-                        let d = tet_quality(&q).min_dihedral_deg;
-                        if d < bounds.min_dihedral_deg {
-                            bounds.min_dihedral_deg / d.max(1e-6)
-                        } else {
-                            0.0
-                        }
+            let mut bad: Vec<(f64, u32, [u32; 4], bool, bool, f64)> = Vec::new();
+            for &(t, v, _) in &inside {
+                // A tet found good in an earlier pass is still there, with
+                // the same corners (refinement never moves a point): good still.
+                if good.get(t as usize) == Some(&v) {
+                    continue;
+                }
+                let q = v.map(|i| pts[i as usize]);
+                let (_, re, vol) = circumsphere(q);
+                let too_big = vol / bounds.max_volume;
+                let size = (re / bounds.radius_edge).max(too_big);
+                let sliver = if bounds.min_dihedral_deg > 0.0 {
+                    let d = dihedral_range_deg(&q).0;
+                    if d < bounds.min_dihedral_deg {
+                        bounds.min_dihedral_deg / d.max(1e-6)
                     } else {
                         0.0
-                    };
-                    let only_sliver = size <= 1.0;
-                    if skipped.contains(&v) {
-                        return None;
                     }
-                    let badness = size.max(sliver);
-                    (badness > 1.0).then_some((badness, t, v, only_sliver, too_big > 1.0, re))
-                })
-                .collect();
+                } else {
+                    0.0
+                };
+                let only_sliver = size <= 1.0;
+                let badness = size.max(sliver);
+                if badness <= 1.0 {
+                    if good.len() <= t as usize {
+                        good.resize(t as usize + 1, [GHOST; 4]);
+                    }
+                    good[t as usize] = v;
+                } else if !skipped.contains(&v) {
+                    bad.push((badness, t, v, only_sliver, too_big > 1.0, re));
+                }
+            }
             stats.bad_left = bad.len();
             if bad.is_empty() {
                 break;
@@ -206,18 +223,39 @@ impl Recovery {
                 } else {
                     ([0, 1, 2].map(|k| (q[0][k] + q[1][k] + q[2][k] + q[3][k]) / 4.0), 0.5 * longest)
                 };
-                let own = tet_quality(&q).min_dihedral_deg;
+                let own = dihedral_range_deg(&q).0;
                 let mut rng = SplitMix(v.iter().fold(0x9E37_79B9u64, |h, &x| h.rotate_left(17) ^ u64::from(x)));
                 let mut best: Option<(f64, Point)> = None;
                 let mut blocked_by: Option<[u32; 3]> = None;
                 let off = off_centres(q, c);
-                for k in 0..CANDIDATES + off.len() {
-                    let p = match k {
+                let candidates: Vec<Point> = (0..CANDIDATES + off.len())
+                    .map(|k| match k {
                         0 => c,
                         k if k < CANDIDATES => near(c, OFF_CENTRE * r, &mut rng),
                         k => off[k - CANDIDATES],
-                    };
-                    match self.try_candidate(p, &mut star, &mut destroyed) {
+                    })
+                    .collect();
+                // Each candidate's verdict is a function of the
+                // tetrahedralization and the point alone (`try_candidate`),
+                // so they are found in parallel and read in candidate order:
+                // the same choice whatever the number of threads.
+                let this = &*self;
+                // Only the circumcentre's blocking subfacet is used (to
+                // refine it); the other candidates need only know whether
+                // they are free, and their probes stop at the first subfacet
+                // they would remove.
+                let verdicts: Vec<Candidate> = candidates
+                    .par_iter()
+                    .enumerate()
+                    .map(|(k, &p)| {
+                        PROBE.with(|s| {
+                            let (scratch, star, destroyed) = &mut *s.borrow_mut();
+                            this.try_candidate(p, t, k > 0, scratch, star, destroyed)
+                        })
+                    })
+                    .collect();
+                for (k, (&p, verdict)) in candidates.iter().zip(verdicts).enumerate() {
+                    match verdict {
                         Candidate::Free(quality) => {
                             if best.is_none_or(|(b, _)| quality > b) {
                                 best = Some((quality, p));
@@ -237,7 +275,7 @@ impl Recovery {
                         stats.slivers_skipped += 1;
                     }
                     (Some((_, p)), _) => {
-                        self.insert_free(p)?;
+                        self.insert_free(p, t)?;
                         stats.circumcentres += 1;
                     }
                     // Refine the subfacet the circumcentre encroaches
@@ -369,7 +407,7 @@ impl Recovery {
         // A flat cap (on coplanar input triangles) is removed after refinement
         // (`drop_flat_caps`); splitting its edge would make more flat caps.
         let pts = self.dt.points();
-        if tet_quality(&v.map(|i| pts[i as usize])).min_dihedral_deg < super::FLAT_DEG {
+        if dihedral_range_deg(&v.map(|i| pts[i as usize])).0 < super::FLAT_DEG {
             return None;
         }
         let shared: Vec<u32> = f.iter().copied().filter(|x| g.contains(x)).collect();
@@ -397,10 +435,26 @@ impl Recovery {
 
     /// Whether `p` may be inserted (module docs): its star's smallest dihedral
     /// angle, or the subfacet it blocks on (the one whose equatorial ball holds
-    /// it deepest; ties: lowest key).
-    fn try_candidate(&mut self, p: Point, star: &mut Vec<[u32; 4]>, destroyed: &mut Vec<[u32; 3]>) -> Candidate {
-        if !self.dt.star_of(p, star, destroyed) {
-            return Candidate::Duplicate;
+    /// it deepest; ties: lowest key). The location walk starts at tet `hint`
+    /// (the bad tet, near `p`).
+    ///
+    /// With `first_blocking`, the subfacet reported for a blocked candidate
+    /// is the first removed one the probe meets, not the deepest: whether the
+    /// candidate is free is the same.
+    fn try_candidate(
+        &self,
+        p: Point,
+        hint: u32,
+        first_blocking: bool,
+        scratch: &mut ProbeScratch,
+        star: &mut Vec<[u32; 4]>,
+        destroyed: &mut Vec<[u32; 3]>,
+    ) -> Candidate {
+        let subfacet = |f: [u32; 3]| f.iter().all(|&v| self.on_surface(v)) && self.face_owner.contains_key(&f);
+        match self.dt.probe_star(p, hint, scratch, star, destroyed, |f| first_blocking && subfacet(f)) {
+            Probe::Duplicate => return Candidate::Duplicate,
+            Probe::Stopped(f) => return Candidate::Blocked(f),
+            Probe::Star => {}
         }
         let pts = self.dt.points();
         let n = pts.len() as u32;
@@ -412,7 +466,9 @@ impl Recovery {
         };
         let mut hit: Option<(f64, [u32; 3])> = None;
         let mut consider = |f: [u32; 3], removed: bool| {
-            if !self.face_owner.contains_key(&f) {
+            // Only faces on surface vertices can be subfacets: most faces of a
+            // cavity inside the volume are settled without a map look-up.
+            if !f.iter().all(|&v| self.on_surface(v)) || !self.face_owner.contains_key(&f) {
                 return;
             }
             let d = depth(&f);
@@ -441,10 +497,18 @@ impl Recovery {
         let mut worst = f64::INFINITY;
         for t in star.iter() {
             let q = t.map(|v| if v == n { p } else { pts[v as usize] });
-            worst = worst.min(tet_quality(&q).min_dihedral_deg);
+            worst = worst.min(dihedral_range_deg(&q).0);
         }
         Candidate::Free(worst)
     }
+}
+
+/// A thread's scratch for `try_candidate`: the probe's, the star, the removed faces.
+type CandidateScratch = (ProbeScratch, Vec<[u32; 4]>, Vec<[u32; 3]>);
+
+thread_local! {
+    /// Each thread's scratch for `try_candidate`.
+    static PROBE: RefCell<CandidateScratch> = RefCell::default();
 }
 
 /// What inserting a candidate point would do.

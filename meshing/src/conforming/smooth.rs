@@ -38,7 +38,7 @@
 use super::order::SplitMix;
 use super::recover::Freedom;
 use crate::predicates::{orient3d, Point};
-use crate::quality::tet_quality;
+use crate::quality::{dihedral_range_deg, tet_quality, tet_volume};
 
 /// What smoothing did.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
@@ -63,11 +63,11 @@ fn star_min(nodes: &[Point], cells: &[[u32; 4]], star: &[u32], v: u32, at: Point
         if orient3d(q[0], q[1], q[2], q[3]) != 1 {
             return None;
         }
-        let t = tet_quality(&q);
-        if t.volume_mm3 > max_volume {
+        if tet_volume(&q) > max_volume {
             return None;
         }
-        worst = worst.min(angle_quality(t.min_dihedral_deg, t.max_dihedral_deg));
+        let (lo, hi) = dihedral_range_deg(&q);
+        worst = worst.min(angle_quality(lo, hi));
     }
     Some(worst)
 }
@@ -129,8 +129,8 @@ pub(crate) fn smooth(
         let mut todo: Vec<u32> = cells
             .iter()
             .filter(|cell| {
-                let t = tet_quality(&cell.map(|v| nodes[v as usize]));
-                angle_quality(t.min_dihedral_deg, t.max_dihedral_deg) < bound_deg
+                let (lo, hi) = dihedral_range_deg(&cell.map(|v| nodes[v as usize]));
+                angle_quality(lo, hi) < bound_deg
             })
             .flatten()
             .copied()
