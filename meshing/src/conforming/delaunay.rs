@@ -43,12 +43,8 @@
 
 #![allow(clippy::needless_range_loop)] // Corner loops index several parallel arrays.
 
-use std::collections::HashMap;
-use std::hash::BuildHasherDefault;
-
 use super::order::{brio_hilbert, SplitMix};
 use super::perturb::{incircle_perturbed_at, insphere_perturbed_at};
-use super::recover::WordHasher;
 use crate::predicates::{orient3d, Point};
 
 /// The vertex at infinity of ghost tets.
@@ -102,7 +98,7 @@ pub enum Probe {
 #[derive(Debug, Default, Clone)]
 pub struct ProbeScratch {
     /// Tets tested: in conflict or not.
-    inside: HashMap<u32, bool, BuildHasherDefault<WordHasher>>,
+    inside: rustc_hash::FxHashMap<u32, bool>,
     stack: Vec<u32>,
     cavity: Vec<u32>,
     /// Cavity boundary faces: cavity tet, face index.

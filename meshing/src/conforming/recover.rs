@@ -4,44 +4,17 @@
 //! See the module docs of [`crate::conforming`] for the design and why.
 
 use std::collections::{BTreeMap, BTreeSet, HashMap};
-use std::hash::{BuildHasherDefault, Hasher};
 
 use super::delaunay::{Delaunay, FACE, GHOST};
 use super::facet::Facet;
 use super::ConformingError;
 use crate::predicates::{cross, dot, sub, Point};
 
-/// A fast hasher for small integer keys (faces, vertex pairs): a
-/// multiply-rotate mix per word (FxHash's), far cheaper than the default
-/// SipHash on the millions of face look-ups of refinement. Used only for
+/// A map keyed by sorted face corners, hashed with `rustc_hash`'s FxHash, far
+/// cheaper than the default SipHash on the millions of face look-ups of
+/// refinement (no random state: the same hashes on every run). Used only for
 /// maps that are never iterated, so their order cannot reach the output.
-#[derive(Default, Clone, Copy)]
-pub(crate) struct WordHasher(u64);
-
-impl Hasher for WordHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for c in bytes.chunks(4) {
-            let mut w = [0u8; 4];
-            w[..c.len()].copy_from_slice(c);
-            self.write_u32(u32::from_le_bytes(w));
-        }
-    }
-    fn write_u32(&mut self, x: u32) {
-        self.write_u64(u64::from(x));
-    }
-    fn write_usize(&mut self, x: usize) {
-        self.write_u64(x as u64);
-    }
-    fn write_u64(&mut self, x: u64) {
-        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x517c_c1b7_2722_0a95);
-    }
-}
-
-/// A map keyed by sorted face corners, hashed with [`WordHasher`].
-pub(crate) type FaceMap<V> = HashMap<[u32; 3], V, BuildHasherDefault<WordHasher>>;
+pub(crate) type FaceMap<V> = rustc_hash::FxHashMap<[u32; 3], V>;
 
 /// The input as a piecewise-linear complex: vertices, the input edges between
 /// facets (*segments*) and the *facets* (planar polygons of coplanar input
@@ -52,7 +25,7 @@ pub(crate) struct Recovery {
     /// Subsegments: `(a, b, segment id)`.
     subsegs: Vec<(u32, u32, u32)>,
     /// The subsegment with each pair of ends (smaller index first).
-    subseg_at: HashMap<(u32, u32), usize, BuildHasherDefault<WordHasher>>,
+    subseg_at: rustc_hash::FxHashMap<(u32, u32), usize>,
     /// The subsegments of each segment.
     seg_subs: Vec<Vec<usize>>,
     /// Input vertex at each end of each segment (for the concentric-shell rule).

@@ -42,11 +42,10 @@
 use super::delaunay::{Probe, ProbeScratch, GHOST};
 use super::order::SplitMix;
 use std::cell::RefCell;
-use std::hash::BuildHasherDefault;
 
 use rayon::prelude::*;
 
-use super::recover::{interior_components, Recovery, WordHasher};
+use super::recover::{interior_components, Recovery};
 use super::ConformingError;
 use crate::predicates::{cross, dot, sub, Point};
 use crate::quality::dihedral_range_deg;
@@ -146,7 +145,7 @@ impl Recovery {
         let mut stats = RefineStats::default();
         let start_points = self.dt.points().len();
         // Never iterated: its hasher cannot reach the output.
-        let mut skipped: std::collections::HashSet<[u32; 4], BuildHasherDefault<WordHasher>> = Default::default();
+        let mut skipped: rustc_hash::FxHashSet<[u32; 4]> = Default::default();
         // Cap splits at most as many as the points present when refinement
         // starts: on some inputs they would otherwise cascade along the surface.
         let mut caps_left = start_points;
