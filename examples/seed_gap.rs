@@ -11,12 +11,11 @@
 //! Run: `cargo run --release -p wagashi-workspace-tests --example seed_gap`
 //! (`-- --quick` stops before the swap study, `-- --no-symptom` skips step 2,
 //! `-- --swap-only` runs steps 1 and 4). The generator runs on 5 mm elements and
-//! fixed 0.25 s steps, the diagnoser on 10 mm elements and fixed 0.5 s steps
-//! (the engine's slider does not converge in the short step adaptive control
-//! takes right after the release). Long: step 3 (the whole library) took 840 s
-//! (session 13; 2214 s in session 14 with the machine at load 12)
-//! and each swap diagnosis several minutes on the shared 2-core machine.
-//! `-- --no-symptom --quick` runs steps 1 and 3 only.
+//! fixed 0.25 s steps, the diagnoser on 10 mm elements and adaptive steps.
+//! Step 3 (the whole library) took 130 s (session 14, load about 4; on fixed
+//! 0.5 s steps 2214 s at load 12), each swap diagnosis minutes.
+//! `-- --no-symptom --quick` runs steps 1 and 3 only; `-- --fixed-steps` runs
+//! the diagnoser on fixed 0.5 s steps (session 13) instead of adaptive ones.
 //!
 //! Steps:
 //! 1. every kappa > 1 candidate (diagnosis-details.md §1: plastic-slider,
@@ -48,9 +47,9 @@ const TRUTH_SIZE_MM: f64 = 5.0;
 /// Element size of the Table II matching [mm] (the matched truth then runs at `TRUTH_SIZE_MM`).
 const MATCH_SIZE_MM: f64 = 5.0;
 const SEED: u64 = 20_261_122;
-/// The diagnoser's fixed step [s] (the generator's is 0.25 s): the engine's
-/// slider does not converge in the very short step adaptive control takes right
-/// after the release (`seed_gap::generator_settings`).
+/// The diagnoser's fixed step with `--fixed-steps` [s] (the generator's is
+/// 0.25 s): until session 14 the engine's slider did not converge in the very
+/// short step adaptive control takes right after the release.
 const DIAGNOSER_DT_S: f64 = 0.5;
 
 const CANDIDATES: [EffectId; 4] =
@@ -63,7 +62,9 @@ fn options() -> DiagnosisOptions {
         bootstrap: 300,
         size_mm: Some(SIZE_MM),
         marker_sigma_mm: NoiseModel::SEED.marker_sigma_mm,
-        fixed_dt_s: Some(DIAGNOSER_DT_S),
+        // Adaptive steps (the engine's slider converges there since session
+        // 14); `--fixed-steps`: the diagnoser's fixed 0.5 s steps of session 13.
+        fixed_dt_s: if std::env::args().any(|a| a == "--fixed-steps") { Some(DIAGNOSER_DT_S) } else { None },
         ..DiagnosisOptions::default()
     }
 }
