@@ -67,42 +67,40 @@ pub struct TetQuality {
     pub volume_mm3: f64,
 }
 
+/// The six edges `(i, j)` of a tet, each with its two other corners `(k, l)`.
+const EDGES: [(usize, usize, usize, usize); 6] =
+    [(0, 1, 2, 3), (0, 2, 1, 3), (0, 3, 1, 2), (1, 2, 0, 3), (1, 3, 0, 2), (2, 3, 0, 1)];
+
+/// The length of edge `(i, j)` of the tet `p` and the cosine of the dihedral
+/// angle there; 1 (an angle of 0) for a degenerate edge or face.
+fn edge_dihedral_cos(p: &[P; 4], (i, j, k, l): (usize, usize, usize, usize)) -> (f64, f64) {
+    let e = sub(p[j], p[i]);
+    let le = norm(e);
+    if le > 0.0 {
+        let e = scale(e, 1.0 / le);
+        let u = sub(p[k], p[i]);
+        let v = sub(p[l], p[i]);
+        let u = sub(u, scale(e, dot(u, e)));
+        let v = sub(v, scale(e, dot(v, e)));
+        let (nu, nv) = (norm(u), norm(v));
+        if nu > 0.0 && nv > 0.0 {
+            return (le, (dot(u, v) / (nu * nv)).clamp(-1.0, 1.0));
+        }
+    }
+    (le, 1.0)
+}
+
 /// The quality of the tet with corners `p` [mm].
 pub fn tet_quality(p: &[P; 4]) -> TetQuality {
     let mut min_d = f64::INFINITY;
     let mut max_d: f64 = 0.0;
     let mut l_min = f64::INFINITY;
-    for i in 0..4 {
-        for j in i + 1..4 {
-            let (k, l) = match (i, j) {
-                (0, 1) => (2, 3),
-                (0, 2) => (1, 3),
-                (0, 3) => (1, 2),
-                (1, 2) => (0, 3),
-                (1, 3) => (0, 2),
-                _ => (0, 1),
-            };
-            let e = sub(p[j], p[i]);
-            let le = norm(e);
-            l_min = l_min.min(le);
-            let angle = if le > 0.0 {
-                let e = scale(e, 1.0 / le);
-                let u = sub(p[k], p[i]);
-                let v = sub(p[l], p[i]);
-                let u = sub(u, scale(e, dot(u, e)));
-                let v = sub(v, scale(e, dot(v, e)));
-                let (nu, nv) = (norm(u), norm(v));
-                if nu > 0.0 && nv > 0.0 {
-                    (dot(u, v) / (nu * nv)).clamp(-1.0, 1.0).acos().to_degrees()
-                } else {
-                    0.0
-                }
-            } else {
-                0.0
-            };
-            min_d = min_d.min(angle);
-            max_d = max_d.max(angle);
-        }
+    for edge in EDGES {
+        let (le, cos) = edge_dihedral_cos(p, edge);
+        l_min = l_min.min(le);
+        let angle = cos.acos().to_degrees();
+        min_d = min_d.min(angle);
+        max_d = max_d.max(angle);
     }
     let a = sub(p[1], p[0]);
     let b = sub(p[2], p[0]);
@@ -144,24 +142,8 @@ pub fn tet_volume(p: &[P; 4]) -> f64 {
 pub fn dihedral_range_deg(p: &[P; 4]) -> (f64, f64) {
     let mut lo = f64::INFINITY;
     let mut hi = f64::NEG_INFINITY;
-    for (i, j, k, l) in [(0, 1, 2, 3), (0, 2, 1, 3), (0, 3, 1, 2), (1, 2, 0, 3), (1, 3, 0, 2), (2, 3, 0, 1)] {
-        let e = sub(p[j], p[i]);
-        let le = norm(e);
-        let cos = if le > 0.0 {
-            let e = scale(e, 1.0 / le);
-            let u = sub(p[k], p[i]);
-            let v = sub(p[l], p[i]);
-            let u = sub(u, scale(e, dot(u, e)));
-            let v = sub(v, scale(e, dot(v, e)));
-            let (nu, nv) = (norm(u), norm(v));
-            if nu > 0.0 && nv > 0.0 {
-                (dot(u, v) / (nu * nv)).clamp(-1.0, 1.0)
-            } else {
-                1.0
-            }
-        } else {
-            1.0
-        };
+    for edge in EDGES {
+        let (_, cos) = edge_dihedral_cos(p, edge);
         lo = lo.min(cos);
         hi = hi.max(cos);
     }

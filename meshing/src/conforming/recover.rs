@@ -509,11 +509,7 @@ impl Recovery {
                         }
                         r => r?,
                     };
-                    self.steiner_on_facets += 1;
-                    let pts = self.dt.points();
-                    self.facets[f].insert_interior(v, pts);
-                    self.index_facet(f);
-                    self.pending.insert(f as u32);
+                    self.insert_on_facet(f, v);
                 } else {
                     let mut key = t;
                     key.sort_unstable();
@@ -588,12 +584,19 @@ impl Recovery {
             r => r?,
         };
 
+        self.insert_on_facet(f, v);
+        Ok(())
+    }
+
+    /// Records vertex `v`, just inserted inside facet `f`, as a Steiner point
+    /// of that facet (its 2D triangulation, the subfacet index, the facets to
+    /// recover again).
+    fn insert_on_facet(&mut self, f: usize, v: u32) {
         self.steiner_on_facets += 1;
         let pts = self.dt.points();
         self.facets[f].insert_interior(v, pts);
         self.index_facet(f);
         self.pending.insert(f as u32);
-        Ok(())
     }
 }
 

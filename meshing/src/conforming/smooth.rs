@@ -117,6 +117,39 @@ pub(crate) fn smooth(
     max_volume: f64,
     passes: usize,
 ) -> SmoothStats {
+    let bad = |q: &[Point; 4]| {
+        let (lo, hi) = dihedral_range_deg(q);
+        angle_quality(lo, hi) < bound_deg
+    };
+    // The cost is the star's smallest quality, negated.
+    let start = |nodes: &[Point], star: &[u32], v: u32, here: Point| {
+        star_min(nodes, cells, star, v, here, f64::INFINITY).map(|q| (-q, ()))
+    };
+    let cost = |nodes: &[Point], star: &[u32], v: u32, at: Point, _: &()| {
+        star_min(nodes, cells, star, v, at, max_volume).map(|q| -q)
+    };
+    smooth_with(nodes, cells, freedom, passes, 0xD1E5, bad, start, cost)
+}
+
+/// The pass loop of both smoothings. Each pass visits, in vertex order, the
+/// movable vertices of the tets `bad` picks and moves each to the candidate
+/// place of lowest `cost` (`None`: refused), if lower than `start`'s cost
+/// where it is (`start` also gives what `cost` judges the candidates by). The
+/// candidates: the centroid of the star's other vertices, three points
+/// part-way towards it, then points drawn in a shrinking ball about the best
+/// so far (a generator seeded by `seed` and the vertex), each projected on what
+/// the vertex may move along.
+#[allow(clippy::too_many_arguments)]
+fn smooth_with<S>(
+    nodes: &mut [Point],
+    cells: &[[u32; 4]],
+    freedom: &[Freedom],
+    passes: usize,
+    seed: u64,
+    bad: impl Fn(&[Point; 4]) -> bool,
+    start: impl Fn(&[Point], &[u32], u32, Point) -> Option<(f64, S)>,
+    cost: impl Fn(&[Point], &[u32], u32, Point, &S) -> Option<f64>,
+) -> SmoothStats {
     let mut stats = SmoothStats::default();
     let mut stars: Vec<Vec<u32>> = vec![Vec::new(); nodes.len()];
     for (c, cell) in cells.iter().enumerate() {
@@ -128,10 +161,7 @@ pub(crate) fn smooth(
         stats.passes += 1;
         let mut todo: Vec<u32> = cells
             .iter()
-            .filter(|cell| {
-                let (lo, hi) = dihedral_range_deg(&cell.map(|v| nodes[v as usize]));
-                angle_quality(lo, hi) < bound_deg
-            })
+            .filter(|cell| bad(&cell.map(|v| nodes[v as usize])))
             .flatten()
             .copied()
             .filter(|&v| freedom[v as usize] != Freedom::Fixed)
@@ -142,7 +172,7 @@ pub(crate) fn smooth(
         for v in todo {
             let star = &stars[v as usize];
             let here = nodes[v as usize];
-            let Some(now) = star_min(nodes, cells, star, v, here, f64::INFINITY) else { continue };
+            let Some((now, judge)) = start(nodes, star, v, here) else { continue };
             let mut sum = [0.0; 3];
             let mut n = 0.0;
             let mut reach: f64 = 0.0;
@@ -158,7 +188,7 @@ pub(crate) fn smooth(
                 }
             }
             let centroid = sum.map(|x| x / n);
-            let mut rng = SplitMix(0xD1E5_u64 ^ (u64::from(v) << 20));
+            let mut rng = SplitMix(seed ^ (u64::from(v) << 20));
             let mut best = (now, here);
             for k in 0..TRIES {
                 let at = match k {
@@ -174,13 +204,13 @@ pub(crate) fn smooth(
                     }
                 };
                 let Some(at) = constrain(freedom[v as usize], here, at) else { continue };
-                if let Some(q) = star_min(nodes, cells, star, v, at, max_volume) {
-                    if q > best.0 {
-                        best = (q, at);
+                if let Some(c) = cost(nodes, star, v, at, &judge) {
+                    if c < best.0 {
+                        best = (c, at);
                     }
                 }
             }
-            if best.0 > now {
+            if best.0 < now {
                 nodes[v as usize] = best.1;
                 moved += 1;
                 if freedom[v as usize] != Freedom::Free {
@@ -238,81 +268,16 @@ pub(crate) fn smooth_radius_edge(
     max_volume: f64,
     passes: usize,
 ) -> SmoothStats {
-    let mut stats = SmoothStats::default();
-    let mut stars: Vec<Vec<u32>> = vec![Vec::new(); nodes.len()];
-    for (c, cell) in cells.iter().enumerate() {
-        for &v in cell {
-            stars[v as usize].push(c as u32);
-        }
-    }
-    for _ in 0..passes {
-        stats.passes += 1;
-        let mut todo: Vec<u32> = cells
-            .iter()
-            .filter(|cell| tet_quality(&cell.map(|v| nodes[v as usize])).radius_edge > bound)
-            .flatten()
-            .copied()
-            .filter(|&v| freedom[v as usize] != Freedom::Fixed)
-            .collect();
-        todo.sort_unstable();
-        todo.dedup();
-        let mut moved = 0;
-        for v in todo {
-            let star = &stars[v as usize];
-            let here = nodes[v as usize];
-            let Some((now, angles)) = star_ratio(nodes, cells, star, v, here, f64::INFINITY) else { continue };
-            let floor = angles.min(bound_deg);
-            let mut sum = [0.0; 3];
-            let mut n = 0.0;
-            let mut reach: f64 = 0.0;
-            for &c in star {
-                for &u in &cells[c as usize] {
-                    if u != v {
-                        let p = nodes[u as usize];
-                        (0..3).for_each(|k| sum[k] += p[k]);
-                        n += 1.0;
-                        let d = [0, 1, 2].map(|k| p[k] - here[k]);
-                        reach = reach.max((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt());
-                    }
-                }
-            }
-            let centroid = sum.map(|x| x / n);
-            let mut rng = SplitMix(0x5EED_u64 ^ (u64::from(v) << 20));
-            let mut best = (now, here);
-            for k in 0..TRIES {
-                let at = match k {
-                    0 => centroid,
-                    1..=3 => {
-                        let f = k as f64 / 4.0;
-                        [0, 1, 2].map(|i| here[i] + f * (centroid[i] - here[i]))
-                    }
-                    _ => {
-                        let r = 0.1 * reach * (1.0 - (k as f64 - 4.0) / TRIES as f64);
-                        let u = [0; 3].map(|_| (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0);
-                        [0, 1, 2].map(|i| best.1[i] + r * u[i])
-                    }
-                };
-                let Some(at) = constrain(freedom[v as usize], here, at) else { continue };
-                if let Some((ratio, angles)) = star_ratio(nodes, cells, star, v, at, max_volume) {
-                    if ratio < best.0 && angles >= floor {
-                        best = (ratio, at);
-                    }
-                }
-            }
-            if best.0 < now {
-                nodes[v as usize] = best.1;
-                moved += 1;
-                if freedom[v as usize] != Freedom::Free {
-                    stats.boundary_moves += 1;
-                }
-            }
-        }
-        stats.moves += moved;
-        if moved == 0 {
-            break;
-        }
-    }
-    stats
+    let bad = |q: &[Point; 4]| tet_quality(q).radius_edge > bound;
+    // The cost is the star's largest ratio; a candidate must keep the star's
+    // smallest angle quality at the floor (`bound_deg`, or what it was).
+    let start = |nodes: &[Point], star: &[u32], v: u32, here: Point| {
+        star_ratio(nodes, cells, star, v, here, f64::INFINITY).map(|(ratio, angles)| (ratio, angles.min(bound_deg)))
+    };
+    let cost = |nodes: &[Point], star: &[u32], v: u32, at: Point, floor: &f64| {
+        star_ratio(nodes, cells, star, v, at, max_volume).filter(|&(_, angles)| angles >= *floor).map(|(r, _)| r)
+    };
+    smooth_with(nodes, cells, freedom, passes, 0x5EED, bad, start, cost)
 }
 
 #[cfg(test)]
