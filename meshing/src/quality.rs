@@ -105,8 +105,9 @@ pub fn tet_quality(p: &[P; 4]) -> TetQuality {
     let a = sub(p[1], p[0]);
     let b = sub(p[2], p[0]);
     let c = sub(p[3], p[0]);
-    let volume = tet_volume(p);
     let det = dot(a, cross(b, c));
+    // `tet_volume`'s expression, bit for bit.
+    let volume = det / 6.0;
     let num = [
         dot(a, a) * cross(b, c)[0] + dot(b, b) * cross(c, a)[0] + dot(c, c) * cross(a, b)[0],
         dot(a, a) * cross(b, c)[1] + dot(b, b) * cross(c, a)[1] + dot(c, c) * cross(a, b)[1],

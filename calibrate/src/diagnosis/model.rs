@@ -47,7 +47,7 @@ use fem_core::press::{
 };
 use nalgebra::DMatrix;
 use rayon::prelude::*;
-use wagashi_io::bundle::Shape;
+use wagashi_io::bundle::{Shape, Tool};
 use wagashi_io::{Bundle, MaterialSpec};
 
 use crate::lsq::{EvalError, Evaluation, LeastSquares, ParameterSpec};
@@ -257,6 +257,26 @@ impl Candidate {
         Self { effect, coords }
     }
 
+    /// [`Candidate::at_stress`] with the effect's nuisance parameters (the
+    /// slider's hardening, the thinning exponent, the adhesion opening) as
+    /// further coordinates after the strength ones, each fitted as itself from
+    /// its registry default (module docs of `diagnosis`, "Nuisance parameters").
+    pub fn with_nuisance(effect: EffectId, sigma_peak_mpa: Option<f64>) -> Self {
+        let mut c = Self::at_stress(effect, sigma_peak_mpa);
+        c.coords.extend(effect.params().iter().enumerate().filter(|(_, p)| p.nuisance).map(|(index, &spec)| Coord {
+            spec,
+            index,
+            inverse: false,
+            reference: spec.reference_at(sigma_peak_mpa),
+        }));
+        c
+    }
+
+    /// Whether the effect has nuisance parameters.
+    pub fn has_nuisance(effect: EffectId) -> bool {
+        effect.params().iter().any(|p| p.nuisance)
+    }
+
     /// The number of fitted effect parameters `d_j`.
     pub fn dim(&self) -> usize {
         self.coords.len()
@@ -359,9 +379,10 @@ fn phase_at(waypoints: &[[f64; 2]], release_s: f64, t: f64) -> Phase {
 /// stress-valued effect references follow ([`Candidate::at_stress`]): over the
 /// bundles with a measured force, the largest of (largest compressive force /
 /// nominal loaded area), the area being the block's `W x T` (the plate's face;
-/// in 2D the width times the thickness) or the cylinder's `pi r^2`. `None` when
-/// no bundle has both (markers only, or a `surface` specimen, whose loaded area
-/// the bundle does not state): the registry's static references then stand.
+/// in 2D the width times the thickness) or the cylinder's `pi r^2`, for bundles
+/// pressed by a plate. `None` when no bundle has both (markers only, a
+/// `surface` specimen, or a sphere, punch or surface tool, whose loaded area
+/// changes with the indentation): the registry's static references then stand.
 ///
 /// Why the measured force and not the baseline's stress field: it is the data
 /// itself, known before any fit, the same for every candidate, and does not
@@ -372,11 +393,14 @@ pub fn peak_stress_mpa(bundles: &[Bundle]) -> Option<f64> {
     bundles
         .iter()
         .filter_map(|b| {
+            if b.experiment.protocol.tool != Tool::Plate {
+                return None;
+            }
             let specimen = &b.experiment.specimen;
             let area = match specimen.shape {
                 Shape::Block => {
-                    let s = specimen.size_mm.as_ref()?;
-                    s.first()? * s.get(2)?
+                    let [w, _, t] = specimen.block_size()?;
+                    w * t
                 }
                 Shape::Cylinder => std::f64::consts::PI * specimen.radius_mm?.powi(2),
                 Shape::Surface => return None,
@@ -1299,6 +1323,24 @@ mod tests {
                 assert_eq!(s.measured, b.markers[s.marker].samples[i].position_mm);
             }
         }
+    }
+
+    /// The campaign's stress level: the largest measured force over the 20 x 10
+    /// mm top face under a plate (to 1e-12); none under a sphere, whose loaded
+    /// area the bundle does not state.
+    #[test]
+    fn peak_stress_is_the_largest_force_over_the_plates_face() {
+        let mut bundles = crate::diagnosis::tests::campaign("", 3e-3, 17);
+        let peak = bundles
+            .iter()
+            .flat_map(|b| b.force.as_ref().unwrap().samples.iter().map(|s| s.force_n))
+            .fold(f64::MIN, f64::max);
+        let sigma = peak_stress_mpa(&bundles).unwrap();
+        assert!((sigma - peak / 200.0).abs() < 1e-12 * sigma, "{sigma} against {peak} N / 200 mm^2");
+        for b in &mut bundles {
+            b.experiment.protocol.tool = Tool::Sphere;
+        }
+        assert_eq!(peak_stress_mpa(&bundles), None);
     }
 
     #[test]

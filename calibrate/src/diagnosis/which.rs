@@ -270,6 +270,30 @@ pub fn refit(
     Refit { fit, starts: n, errors }
 }
 
+/// The refit of `extended` (a strength fit's candidate with its nuisance
+/// parameters freed, [`Candidate::with_nuisance`]) from the strength fit `x`
+/// (the nuisance coordinates at their registry defaults): `Some` when it ends
+/// below `objective`.
+pub fn refine_nuisance(
+    model: &Model,
+    extended: &Candidate,
+    x: &[f64],
+    objective: f64,
+    options: &Options,
+) -> Result<Option<Fit>, String> {
+    let problem = Fitting { model, candidate: Some(extended) };
+    let specs = problem.specs();
+    let mut x0 = x.to_vec();
+    let defaults = extended.effect.null_values();
+    x0.extend(extended.coords.iter().filter(|c| c.spec.nuisance).map(|c| defaults[c.index]));
+    let mut first = options.clone();
+    if !extended.effect.has_sensitivities() {
+        first.jacobian_with_trial = false;
+    }
+    let fit = levenberg_marquardt(&problem, &specs, &x0, &first).map_err(|e| e.to_string())?;
+    Ok((fit.objective < objective).then_some(fit))
+}
+
 /// `(J~^T e)^T (J~^T J~)^+ (J~^T e)`: the part of `e` a candidate's projected
 /// columns can absorb (the numerical-error check `LM_num`).
 pub fn absorbed(projected: &[Vec<f64>], e: &[f64]) -> f64 {

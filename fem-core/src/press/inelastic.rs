@@ -20,7 +20,8 @@
 //!    current state otherwise). If that factorization fails the modified
 //!    iteration goes on.
 //! 3. Every full-Newton step is *line-searched* ([`line_search`]): each law's
-//!    update is monotone and associative, so the residual is the gradient of a
+//!    update is monotone and associative (all but softening, strain stiffening
+//!    with `a < 0`: [`line_search`]), so the residual is the gradient of a
 //!    convex incremental potential of the displacements, and the step length is
 //!    chosen where the potential's slope along the Newton direction has fallen to
 //!    [`LINE_SEARCH_SLOPE`] of its size at the start (the full step whenever it
@@ -157,7 +158,12 @@ pub(crate) const LINE_SEARCH_LONGEST: f64 = 64.0;
 /// bracketed (doubling the step up to [`LINE_SEARCH_LONGEST`] when the slope is
 /// still negative at 1, e.g. a tangent stiffer than the true one) and found by
 /// regula falsi (Illinois) with a bisection safeguard, to the same acceptance.
-/// Returns the step length and the evaluation there.
+/// Returns the step length and the evaluation there. One law is not monotone:
+/// strain stiffening with `a < 0` (softening); there the potential need not be
+/// convex, the slope may have several roots and the point returned need not
+/// lower the potential; the iteration's residual test still decides
+/// convergence. A local update without a solution at a trial length ends the
+/// search at the point of least slope found so far, in both phases.
 fn line_search<const S: usize>(
     u: &[f64],
     du: &[f64],
@@ -218,7 +224,9 @@ fn line_search<const S: usize>(
         if !(alpha > lo + 0.01 * width && alpha < hi - 0.01 * width) {
             alpha = 0.5 * (lo + hi);
         }
-        let (e, s) = at(alpha)?;
+        let Ok((e, s)) = at(alpha) else {
+            return Ok((closest.0, closest.1));
+        };
         if accept(&e, s) {
             return Ok((alpha, e));
         }
