@@ -493,31 +493,26 @@ pub fn whiten(r: &mut [f64], rho: f64) {
 /// `sigma^2 (I + 1 1^T)` over its `m` samples, whose inverse square root is
 /// `I - (1 - 1/sqrt(1 + m)) 1 1^T / m` (module docs, "Marker noise").
 pub fn whiten_markers(r: &mut [f64], groups: &[Vec<usize>]) {
+    shift_by_group_mean(r, groups, |m| -(1.0 - 1.0 / (1.0 + m).sqrt()));
+}
+
+/// The inverse of [`whiten_markers`]: a whitened group's mean is the raw mean
+/// divided by `sqrt(1 + m)`, and the shift is a multiple of the raw mean.
+pub fn unwhiten_markers(w: &mut [f64], groups: &[Vec<usize>]) {
+    shift_by_group_mean(w, groups, |m| (1.0 + m).sqrt() - 1.0);
+}
+
+/// Adds `gain(m)` times its mean to every entry of each group of `m` entries.
+fn shift_by_group_mean(r: &mut [f64], groups: &[Vec<usize>], gain: impl Fn(f64) -> f64) {
     for g in groups {
         if g.is_empty() {
             continue;
         }
         let m = g.len() as f64;
         let mean = g.iter().map(|&i| r[i]).sum::<f64>() / m;
-        let shift = (1.0 - 1.0 / (1.0 + m).sqrt()) * mean;
+        let shift = gain(m) * mean;
         for &i in g {
-            r[i] -= shift;
-        }
-    }
-}
-
-/// The inverse of [`whiten_markers`]: a whitened group's mean is the raw mean
-/// divided by `sqrt(1 + m)`, and the shift is a multiple of the raw mean.
-pub fn unwhiten_markers(w: &mut [f64], groups: &[Vec<usize>]) {
-    for g in groups {
-        if g.is_empty() {
-            continue;
-        }
-        let m = g.len() as f64;
-        let mean = g.iter().map(|&i| w[i]).sum::<f64>() / m;
-        let shift = ((1.0 + m).sqrt() - 1.0) * mean;
-        for &i in g {
-            w[i] += shift;
+            r[i] += shift;
         }
     }
 }
