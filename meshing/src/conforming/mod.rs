@@ -220,7 +220,9 @@ pub struct ConformingOptions {
     /// [`DEFAULT_RADIUS_EDGE`]. Infinite: none.
     pub radius_edge: f64,
     /// Sliver bound: tets whose smallest dihedral angle is under it [deg] are
-    /// refined or improved; default [`DEFAULT_SLIVER_DEG`]. 0: none.
+    /// refined or improved; default [`DEFAULT_SLIVER_DEG`]. 0: none, and no
+    /// smoothing at all (the smoothing for the radius-edge ratio keeps angles
+    /// at this bound, so it runs only with it).
     pub sliver_deg: f64,
 }
 
