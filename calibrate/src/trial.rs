@@ -40,14 +40,19 @@
 //! (`Settings::step_ends_s`) and so is each perturbed run, so the adaptive step
 //! choice does not enter the difference (the diagnosis's rule,
 //! diagnosis-details.md §5.1.3). Step: [`FD_STEP`] of a log-scaled unknown's value,
-//! of a linear one's range. `plate-friction` and `adhesion` are still refused by
-//! [`Campaign::new`], naming the key: a contact step may not be subdivided on a
-//! replay, so its differences would need adaptive runs, whose step choice moves
-//! the force by about the step tolerance.
+//! of a linear one's range. Trials with contact tools (a sphere, a punch, a
+//! surface, a plate that leaves and touches again) have no forward sensitivities
+//! either and are differenced the same way. A contact step that does not settle
+//! may not be subdivided on a replay, so when a replay fails, and always with a
+//! contact effect (`plate-friction`, `adhesion`), the columns come from adaptive
+//! runs instead, with the larger step [`ADAPTIVE_FD_STEP`]: their step choice
+//! moves the force by about the step tolerance (the diagnosis's rule,
+//! `diagnosis::model`).
 
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+use fem_core::effects::HookPoint;
 use fem_core::material::Material;
 use fem_core::press::{
     simulate_any, simulate_any_with_sensitivities, AnyPress, ParameterKind, PressResult, Sensitivities,
@@ -62,6 +67,12 @@ use crate::lsq::{EvalError, Evaluation, LeastSquares, ParameterSpec};
 /// The relative step of the forward differences of a trial whose effects have no
 /// forward sensitivities (module docs).
 pub const FD_STEP: f64 = 1e-6;
+
+/// The relative step of the forward differences on adaptive runs, for the trials
+/// whose frozen replay is not possible (contact; module docs): the adaptive step
+/// choice moves the force by about the step tolerance, so the step must be far
+/// larger than [`FD_STEP`] (the diagnosis uses the same, `diagnosis::model`).
+pub const ADAPTIVE_FD_STEP: f64 = 2e-2;
 
 /// Force samples per trial used in a fit, at most.
 pub const MAX_FORCE_SAMPLES: usize = 1500;
@@ -382,23 +393,6 @@ impl Campaign {
                 }
             };
             let problem = if axisymmetric { filled.to_press_axisymmetric(size)? } else { filled.to_press(size)? };
-            // Effects are held at the bundle's values; those without forward
-            // sensitivities are differenced on frozen steps, except contact ones
-            // (module docs), which are refused.
-            let contact = problem
-                .effects()
-                .active()
-                .into_iter()
-                .find(|e| !e.has_sensitivities() && e.hook() == fem_core::effects::HookPoint::Contact);
-            if let Some(effect) = contact {
-                let e = fem_core::effects::EffectError::NoSensitivities { effect, key: effect.params()[0].key };
-                let field = format!("effects.{}", e.key());
-                return Err(CampaignError::Invalid(format!(
-                    "{}:{}: effects.{e}",
-                    b.experiment_file().display(),
-                    b.line_of(&field)
-                )));
-            }
             trials.push(trial_of(b, problem)?);
         }
         Ok(Self {
@@ -610,8 +604,9 @@ impl<'c> Objective<'c> {
     ) -> Result<(Vec<f64>, Vec<Vec<f64>>), EvalError> {
         let materials = trial.materials(table)?;
         let problem = trial.with_materials(materials.clone());
-        // Effects without forward sensitivities: forward differences (module docs).
-        let differenced = problem.effects().check_sensitivities().is_err();
+        // Effects without forward sensitivities, and contact tools: forward
+        // differences (module docs).
+        let differenced = problem.effects().check_sensitivities().is_err() || problem.has_tools();
         // The free unknowns that act on this trial, as engine parameters.
         let mut acting: Vec<(usize, SensitivityParameter)> = Vec::new();
         if want_jacobian {
@@ -638,34 +633,50 @@ impl<'c> Objective<'c> {
         let mut jac: Vec<Vec<f64>> = Vec::new();
         if differenced && want_jacobian && !acting.is_empty() {
             res = self.trial_residuals_of(trial, &result);
+            let run = |table: &BTreeMap<String, MaterialSpec>, settings: &Settings| -> Result<Vec<f64>, EvalError> {
+                self.campaign.simulations.fetch_add(1, Ordering::Relaxed);
+                let r = simulate_any(&trial.with_materials(trial.materials(table)?), settings, &mut |_| {})
+                    .map_err(|e| EvalError::with_source(format!("trial {}", trial.name), e))?;
+                Ok(self.trial_residuals_of(trial, &r))
+            };
+            // The columns from runs on `settings`, differenced against `base`.
+            let columns = |settings: &Settings, base: &[f64], step: f64| -> Result<Vec<Vec<f64>>, EvalError> {
+                let mut jac = vec![vec![0.0; n]; base.len()];
+                for &(col, _) in &acting {
+                    let u = &self.campaign.unknowns[self.free[col]];
+                    let spec = u.spec();
+                    let value = table[&u.material].get(u.key).expect("a free unknown has a value");
+                    let h = match spec.scale {
+                        crate::lsq::Scale::Log => step * value,
+                        crate::lsq::Scale::Linear => step * (spec.upper - spec.lower),
+                    };
+                    let h = if value + h > spec.upper { -h } else { h };
+                    let mut perturbed = table.clone();
+                    set_parameter(perturbed.get_mut(&u.material).expect("the unknown's material"), u.key, value + h);
+                    for (row, (plus, at)) in jac.iter_mut().zip(run(&perturbed, settings)?.iter().zip(base)) {
+                        row[col] = (plus - at) / h;
+                    }
+                }
+                Ok(jac)
+            };
+            // Frozen steps first; a contact effect, or a replay that fails (a
+            // contact step that does not settle may not be subdivided), falls back
+            // to adaptive runs with the larger step.
+            let contact_effect = problem.effects().active().into_iter().any(|e| e.hook() == HookPoint::Contact);
             let frozen = Settings {
                 step_ends_s: Some(result.steps.iter().map(|s| s.t_s).collect()),
                 fixed_dt_s: None,
                 ..settings.clone()
             };
-            let run = |table: &BTreeMap<String, MaterialSpec>| -> Result<Vec<f64>, EvalError> {
-                self.campaign.simulations.fetch_add(1, Ordering::Relaxed);
-                let r = simulate_any(&trial.with_materials(trial.materials(table)?), &frozen, &mut |_| {})
-                    .map_err(|e| EvalError::with_source(format!("trial {}", trial.name), e))?;
-                Ok(self.trial_residuals_of(trial, &r))
+            let replayed = if contact_effect {
+                Err(EvalError::new("contact effect"))
+            } else {
+                run(table, &frozen).and_then(|base| columns(&frozen, &base, FD_STEP))
             };
-            let base = run(table)?;
-            jac = vec![vec![0.0; n]; res.len()];
-            for &(col, _) in &acting {
-                let u = &self.campaign.unknowns[self.free[col]];
-                let spec = u.spec();
-                let value = table[&u.material].get(u.key).expect("a free unknown has a value");
-                let h = match spec.scale {
-                    crate::lsq::Scale::Log => FD_STEP * value,
-                    crate::lsq::Scale::Linear => FD_STEP * (spec.upper - spec.lower),
-                };
-                let h = if value + h > spec.upper { -h } else { h };
-                let mut perturbed = table.clone();
-                set_parameter(perturbed.get_mut(&u.material).expect("the unknown's material"), u.key, value + h);
-                for (row, (plus, at)) in jac.iter_mut().zip(run(&perturbed)?.iter().zip(&base)) {
-                    row[col] = (plus - at) / h;
-                }
-            }
+            jac = match replayed {
+                Ok(jac) => jac,
+                Err(_) => columns(settings, &res, ADAPTIVE_FD_STEP)?,
+            };
             return Ok((res, jac));
         }
         for &(channel, _) in &self.channels {

@@ -66,9 +66,10 @@
 //! (E1 to E6) are refused the same way: their tangent equation needs the
 //! consistent tangent and the internal variables' derivatives (design below).
 //! `wagashi fit` (`wagashi_calibrate::trial`) differences the effects without
-//! sensitivities on frozen step ends instead, except the contact ones
-//! (`plate-friction`, `adhesion`): a contact step may not be subdivided on a
-//! replay. `adhesion` is refused with sensitivities as friction is.
+//! sensitivities on frozen step ends instead; the contact ones (`plate-friction`,
+//! `adhesion`) on adaptive runs with a larger step, because a contact step may
+//! not be subdivided on a replay. `adhesion` is refused with sensitivities as
+//! friction is.
 //!
 //! ## The material-point path (E1 to E6, built)
 //!
