@@ -9,15 +9,24 @@
 //! and 3, axisymmetric, with every candidate of the library (`--effects all`; the
 //! ones the engine cannot run are listed as not evaluated and cost nothing).
 //!
-//! One diagnosis takes tens of seconds, so the bench prints one timed run (with
-//! the verdict and how many candidates were evaluated) before criterion's ten
-//! samples; `cargo bench -p wagashi-workspace-tests --bench diagnosis -- none`
-//! prints that run and skips the samples. Figures in BENCHMARKS.md.
+//! That campaign cannot run all twelve (its plates are glued and it gives no
+//! `age_h`), so a second case is synthetic: three trials of the blind check's
+//! 2D campaign (`calibrate::diagnosis::blind`, a null campaign of development
+//! seed 101: frictionless plate, `age_h` given, issue-level sample scatter and
+//! noise), diagnosed with the library's default options (4 starts, 5 mm
+//! elements) and every candidate.
+//!
+//! One diagnosis takes seconds to tens of seconds, so the bench prints one timed
+//! run of each case (with the verdict and how many candidates were evaluated)
+//! before criterion's ten samples; `cargo bench -p wagashi-workspace-tests
+//! --bench diagnosis -- none` prints those runs and skips the samples. Figures
+//! in BENCHMARKS.md.
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
+use calibrate::diagnosis::blind::{campaign_seed, default_options, generate, Case, Scatter, Truth, MARKER_SIGMA_MM};
 use calibrate::diagnosis::{diagnose, DiagnosisOptions};
 use criterion::{criterion_group, criterion_main, Criterion};
 use wagashi_io::texture::{read_rheometer, to_bundle, ImportOptions};
@@ -52,22 +61,42 @@ fn run(all: &[Bundle]) -> calibrate::diagnosis::Diagnosis {
     diagnose(&all[..1], &all[1..], &BTreeMap::new(), &options, &|_, _, _| {}).unwrap()
 }
 
-fn bench(c: &mut Criterion) {
-    let dir = tempfile::tempdir().unwrap();
-    let all = bundles(dir.path());
+/// Three trials of a synthetic 2D null campaign (module docs).
+fn synthetic() -> Vec<Bundle> {
+    let case = Case { truth: Truth::Null, lambda: 0.0 };
+    let generated = generate(&case, campaign_seed(101, 0), &Scatter::ISSUE, &default_options(101)).unwrap();
+    generated.bundles.into_iter().take(3).collect()
+}
+
+fn run_synthetic(trials: &[Bundle]) -> calibrate::diagnosis::Diagnosis {
+    let options =
+        DiagnosisOptions { size_mm: Some(5.0), marker_sigma_mm: MARKER_SIGMA_MM, ..DiagnosisOptions::default() };
+    diagnose(trials, &[], &BTreeMap::new(), &options, &|_, _, _| {}).unwrap()
+}
+
+fn report(name: &str, run: impl Fn() -> calibrate::diagnosis::Diagnosis) {
     let start = Instant::now();
-    let d = run(&all);
+    let d = run();
     eprintln!(
-        "diagnosis/fungi_3_trials: one run {:.1} s, verdict `{}`, {} candidates evaluated, {} not evaluated ({})",
+        "diagnosis/{name}: one run {:.1} s, verdict `{}`, {} candidates evaluated, {} not evaluated ({})",
         start.elapsed().as_secs_f64(),
         d.verdict.label,
         d.candidates.len(),
         d.not_evaluated.len(),
         d.not_evaluated.iter().map(|(e, _)| e.id()).collect::<Vec<_>>().join(", ")
     );
+}
+
+fn bench(c: &mut Criterion) {
+    let dir = tempfile::tempdir().unwrap();
+    let all = bundles(dir.path());
+    let trials = synthetic();
+    report("fungi_3_trials", || run(&all));
+    report("synthetic_2d_3_trials", || run_synthetic(&trials));
     let mut group = c.benchmark_group("diagnosis");
     group.sample_size(10).measurement_time(Duration::from_secs(30));
     group.bench_function("fungi_3_trials", |b| b.iter(|| run(&all)));
+    group.bench_function("synthetic_2d_3_trials", |b| b.iter(|| run_synthetic(&trials)));
     group.finish();
 }
 
