@@ -8,7 +8,7 @@
 //! ```
 use std::time::Instant;
 
-use meshing::envelope::{envelope_mesh, EnvelopeOptions, TriangleTree};
+use meshing::envelope::{envelope_mesh_with_progress, EnvelopeOptions, TriangleTree};
 use meshing::quality::report;
 use meshing::Surface;
 
@@ -50,7 +50,15 @@ fn main() {
         if let Ok(f) = std::env::var("PROBE_FIT") {
             opts.fit_tolerance = f.parse().unwrap_or(0.0);
         }
-        let out = envelope_mesh(&s, &opts).unwrap_or_else(|e| panic!("{e}"));
+        let stage = std::sync::Mutex::new(String::new());
+        let timing = |name: &str, _: f64| {
+            let mut last = stage.lock().unwrap_or_else(|e| e.into_inner());
+            if *last != name && std::env::var("PROBE_STAGES").is_ok() {
+                println!("  {:.2} s: {name}", t0.elapsed().as_secs_f64());
+            }
+            *last = name.to_string();
+        };
+        let out = envelope_mesh_with_progress(&s, &opts, &timing).unwrap_or_else(|e| panic!("{e}"));
         let dt = t0.elapsed().as_secs_f64();
         let q = report(&out.mesh, &s, dt);
         let faces = out.mesh.boundary_facets();

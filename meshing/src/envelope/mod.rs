@@ -259,9 +259,11 @@ pub struct EnvelopeStats {
     pub smoothed_nodes: usize,
     /// Boundary fitting rounds run.
     pub fit_rounds: usize,
-    /// Boundary edges split by the fitting.
+    /// Edges split by the fitting (boundary ones, and inside ones by its longest-edge propagation).
     pub fit_splits: usize,
-    /// Splits the fitting's angle guard refused.
+    /// Boundary nodes the fitting moved onto input vertices.
+    pub fit_snaps: usize,
+    /// Candidates for which the fitting's angle guard refused every split.
     pub fit_refused: usize,
     /// Wall time [s].
     pub time_s: f64,
@@ -397,6 +399,7 @@ pub fn envelope_mesh_with_progress(
         stats.fit_rounds = f.rounds;
         stats.fit_splits = f.splits;
         stats.fit_refused = f.refused;
+        stats.fit_snaps = f.snaps;
     }
 
     for (r, name) in mesh.region_names.iter().enumerate() {
