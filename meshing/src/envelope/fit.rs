@@ -22,7 +22,7 @@
 //!    triangles with a node of a changed tet, and the input vertices still far,
 //!    are looked at again.
 //! 2. **Snap** (input -> output): the nearest corner of the nearest boundary
-//!    triangle moves onto the far input vertex, when that is closer than its
+//!    triangle moves onto the far input vertex, when that is closer than half its
 //!    shortest edge and every tet of it passes the guard below.
 //! 3. **Split** (Rivara's longest-edge propagation): before edge `(a, b)` is split,
 //!    the longer edges of the tets around it are split (up to [`LEPP_DEPTH`]
@@ -30,8 +30,9 @@
 //!    shapes. A split puts a new node on the edge; every tet around the edge is cut
 //!    in two (`a` or `b` replaced by the new node), which keeps the mesh
 //!    conforming. On the boundary the new node is the far input vertex (input ->
-//!    output) or the input's closest point to the midpoint, within one edge length
-//!    of the midpoint (not across a hole of an open input); inside it is the
+//!    output) or the input's closest point to the midpoint, within half the edge's
+//!    length of the midpoint (not across a hole of an open input, and not so far
+//!    that the new edges' chords stray more); inside it is the
 //!    midpoint. A split or snap is taken only when **every tet it makes has its
 //!    dihedral angles in [12°, 155°]** (the envelope targets;
 //!    [`super::smooth::score`] >= 1). So the step never widens the angle range
@@ -255,7 +256,8 @@ impl Work<'_> {
     }
 
     /// Moves node `v` to `p` if every tet of it then scores at least [`GUARD`] and
-    /// `p` is closer than half its shortest edge. Returns whether it did.
+    /// `p` is closer than half its shortest edge (farther, its boundary edges
+    /// lengthen and their chords stray: measured on the sphere). Returns whether it did.
     fn snap(&mut self, v: u32, p: P) -> bool {
         let here = self.nodes[v as usize];
         let shortest = self.of_node[v as usize]
@@ -264,7 +266,7 @@ impl Work<'_> {
             .filter(|&x| x != v)
             .map(|x| norm(sub(self.nodes[x as usize], here)))
             .fold(f64::INFINITY, f64::min);
-        if !(norm(sub(p, here)) < shortest) {
+        if !(norm(sub(p, here)) < 0.5 * shortest) {
             return false;
         }
         self.nodes[v as usize] = p;
@@ -352,7 +354,7 @@ impl Work<'_> {
                     None => return false,
                 },
             };
-            if !(norm(sub(target, mid)) <= norm(sub(pa, pb))) {
+            if !(norm(sub(target, mid)) <= 0.5 * norm(sub(pa, pb))) {
                 return false;
             }
             (target, Mobility::OnSurface)
