@@ -296,7 +296,8 @@ fn sphere_boundary_is_fitted_to_one_thousandth_of_the_diagonal() {
     assert!(q.hausdorff_relative <= 1e-3, "Hausdorff {} of the diagonal", q.hausdorff_relative);
     // Against the exact sphere: boundary nodes and face centroids.
     let diag = s.diagonal();
-    let radial = |p: [f64; 3]| (((p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) + (p[2] - c[2]).powi(2)).sqrt() - 1.0).abs();
+    let radial =
+        |p: [f64; 3]| (((p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) + (p[2] - c[2]).powi(2)).sqrt() - 1.0).abs();
     let mut worst: f64 = 0.0;
     for f in out.mesh.boundary_facets() {
         let p = f.map(|v| out.mesh.nodes[v as usize]);
@@ -318,7 +319,10 @@ fn sphere_boundary_is_fitted_to_one_thousandth_of_the_diagonal() {
     // refused every split keeps the unfitted distance (measured 1.75e-3).
     assert!(q.hausdorff_relative <= q0.hausdorff_relative, "{} > {}", q.hausdorff_relative, q0.hausdorff_relative);
     let err = (q.volume_mm3 - exact) / exact;
-    eprintln!("fitted to 2.5e-4: volume error {err:.2e} against the exact ball, {:.2e} against the input", q.volume_error);
+    eprintln!(
+        "fitted to 2.5e-4: volume error {err:.2e} against the exact ball, {:.2e} against the input",
+        q.volume_error
+    );
     assert!(err.abs() <= 2e-3, "{err}");
     assert!(q.volume_error.abs() <= 2e-3, "{}", q.volume_error);
 }

@@ -100,7 +100,7 @@ pub(crate) fn fit(
     let mut far_points: Vec<P> = input_points.to_vec();
     for _ in 0..max_rounds {
         let faces: Vec<[u32; 3]> = w.boundary.values().copied().collect();
-        let mut candidates: Vec<(f64, Vec<(u32, u32)>, Option<P>)> = Vec::new();
+        let mut candidates: Vec<Candidate> = Vec::new();
         let mut snaps: Vec<(f64, [u32; 3], P)> = Vec::new();
         let key = |a: u32, b: u32| if a < b { (a, b) } else { (b, a) };
         let movable = |w: &Work, v: u32| w.mobility[v as usize] == Mobility::OnSurface;
@@ -218,6 +218,10 @@ pub(crate) fn fit(
     }
     stats
 }
+
+/// A split candidate: its distance [mm], the edges to try in order, the input
+/// vertex to put the new node on (else the input's closest point to the midpoint).
+type Candidate = (f64, Vec<(u32, u32)>, Option<P>);
 
 /// How deep the longest-edge propagation goes.
 const LEPP_DEPTH: usize = 4;
@@ -338,7 +342,8 @@ impl Work<'_> {
             third.extend(self.cells[k as usize].iter().copied().filter(|&v| v != a && v != b));
         }
         third.sort_unstable();
-        let single: Vec<u32> = third.iter().copied().filter(|&x| third.iter().filter(|&&y| y == x).count() == 1).collect();
+        let single: Vec<u32> =
+            third.iter().copied().filter(|&x| third.iter().filter(|&&y| y == x).count() == 1).collect();
         let on_boundary = !single.is_empty();
         let (ma, mb) = (self.mobility[a as usize], self.mobility[b as usize]);
         let (pa, pb) = (self.nodes[a as usize], self.nodes[b as usize]);

@@ -123,7 +123,13 @@ pub struct EnvelopeOptions {
 impl EnvelopeOptions {
     /// Options with lattice spacing `size_mm` [mm] and the defaults.
     pub fn new(size_mm: f64) -> Self {
-        Self { size_mm, layers_mm: Vec::new(), max_lattice_vertices: 40_000_000, fit_tolerance: 1e-3, max_fit_rounds: 10 }
+        Self {
+            size_mm,
+            layers_mm: Vec::new(),
+            max_lattice_vertices: 40_000_000,
+            fit_tolerance: 1e-3,
+            max_fit_rounds: 10,
+        }
     }
 }
 
