@@ -117,14 +117,19 @@ fn obj(name: &str) -> Surface {
 }
 
 fn mesh_and_report(s: &Surface, h: f64) -> (meshing::envelope::EnvelopeMesh, QualityReport) {
+    mesh_and_report_with(s, &EnvelopeOptions::new(h))
+}
+
+fn mesh_and_report_with(s: &Surface, options: &EnvelopeOptions) -> (meshing::envelope::EnvelopeMesh, QualityReport) {
+    let h = options.size_mm;
     let t0 = Instant::now();
-    let out = envelope_mesh(s, &EnvelopeOptions::new(h)).unwrap_or_else(|e| panic!("h = {h}: {e}"));
+    let out = envelope_mesh(s, options).unwrap_or_else(|e| panic!("h = {h}: {e}"));
     let dt = t0.elapsed().as_secs_f64();
     let q = report(&out.mesh, s, dt);
     eprintln!(
         "h {h}: {} cells, dihedral [{:.2}, {:.2}] deg, <10deg {:.2e}, radius-edge max {:.2} p99.9 {:.2}, \
          radius ratio mean {:.3}, volume error {:.2e}, Hausdorff {:.2e} of diag ({:.2e} / {:.2e} mm), \
-         mesh {:.2} s, report {:.2} s, {} warnings",
+         mesh {:.2} s, report {:.2} s, {} warnings, fit {} splits {} snaps",
         q.num_cells,
         q.min_dihedral_deg,
         q.max_dihedral_deg,
@@ -138,7 +143,9 @@ fn mesh_and_report(s: &Surface, h: f64) -> (meshing::envelope::EnvelopeMesh, Qua
         q.surface_to_mesh_mm,
         q.mesh_time_s,
         q.report_time_s,
-        out.warnings.len()
+        out.warnings.len(),
+        out.stats.fit_splits,
+        out.stats.fit_snaps
     );
     for w in &out.warnings {
         eprintln!("  warning: {w}");
@@ -206,14 +213,15 @@ fn order(points: &[(f64, f64)]) -> f64 {
 
 // ---- shapes with known volume
 
-/// The sphere (an icosphere of 20480 triangles, volume by the divergence theorem):
-/// proven angle bounds at every size, the volume error converges at second order.
+/// The sphere (an icosphere of 20480 triangles, volume by the divergence theorem),
+/// stuffing without boundary fitting: proven angle bounds at every size, the volume error converges at second order.
 #[test]
 fn sphere_quality_and_volume_convergence() {
     let s = icosphere(1.0, [0.1, -0.2, 0.05], 5);
     let mut errors = Vec::new();
     for h in [0.2, 0.1, 0.05] {
-        let (out, q) = mesh_and_report(&s, h);
+        // The stuffing alone (the fitting's error follows its tolerance, not h).
+        let (out, q) = mesh_and_report_with(&s, &EnvelopeOptions { fit_tolerance: 0.0, ..EnvelopeOptions::new(h) });
         assert_proven_bounds(&q);
         assert_issue_angles(&q);
         assert_conforming(&out.mesh);
@@ -261,6 +269,64 @@ fn cube_quality_and_volume_convergence() {
     assert!(p > 1.0, "order {p}: {errors:?}");
 }
 
+/// Boundary fitting on the sphere (closed form): at h = 0.2 the stuffing's chords
+/// alone stray by about 0.18 h^2 = 7e-3 mm, 2e-3 of the diagonal; the fitted
+/// boundary is within the issue's 1e-3 of the diagonal of the input both ways,
+/// and of the exact sphere (radius 1) within that plus the icosphere's own
+/// facets (sagitta 3.8e-4 mm), the angles within [12, 155] deg (volume error
+/// -3e-3). Fitted to 2.5e-4, the volume is within 2e-3 of the exact ball's, but
+/// the Hausdorff distance is only no worse than unfitted. Without fitting the
+/// same size misses the Hausdorff target.
+#[test]
+fn sphere_boundary_is_fitted_to_one_thousandth_of_the_diagonal() {
+    let c = [0.1, -0.2, 0.05];
+    let s = icosphere(1.0, c, 5);
+    let h = 0.2;
+    let mut plain = EnvelopeOptions::new(h);
+    plain.fit_tolerance = 0.0;
+    let unfitted = envelope_mesh(&s, &plain).unwrap();
+    let q0 = report(&unfitted.mesh, &s, 0.0);
+    eprintln!("unfitted: Hausdorff {:.2e} of diag, volume error {:.2e}", q0.hausdorff_relative, q0.volume_error);
+    assert!(q0.hausdorff_relative > 1e-3, "{}", q0.hausdorff_relative);
+    let (out, q) = mesh_and_report(&s, h);
+    assert!(out.stats.fit_splits > 0);
+    assert_eq!(q.num_inverted, 0);
+    assert_issue_angles(&q);
+    assert_conforming(&out.mesh);
+    assert!(q.hausdorff_relative <= 1e-3, "Hausdorff {} of the diagonal", q.hausdorff_relative);
+    // Against the exact sphere: boundary nodes and face centroids.
+    let diag = s.diagonal();
+    let radial =
+        |p: [f64; 3]| (((p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) + (p[2] - c[2]).powi(2)).sqrt() - 1.0).abs();
+    let mut worst: f64 = 0.0;
+    for f in out.mesh.boundary_facets() {
+        let p = f.map(|v| out.mesh.nodes[v as usize]);
+        worst = worst.max(radial(p[0]));
+        worst = worst.max(radial([0, 1, 2].map(|k| (p[0][k] + p[1][k] + p[2][k]) / 3.0)));
+    }
+    let sagitta = 3.8e-4;
+    assert!(worst <= 1e-3 * diag + sagitta, "{worst} mm from the exact sphere");
+    eprintln!("fitted: {worst:.2e} mm from the exact sphere");
+    // The volume: chords on a convex part all err inward, so the issue's volume
+    // gate (2e-3) needs a tighter fit than its Hausdorff gate here: 2.5e-4.
+    let exact = 4.0 / 3.0 * std::f64::consts::PI;
+    let tight = EnvelopeOptions { fit_tolerance: 2.5e-4, ..EnvelopeOptions::new(h) };
+    let (out, q) = mesh_and_report_with(&s, &tight);
+    assert_eq!(q.num_inverted, 0);
+    assert_issue_angles(&q);
+    assert_conforming(&out.mesh);
+    // Its Hausdorff distance is measured, not promised: a spot where the guard
+    // refused every split keeps the unfitted distance (measured 1.75e-3).
+    assert!(q.hausdorff_relative <= q0.hausdorff_relative, "{} > {}", q.hausdorff_relative, q0.hausdorff_relative);
+    let err = (q.volume_mm3 - exact) / exact;
+    eprintln!(
+        "fitted to 2.5e-4: volume error {err:.2e} against the exact ball, {:.2e} against the input",
+        q.volume_error
+    );
+    assert!(err.abs() <= 2e-3, "{err}");
+    assert!(q.volume_error.abs() <= 2e-3, "{}", q.volume_error);
+}
+
 /// Faces on lattice planes: lattice vertices exactly on the surface count as on it.
 #[test]
 fn a_cube_on_the_lattice_planes_is_meshed_exactly() {
@@ -274,7 +340,9 @@ fn a_cube_on_the_lattice_planes_is_meshed_exactly() {
 
 /// The Stanford bunny (clean, closed): the issue's angle and volume targets at
 /// h = 0.2 mm (1/50 of its size). Its Hausdorff target (1e-3 of the diagonal) is
-/// not reached by a uniform lattice at this size: measured 9.4e-3, asserted < 1.2e-2.
+/// not reached by a uniform lattice at this size, nor after the boundary fitting
+/// (the ear tips, where the angle guard refuses the splits): measured 9.4e-3,
+/// asserted < 1.2e-2.
 #[test]
 fn bunny_meets_the_angle_and_volume_targets() {
     let s = obj("npm_bunny.obj");

@@ -30,7 +30,7 @@ pub(crate) enum Mobility {
 }
 
 /// The score of the tet with corners `p` (see the module docs); negative when inverted.
-fn score(p: &[P; 4]) -> f64 {
+pub(crate) fn score(p: &[P; 4]) -> f64 {
     let vol = dot(sub(p[1], p[0]), cross(sub(p[2], p[0]), sub(p[3], p[0])));
     if !(vol > 0.0) {
         return -1.0;

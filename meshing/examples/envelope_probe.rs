@@ -1,0 +1,147 @@
+//! Where the envelope mesh's Hausdorff distance comes from: for an OBJ file and
+//! a list of sizes, both directions of the distance (output boundary -> input,
+//! input -> output boundary), where their maxima sit, and the input's dihedral
+//! angle at the worst input point (a sharp edge or a smooth part).
+//!
+//! ```text
+//! cargo run --release -p wagashi-meshing --example envelope_probe -- ../shared/data/meshes/npm_bunny.obj 0.3 0.2 0.1
+//! ```
+use std::time::Instant;
+
+use meshing::envelope::{envelope_mesh_with_progress, EnvelopeOptions, TriangleTree};
+use meshing::quality::report;
+use meshing::Surface;
+
+type P = [f64; 3];
+
+fn read_obj(path: &str) -> Surface {
+    let (models, _) = tobj::load_obj(path, &tobj::LoadOptions { triangulate: true, ..Default::default() })
+        .unwrap_or_else(|e| panic!("{path}: {e}"));
+    let mut s = Surface::default();
+    for (r, m) in models.iter().enumerate() {
+        let base = s.vertices.len() as u32;
+        let p = &m.mesh.positions;
+        s.vertices.extend(p.chunks(3).map(|c| [c[0] as f64, c[1] as f64, c[2] as f64]));
+        s.triangles.extend(m.mesh.indices.chunks(3).map(|t| [base + t[0], base + t[1], base + t[2]]));
+        s.triangle_regions.extend(std::iter::repeat_n(r as u32, m.mesh.indices.len() / 3));
+        s.region_names.push(m.name.clone());
+    }
+    s
+}
+
+fn sub(a: P, b: P) -> P {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn norm(a: P) -> f64 {
+    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let path = args.get(1).map(String::as_str).unwrap_or("../shared/data/meshes/npm_bunny.obj");
+    let sizes: Vec<f64> = args.iter().skip(2).filter_map(|a| a.parse().ok()).collect();
+    let s = read_obj(path);
+    let diag = s.diagonal();
+    let in_tree = TriangleTree::new(s.triangles.iter().map(|t| t.map(|v| s.vertices[v as usize])).collect());
+    println!("{path}: {} triangles, diagonal {diag:.4} mm", s.triangles.len());
+    for h in sizes {
+        let t0 = Instant::now();
+        let mut opts = EnvelopeOptions::new(h);
+        if let Ok(f) = std::env::var("PROBE_FIT") {
+            opts.fit_tolerance = f.parse().unwrap_or(0.0);
+        }
+        let stage = std::sync::Mutex::new(String::new());
+        let timing = |name: &str, _: f64| {
+            let mut last = stage.lock().unwrap_or_else(|e| e.into_inner());
+            if *last != name && std::env::var("PROBE_STAGES").is_ok() {
+                println!("  {:.2} s: {name}", t0.elapsed().as_secs_f64());
+            }
+            *last = name.to_string();
+        };
+        let out = envelope_mesh_with_progress(&s, &opts, &timing).unwrap_or_else(|e| panic!("{e}"));
+        let dt = t0.elapsed().as_secs_f64();
+        let q = report(&out.mesh, &s, dt);
+        let faces = out.mesh.boundary_facets();
+        let out_tree = TriangleTree::new(faces.iter().map(|f| f.map(|v| out.mesh.nodes[v as usize])).collect());
+        // Input vertices: distance to the output boundary, the worst few and a histogram.
+        let mut d: Vec<(f64, usize)> = s
+            .vertices
+            .iter()
+            .enumerate()
+            .map(|(i, &p)| (out_tree.closest_point(p).map_or(f64::INFINITY, |c| c.1), i))
+            .collect();
+        d.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let over = |t: f64| d.iter().filter(|x| x.0 > t * diag).count();
+        // Output boundary triangle centroids: distance to the input.
+        let mut e: Vec<(f64, P)> = faces
+            .iter()
+            .map(|f| {
+                let p = f.map(|v| out.mesh.nodes[v as usize]);
+                let c = [0, 1, 2].map(|k| (p[0][k] + p[1][k] + p[2][k]) / 3.0);
+                (in_tree.closest_point(c).map_or(f64::INFINITY, |x| x.1), c)
+            })
+            .collect();
+        e.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let eover = |t: f64| e.iter().filter(|x| x.0 > t * diag).count();
+        println!(
+            "h {h}: {} cells, dihedral [{:.2}, {:.2}], volume err {:.2e}, time {dt:.2} s; Hausdorff {:.2e} \
+             (out->in {:.2e}, in->out {:.2e} of diag)",
+            q.num_cells,
+            q.min_dihedral_deg,
+            q.max_dihedral_deg,
+            q.volume_error,
+            q.hausdorff_relative,
+            q.mesh_to_surface_mm / diag,
+            q.surface_to_mesh_mm / diag
+        );
+        println!(
+            "  fit: {} rounds, {} splits, {} refused",
+            out.stats.fit_rounds, out.stats.fit_splits, out.stats.fit_refused
+        );
+        println!(
+            "  input vertices farther than 1e-3/3e-3/1e-2 diag: {} / {} / {} of {}; boundary centroids: {} / {} / {} of {}",
+            over(1e-3),
+            over(3e-3),
+            over(1e-2),
+            d.len(),
+            eover(1e-3),
+            eover(3e-3),
+            eover(1e-2),
+            e.len()
+        );
+        for &(dist, i) in d.iter().take(5) {
+            println!("  input vertex {i} at {:?}: {:.2e} diag", s.vertices[i], dist / diag);
+        }
+        if std::env::var("PROBE_WHERE").is_ok() {
+            let (_, i) = d[0];
+            let p = s.vertices[i];
+            let (c, dist, t) = out_tree.closest_point(p).unwrap();
+            let f = faces[t as usize];
+            println!("  worst input vertex {i}: nearest boundary point {c:?} at {dist:.4} mm, face {f:?}");
+            for v in f {
+                let q = out.mesh.nodes[v as usize];
+                let mut angles = (180.0f64, 0.0f64);
+                let mut n = 0;
+                for cell in &out.mesh.cells {
+                    if cell.contains(&v) {
+                        let (lo, hi) = meshing::quality::dihedral_range_deg(&cell.map(|x| out.mesh.nodes[x as usize]));
+                        angles = (angles.0.min(lo), angles.1.max(hi));
+                        n += 1;
+                    }
+                }
+                println!(
+                    "    node {v} at {q:?}: {:.4} mm from the vertex, {:.2e} from the input, {n} tets, angles [{:.1}, {:.1}]",
+                    norm(sub(q, p)),
+                    in_tree.closest_point(q).unwrap().1,
+                    angles.0,
+                    angles.1
+                );
+            }
+        }
+        for &(dist, c) in e.iter().take(3) {
+            println!("  boundary centroid at {c:?}: {:.2e} diag", dist / diag);
+        }
+        let _ = sub([0.0; 3], [0.0; 3]);
+        let _ = norm([0.0; 3]);
+    }
+}
