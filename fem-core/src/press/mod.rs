@@ -63,7 +63,10 @@ where
         Integrator::Seed if !problem.tools.is_empty() => {
             Err(PressError::BadSettings("contact tools need the quasi-static integrator".into()))
         }
-        Integrator::Seed if problem.effects.material_point().is_some() => {
+        Integrator::Seed
+            if problem.effects.material_point().is_some()
+                || problem.materials.iter().any(|m| m.damage_runs(problem.effects.forces_material_point_path())) =>
+        {
             Err(PressError::BadSettings("material-point effects need the quasi-static integrator".into()))
         }
         Integrator::Seed if problem.effects.machine_compliance_mm_per_n().is_some() => {

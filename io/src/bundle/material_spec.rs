@@ -229,7 +229,7 @@ impl MaterialSpec {
     pub fn to_material(&self) -> Result<Material, MissingParameter> {
         let rheology = self.to_rheology()?;
         let poisson = self.poisson.ok_or(MissingParameter { key: "poisson" })?;
-        Ok(Material { rheology, poisson })
+        Ok(Material { rheology, poisson, damage: None })
     }
 
     /// The file this table was read from and the line of `key` in it (of the
