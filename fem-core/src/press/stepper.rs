@@ -173,7 +173,9 @@ where
     // The material-point path (crate::effects, E1 to E5; press::inelastic).
     if model.point.is_some() && (settings.integrator != Integrator::QuasiStatic || tracker.is_some()) {
         return Err(PressError::BadSettings(
-            "material-point effects need the quasi-static integrator and no sensitivities".into(),
+            "material-point effects (and a material's Mullins damage) need the quasi-static integrator and no \
+             sensitivities"
+                .into(),
         ));
     }
     let mut point_retries = 0usize;
