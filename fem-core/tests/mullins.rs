@@ -78,12 +78,8 @@ fn cycle_matches_the_closed_form() {
         let p = block(m.clone(), uniaxial(cycle(), 30.0));
         let r = press::simulate(&p, &settings, &mut |_| {}).unwrap();
         let expected = closed_form(&r, &p.protocol, e, &law);
-        let worst = r
-            .steps
-            .iter()
-            .zip(&expected)
-            .map(|(s, (_, x))| (s.plate_force_n / A - x).abs() / peak)
-            .fold(0.0, f64::max);
+        let worst =
+            r.steps.iter().zip(&expected).map(|(s, (_, x))| (s.plate_force_n / A - x).abs() / peak).fold(0.0, f64::max);
         println!("{name}: {} steps, largest stress error {worst:.2e} of the peak", r.steps.len());
         assert!(worst < 1e-9, "{name}: {worst}");
     }
@@ -193,8 +189,8 @@ fn refusals_name_the_parameter() {
     // A material built by hand is checked by the problem's validation.
     let mut m = Material::new(Rheology::Elastic { e_mpa: 0.05 }, 0.3).unwrap();
     m.damage = Some(MullinsDamage { d_inf: 0.95, strain_c: 0.05 });
-    let err = PlanePress::new_2d(mesh::rectangle(W, H, 5.0, "m").unwrap(), T, vec![m], uniaxial(cycle(), 30.0))
-        .unwrap_err();
+    let err =
+        PlanePress::new_2d(mesh::rectangle(W, H, 5.0, "m").unwrap(), T, vec![m], uniaxial(cycle(), 30.0)).unwrap_err();
     assert!(err.to_string().contains("region `m`") && err.to_string().contains("d_inf = 0.95"), "{err}");
     // With a material-point effect, and with the seed's integrator.
     let m = Material::seed_mat1_force().with_damage(MullinsDamage::new(0.3, 0.05).unwrap()).unwrap();

@@ -415,18 +415,20 @@ mod tests {
         let trial = uniaxial(-0.02);
         let (g, dt, c3) = (0.05, 2.0, 3.0);
         let k = g * dt / c3;
-        let s =
-            InelasticLaw::Slider { yield_mpa: 0.005, hardening_mpa: 0.01 }.update(&c, &trial, &e0, g, dt, false, &e0, 0.0);
+        let s = InelasticLaw::Slider { yield_mpa: 0.005, hardening_mpa: 0.01 }
+            .update(&c, &trial, &e0, g, dt, false, &e0, 0.0);
         let s = s.unwrap();
         assert!((energy_norm(&c, &(s.tau - s.inelastic * 0.01)) - 0.005).abs() < 1e-15);
-        let b = InelasticLaw::Bingham { threshold_mpa: 0.004, c3_mpa_s: c3 }.update(&c, &trial, &e0, g, dt, false, &e0, 0.0);
+        let b = InelasticLaw::Bingham { threshold_mpa: 0.004, c3_mpa_s: c3 }
+            .update(&c, &trial, &e0, g, dt, false, &e0, 0.0);
         let b = b.unwrap();
         // Net dashpot flow over the step: the chain's tau1/c3 dt plus the correction.
         let net = b.tau * (dt / c3) + b.inelastic;
         let expected = b.tau * ((1.0 - 0.004 / energy_norm(&c, &b.tau)) * dt / c3);
         assert!((net - expected).norm() < 1e-15, "{net} vs {expected}");
         let small = uniaxial(-0.001);
-        let b = InelasticLaw::Bingham { threshold_mpa: 0.004, c3_mpa_s: c3 }.update(&c, &small, &e0, g, dt, false, &e0, 0.0);
+        let b = InelasticLaw::Bingham { threshold_mpa: 0.004, c3_mpa_s: c3 }
+            .update(&c, &small, &e0, g, dt, false, &e0, 0.0);
         let b = b.unwrap();
         assert!((b.tau * (dt / c3) + b.inelastic).norm() < 1e-18);
         assert!((b.tau - small / (1.0 - k)).norm() < 1e-18);
@@ -444,8 +446,8 @@ mod tests {
             assert_eq!(u.tau, trial, "{law:?}");
             assert_eq!(u.inelastic, e0, "{law:?}");
         }
-        let long =
-            InelasticLaw::Bingham { threshold_mpa: 0.004, c3_mpa_s: c3 }.update(&c, &trial, &e0, g, 60.0, false, &e0, 0.0);
+        let long = InelasticLaw::Bingham { threshold_mpa: 0.004, c3_mpa_s: c3 }
+            .update(&c, &trial, &e0, g, 60.0, false, &e0, 0.0);
         assert!(matches!(long, Err(PointFailure::StepTooLong { .. })));
     }
 

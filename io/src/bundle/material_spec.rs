@@ -314,8 +314,7 @@ impl MaterialSpec {
             (Some(_), None) => return Err(err("mullins_d_inf", "needs mullins_strain_c too".into())),
             (None, Some(_)) => return Err(err("mullins_strain_c", "needs mullins_d_inf too".into())),
             (Some(d_inf), Some(strain_c)) => {
-                if let Err(MaterialError::DamageOutOfRange { name, value, range }) =
-                    MullinsDamage::new(d_inf, strain_c)
+                if let Err(MaterialError::DamageOutOfRange { name, value, range }) = MullinsDamage::new(d_inf, strain_c)
                 {
                     return Err(err(&format!("mullins_{name}"), format!("{value} is outside {range}")));
                 }
