@@ -85,8 +85,9 @@
 //! scatter, `cargo run --release -p wagashi-calibrate --example blind_mullins --
 //! S 30 100 300` for S = 101 to 104: campaign `i` of the case list at
 //! [`campaign_seed`]`(S, i)`, as [`run_blind`] runs it): every campaign reached
-//! its strength with three lambda_eff evaluations (`strength_evals`; lambda_eff 30.3 to 30.4, 100.1 to 100.9,
-//! 300.0 to 301.1; `d_inf` 0.010, 0.017 to 0.020, 0.033 to 0.037) and all
+//! its strength with three lambda_eff evaluations (`strength_evals`; lambda_eff
+//! 30.3 to 30.4, 100.1 to 100.9, 300.0 to 301.1; `d_inf` 0.010, 0.017 to 0.020,
+//! 0.033 to 0.037) and all
 //! twelve came out `tie` between `finite-strain` and `strain-stiffening`
 //! (cosine of their corrections 0.88 to 0.97): flagged `unexplained` or
 //! `partial` 0/12. On first loading the damage is a softening that grows with
