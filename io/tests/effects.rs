@@ -220,3 +220,32 @@ fn effects_round_trip() {
     assert_eq!(back.experiment.data.as_ref().unwrap().force_tared, Some(false));
     assert_eq!(effects_of(&back.to_press(2.5).unwrap()), effects_of(&bundle.to_press(2.5).unwrap()));
 }
+
+/// The Mullins-type damage keys of a material reach the engine: the push force
+/// of a damaged elastic gel is below the baseline's (softening on first
+/// loading); `mullins_d_inf = 0` gives the baseline bit for bit; out-of-range
+/// values and a lone key are refused naming the file, line and key.
+#[test]
+fn mullins_damage_keys_run_and_are_checked() {
+    let settings = Settings { fixed_dt_s: Some(0.25), ..Settings::default() };
+    let last_force = |toml: &str| {
+        let b = plane_bundle(toml);
+        let p = read_bundle(&b.dir).unwrap().to_press(5.0).unwrap();
+        simulate_any(&p, &settings, &mut |_| {}).unwrap().steps.last().unwrap().plate_force_n
+    };
+    let base = last_force(PLANE);
+    let with = |lines: &str| edit(PLANE, "E_MPa = 0.05", &format!("E_MPa = 0.05\n{lines}"));
+    let damaged = last_force(&with("mullins_d_inf = 0.3\nmullins_strain_c = 0.05"));
+    assert!(damaged < 0.9 * base, "{damaged} vs {base}");
+    let null = last_force(&with("mullins_d_inf = 0.0\nmullins_strain_c = 0.05"));
+    assert_eq!(null.to_bits(), base.to_bits());
+    for (lines, key) in [
+        ("mullins_d_inf = 0.9\nmullins_strain_c = 0.05", "materials.gel.mullins_d_inf"),
+        ("mullins_d_inf = 0.3\nmullins_strain_c = -1.0", "materials.gel.mullins_strain_c"),
+        ("mullins_d_inf = 0.3", "materials.gel.mullins_d_inf"),
+    ] {
+        let b = plane_bundle(&with(lines));
+        let err = read_bundle(&b.dir).unwrap_err().to_string();
+        assert!(err.contains(key) && err.contains("experiment.toml:"), "{lines}: {err}");
+    }
+}

@@ -226,6 +226,30 @@ fn the_blind_generator_does_not_depend_on_the_number_of_threads() {
     assert!(one.reached && (one.lambda_eff / 30.0 - 1.0).abs() < 0.2, "{one:?}");
 }
 
+/// A Mullins-type damage campaign (out of library: the engine's damage law on
+/// the truth, [`super::blind::OutOfLibrary::MullinsDamage`]) is generated at its
+/// target strength: lambda_eff within 20 % of 100 (the strength calibration's
+/// acceptance), reached, with `d_inf = 0.1 a` inside the law's bounds and the
+/// characteristic strain recorded.
+#[test]
+fn a_mullins_campaign_is_generated_at_its_strength() {
+    use super::blind::{
+        default_options, generate, Case, OutOfLibrary, Scatter, Truth, MULLINS_D_INF_PER_AMPLITUDE, MULLINS_STRAIN_C,
+    };
+    let case = Case { truth: Truth::OutOfLibrary(OutOfLibrary::MullinsDamage), lambda: 100.0 };
+    let g = generate(&case, 78, &Scatter::ISSUE, &default_options(1)).unwrap();
+    eprintln!("{:?}: lambda_eff {:.1} (raw {:.1}, null {:.1})", g.strength, g.lambda_eff, g.lambda_raw, g.lambda_null);
+    assert!(g.reached && (g.lambda_eff / 100.0 - 1.0).abs() < 0.2, "{:?} {}", g.strength, g.lambda_eff);
+    assert_eq!(g.lambda_eff, g.lambda_raw - g.lambda_null);
+    assert_eq!(g.strength.len(), 2);
+    let (key, d_inf) = &g.strength[0];
+    assert_eq!(key, "mullins_d_inf");
+    assert!(*d_inf > 0.0 && *d_inf <= fem_core::material::MAX_DAMAGE, "{d_inf}");
+    assert_eq!(*d_inf, g.amplitude * MULLINS_D_INF_PER_AMPLITUDE);
+    assert_eq!(g.strength[1], ("mullins_strain_c".to_string(), MULLINS_STRAIN_C));
+    assert_eq!(g.bundles.len(), super::blind::DESIGN.len());
+}
+
 /// The frozen blind CI set (seed 20261121, never used while tuning; the
 /// development seeds are 101 to 104, see blind.rs): eight campaigns with ideal
 /// samples ([`super::blind::Scatter::IDEAL`], kept from before the per-sample

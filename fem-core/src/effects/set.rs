@@ -231,7 +231,7 @@ impl Effects {
                 c3_mpa_s: c3_mpa_s * sc,
             },
         };
-        Material { rheology, poisson: material.poisson }
+        Material { rheology, poisson: material.poisson, damage: material.damage }
     }
 
     /// For verification: run the material-point path (the inelastic strain, the
@@ -240,6 +240,12 @@ impl Effects {
     /// tests compare the two.
     pub fn force_material_point_path(&mut self, on: bool) {
         self.force_material_point = on;
+    }
+
+    /// Whether [`Effects::force_material_point_path`] is on (it also runs a
+    /// material's Mullins-type damage at its null, [`crate::material::MullinsDamage`]).
+    pub fn forces_material_point_path(&self) -> bool {
+        self.force_material_point
     }
 
     /// The material-point effect (E1 to E5) the engine runs, with its values: the

@@ -36,6 +36,14 @@
 //! `e1` alone (the chain then acts on `psi(e1) = e1 - e_in`, Fung's quasi-linear
 //! form), so its update needs `e1` and no iteration of its own.
 //!
+//! Mullins-type damage ([`InelasticLaw::Damage`], a material's law, not an effect
+//! of the diagnosis; [`super::MullinsDamage`]) is strain-driven too: the chain
+//! acts on `(1 - d(alpha1)) e1`, i.e. `e_in = d(alpha1) e1`, with the cell's
+//! history `alpha1 = max(alpha0, |e1|_C)`, the largest equivalent strain at the
+//! step ends so far. That is the exact largest value over the step too: the
+//! strain is linear in time inside a step and `|e|_C` is convex along a line, so
+//! its maximum over the step lies at an end.
+//!
 //! Every other update is *radial*: the new stress image is a positive multiple of the
 //! trial (relative to the back stress for the slider), which turns each law into
 //! one scalar equation, solved in closed form (slider, Bingham, dual) or by a
@@ -68,6 +76,10 @@ pub enum InelasticLaw {
     /// and the kinematics change (the blended Green-Lagrange strain, the internal
     /// force `w B(u)^T S`; [`crate::element::green_lagrange_strain`]).
     FiniteStrain { blend: f64 },
+    /// Mullins-type damage (a material's law, [`super::MullinsDamage`]): the chain
+    /// acts on `(1 - d(alpha)) e`, `d(alpha) = d_inf (1 - exp(-alpha / strain_c))`,
+    /// `alpha` the cell's largest `|e|_C` so far (its history).
+    Damage { d_inf: f64, strain_c: f64 },
 }
 
 /// The result of a local update.
@@ -81,6 +93,9 @@ pub struct PointUpdate<const S: usize> {
     /// slider with `H < TANGENT_HARDENING g` the tangent of `H = TANGENT_HARDENING g`
     /// ([`TANGENT_HARDENING`] is 1e-8: in practice only `H = 0`).
     pub tangent: SMatrix<f64, S, S>,
+    /// The law's scalar history at the step's end: for [`InelasticLaw::Damage`] the
+    /// largest equivalent strain so far; the start's value for the other laws.
+    pub history: f64,
 }
 
 /// Why a local update has no solution for this step.
@@ -135,7 +150,13 @@ impl InelasticLaw {
             InelasticLaw::Dual { log_ratio, .. } => log_ratio == 0.0,
             InelasticLaw::Stiffening { a } => a == 0.0,
             InelasticLaw::FiniteStrain { blend } => blend == 0.0,
+            InelasticLaw::Damage { d_inf, .. } => d_inf == 0.0,
         }
+    }
+
+    /// Whether the law carries a scalar history per cell (the damage's largest strain).
+    pub fn needs_history(&self) -> bool {
+        matches!(self, InelasticLaw::Damage { .. })
     }
 
     /// Whether the law needs the per-cell loading flag (E4).
@@ -147,7 +168,9 @@ impl InelasticLaw {
     /// matrix, `tau_trial = g (e1 - e_in0) - q`, `inelastic0 = e_in0`, `g` the
     /// step factor, `dt` the step, `unloading` the cell's direction flag (E4 only),
     /// `strain = e1` the cell's total strain at the step's end (E5 only: its law is
-    /// a function of the strain, not of the stress).
+    /// a function of the strain, not of the stress; and the damage), `history0` the
+    /// law's scalar history at the step's start (damage only: the largest `|e|_C`
+    /// so far; any value for the other laws, returned unchanged).
     #[allow(clippy::too_many_arguments)]
     pub fn update<const S: usize>(
         &self,
@@ -158,9 +181,10 @@ impl InelasticLaw {
         dt: f64,
         unloading: bool,
         strain: &SVector<f64, S>,
+        history0: f64,
     ) -> Result<PointUpdate<S>, PointFailure> {
         let identity = SMatrix::<f64, S, S>::identity();
-        let unchanged = PointUpdate { inelastic: *inelastic0, tau: *tau_trial, tangent: identity };
+        let unchanged = PointUpdate { inelastic: *inelastic0, tau: *tau_trial, tangent: identity, history: history0 };
         // `n (C1 n)^T` for a unit direction n: the radial part of a tangent.
         let radial = |n: &SVector<f64, S>| n * (c1 * n).transpose();
         match *self {
@@ -182,7 +206,12 @@ impl InelasticLaw {
                 let nn = radial(&n);
                 let ht = h.max(TANGENT_HARDENING * g);
                 let d = nn / (g + ht) + (identity - nn) * (dl / sigma);
-                Ok(PointUpdate { inelastic: inelastic0 + de, tau: tau_trial - de * g, tangent: identity - d * g })
+                Ok(PointUpdate {
+                    inelastic: inelastic0 + de,
+                    tau: tau_trial - de * g,
+                    tangent: identity - d * g,
+                    history: history0,
+                })
             }
             InelasticLaw::Bingham { threshold_mpa: sb, c3_mpa_s } => {
                 if sb == 0.0 {
@@ -202,7 +231,7 @@ impl InelasticLaw {
                 } else {
                     (tau_trial / (1.0 - k), identity / (1.0 - k))
                 };
-                Ok(PointUpdate { inelastic: inelastic0 + (tau_trial - tau) / g, tau, tangent })
+                Ok(PointUpdate { inelastic: inelastic0 + (tau_trial - tau) / g, tau, tangent, history: history0 })
             }
             InelasticLaw::Thinning { inverse_stress_per_mpa: w, exponent: m, c3_mpa_s } => {
                 if w == 0.0 {
@@ -242,7 +271,7 @@ impl InelasticLaw {
                 let n = tau_trial / sigma;
                 let tau = tau_trial * rho;
                 let tangent = identity * rho + radial(&n) * (p - rho);
-                Ok(PointUpdate { inelastic: inelastic0 + (tau_trial - tau) / g, tau, tangent })
+                Ok(PointUpdate { inelastic: inelastic0 + (tau_trial - tau) / g, tau, tangent, history: history0 })
             }
             InelasticLaw::Dual { log_ratio, c3_mpa_s } => {
                 if log_ratio == 0.0 || !unloading {
@@ -257,7 +286,12 @@ impl InelasticLaw {
                     return Err(PointFailure::StepTooLong { ratio: k });
                 }
                 let tau = tau_trial / denom;
-                Ok(PointUpdate { inelastic: inelastic0 + (tau_trial - tau) / g, tau, tangent: identity / denom })
+                Ok(PointUpdate {
+                    inelastic: inelastic0 + (tau_trial - tau) / g,
+                    tau,
+                    tangent: identity / denom,
+                    history: history0,
+                })
             }
             InelasticLaw::FiniteStrain { .. } => Ok(unchanged),
             InelasticLaw::Stiffening { a } => {
@@ -279,7 +313,28 @@ impl InelasticLaw {
                 if n > 0.0 {
                     tangent += strain * (c1 * strain).transpose() * (0.5 * a / n);
                 }
-                Ok(PointUpdate { inelastic, tau, tangent })
+                Ok(PointUpdate { inelastic, tau, tangent, history: history0 })
+            }
+            InelasticLaw::Damage { d_inf, strain_c } => {
+                // e_in1 = d(alpha1) e1 with alpha1 = max(alpha0, n), n = |e1|_C, so the
+                // chain's strain is (1 - d) e1 and tau1 = tau_trial - g (e_in1 - e_in0)
+                // = g (1 - d) e1 - q. Below the largest strain (alpha1 = alpha0) the
+                // damage is frozen: T = (1 - d) I. On the virgin curve (n > alpha0)
+                // T = (1 - d) I - (d'(n) / n) e1 (C1 e1)^T: C1 T is symmetric (the
+                // damaged strain is the C1-gradient of W(n) = int_0^n (1 - d(m)) m dm),
+                // with eigenvalues 1 - d across e1 and 1 - d - n d'(n) > 0.09 along it.
+                let law = super::MullinsDamage { d_inf, strain_c };
+                let n = energy_norm(c1, strain);
+                let virgin = n > history0;
+                let alpha = if virgin { n } else { history0 };
+                let d = law.damage(alpha);
+                let inelastic = strain * d;
+                let tau = tau_trial - (inelastic - inelastic0) * g;
+                let mut tangent = identity * (1.0 - d);
+                if virgin && n > 0.0 {
+                    tangent -= strain * (c1 * strain).transpose() * (law.damage_derivative(n) / n);
+                }
+                Ok(PointUpdate { inelastic, tau, tangent, history: alpha })
             }
         }
     }
@@ -325,7 +380,7 @@ mod tests {
         ];
         let (g, dt) = (0.05, 2.0);
         for law in laws {
-            let at = |t: &SVector<f64, 4>| law.update(&c, t, &e0, g, dt, true, &e0).unwrap();
+            let at = |t: &SVector<f64, 4>| law.update(&c, t, &e0, g, dt, true, &e0, 0.0).unwrap();
             let u = at(&trial);
             for j in 0..4 {
                 let h = 1e-6 * trial.norm();
@@ -360,18 +415,20 @@ mod tests {
         let trial = uniaxial(-0.02);
         let (g, dt, c3) = (0.05, 2.0, 3.0);
         let k = g * dt / c3;
-        let s =
-            InelasticLaw::Slider { yield_mpa: 0.005, hardening_mpa: 0.01 }.update(&c, &trial, &e0, g, dt, false, &e0);
+        let s = InelasticLaw::Slider { yield_mpa: 0.005, hardening_mpa: 0.01 }
+            .update(&c, &trial, &e0, g, dt, false, &e0, 0.0);
         let s = s.unwrap();
         assert!((energy_norm(&c, &(s.tau - s.inelastic * 0.01)) - 0.005).abs() < 1e-15);
-        let b = InelasticLaw::Bingham { threshold_mpa: 0.004, c3_mpa_s: c3 }.update(&c, &trial, &e0, g, dt, false, &e0);
+        let b = InelasticLaw::Bingham { threshold_mpa: 0.004, c3_mpa_s: c3 }
+            .update(&c, &trial, &e0, g, dt, false, &e0, 0.0);
         let b = b.unwrap();
         // Net dashpot flow over the step: the chain's tau1/c3 dt plus the correction.
         let net = b.tau * (dt / c3) + b.inelastic;
         let expected = b.tau * ((1.0 - 0.004 / energy_norm(&c, &b.tau)) * dt / c3);
         assert!((net - expected).norm() < 1e-15, "{net} vs {expected}");
         let small = uniaxial(-0.001);
-        let b = InelasticLaw::Bingham { threshold_mpa: 0.004, c3_mpa_s: c3 }.update(&c, &small, &e0, g, dt, false, &e0);
+        let b = InelasticLaw::Bingham { threshold_mpa: 0.004, c3_mpa_s: c3 }
+            .update(&c, &small, &e0, g, dt, false, &e0, 0.0);
         let b = b.unwrap();
         assert!((b.tau * (dt / c3) + b.inelastic).norm() < 1e-18);
         assert!((b.tau - small / (1.0 - k)).norm() < 1e-18);
@@ -381,15 +438,16 @@ mod tests {
             InelasticLaw::Thinning { inverse_stress_per_mpa: 0.0, exponent: 1.0, c3_mpa_s: c3 },
             InelasticLaw::Dual { log_ratio: 0.0, c3_mpa_s: c3 },
             InelasticLaw::Stiffening { a: 0.0 },
+            InelasticLaw::Damage { d_inf: 0.0, strain_c: 0.1 },
         ];
         for law in nulls {
             assert!(law.is_null());
-            let u = law.update(&c, &trial, &e0, g, dt, true, &e0).unwrap();
+            let u = law.update(&c, &trial, &e0, g, dt, true, &e0, 0.0).unwrap();
             assert_eq!(u.tau, trial, "{law:?}");
             assert_eq!(u.inelastic, e0, "{law:?}");
         }
-        let long =
-            InelasticLaw::Bingham { threshold_mpa: 0.004, c3_mpa_s: c3 }.update(&c, &trial, &e0, g, 60.0, false, &e0);
+        let long = InelasticLaw::Bingham { threshold_mpa: 0.004, c3_mpa_s: c3 }
+            .update(&c, &trial, &e0, g, 60.0, false, &e0, 0.0);
         assert!(matches!(long, Err(PointFailure::StepTooLong { .. })));
     }
 
@@ -405,7 +463,7 @@ mod tests {
         let e0 = SVector::<f64, 4>::from([0.003, -0.002, 0.001, 0.0005]);
         let law = InelasticLaw::Stiffening { a };
         // tau_trial = g (e1 - e_in0) - q with q = 0.
-        let at = |e1: &SVector<f64, 4>| law.update(&c, &((e1 - e0) * g), &e0, g, dt, false, e1).unwrap();
+        let at = |e1: &SVector<f64, 4>| law.update(&c, &((e1 - e0) * g), &e0, g, dt, false, e1, 0.0).unwrap();
         for sigma in [-0.12, 0.05] {
             let e1 = uniaxial(sigma);
             let u = at(&e1);
@@ -433,8 +491,58 @@ mod tests {
         let soft = InelasticLaw::Stiffening { a: -4.0 };
         let e1 = uniaxial(-0.3);
         assert!(matches!(
-            soft.update(&c, &(e1 * g), &SVector::zeros(), g, dt, false, &e1),
+            soft.update(&c, &(e1 * g), &SVector::zeros(), g, dt, false, &e1, 0.0),
             Err(PointFailure::NoStiffness { .. })
         ));
+    }
+
+    /// Mullins-type damage: in uniaxial stress `sigma = (1 - d(alpha)) e` with
+    /// `alpha = max(alpha0, |e|)`, no lateral stress; the history is the largest
+    /// strain; the tangent matches central differences of the update on the virgin
+    /// curve and below it (relative step 1e-6, agreement 1e-8) and `C1 T` is symmetric.
+    #[test]
+    fn damage_update_matches_its_closed_form() {
+        let c = c1();
+        let (g, dt) = (0.7, 1.0);
+        let law = InelasticLaw::Damage { d_inf: 0.6, strain_c: 0.05 };
+        let d = |alpha: f64| 0.6 * (1.0 - (-alpha / 0.05).exp());
+        let e0 = SVector::<f64, 4>::from([0.003, -0.002, 0.001, 0.0005]);
+        let at = |e1: &SVector<f64, 4>, alpha0: f64| {
+            law.update(&c, &((e1 - e0) * g), &e0, g, dt, false, e1, alpha0).unwrap()
+        };
+        for (sigma, alpha0) in [(-0.12, 0.0), (-0.12, 0.2), (0.05, 0.03)] {
+            let e1 = uniaxial(sigma);
+            let u = at(&e1, alpha0);
+            let alpha = alpha0.max(sigma.abs());
+            assert!((u.history - alpha).abs() < 1e-15, "{} vs {alpha}", u.history);
+            let s = c * u.tau / g;
+            let expected = (1.0 - d(alpha)) * sigma;
+            assert!((s[1] - expected).abs() < 1e-15, "{} vs {expected}", s[1]);
+            for k in [0, 2, 3] {
+                assert!(s[k].abs() < 1e-15, "lateral stress {}", s[k]);
+            }
+        }
+        let e1 = uniaxial(-0.1) + SVector::<f64, 4>::from([0.01, -0.004, 0.02, 0.03]);
+        let n = energy_norm(&c, &e1);
+        for alpha0 in [0.5 * n, 2.0 * n] {
+            let u = at(&e1, alpha0);
+            for j in 0..4 {
+                let h = 1e-6 * e1.norm();
+                let (mut up, mut down) = (e1, e1);
+                up[j] += h;
+                down[j] -= h;
+                let fd = (at(&up, alpha0).tau - at(&down, alpha0).tau) / (2.0 * h * g);
+                for i in 0..4 {
+                    assert!(
+                        (u.tangent[(i, j)] - fd[i]).abs() < 1e-8,
+                        "alpha0 {alpha0} ({i}, {j}): {} vs {}",
+                        u.tangent[(i, j)],
+                        fd[i]
+                    );
+                }
+            }
+            let ct = c * u.tangent;
+            assert!((ct - ct.transpose()).norm() < 1e-14 * ct.norm());
+        }
     }
 }

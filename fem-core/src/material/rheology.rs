@@ -54,6 +54,10 @@ pub enum MaterialError {
     /// A Poisson ratio outside (-1, 0.5).
     #[error("poisson = {value}: must lie in (-1, 0.5)")]
     PoissonOutOfRange { value: f64 },
+    /// A parameter of the Mullins-type damage law out of its range
+    /// ([`super::MullinsDamage`]: `d_inf` in [0, [`super::MAX_DAMAGE`]], `strain_c` finite and > 0).
+    #[error("Mullins damage {name} = {value}: must lie in {range}")]
+    DamageOutOfRange { name: &'static str, value: f64, range: &'static str },
 }
 
 /// The relaxation function `G(t) = viscous delta(t) + equilibrium + sum_k a_k exp(-r_k t)`

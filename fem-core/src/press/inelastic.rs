@@ -1,5 +1,6 @@
 //! The global iteration of a quasi-static step on the material-point path
-//! (effects E1 to E5, [`crate::effects`]; the local laws in
+//! (effects E1 to E5, [`crate::effects`], and a material's Mullins-type damage,
+//! [`crate::material::MullinsDamage`]; the local laws in
 //! [`crate::material::InelasticLaw`]).
 //!
 //! With an inelastic strain `e_in` in series, the step's stress image per cell is
@@ -82,6 +83,8 @@ pub(crate) struct PointStep<const S: usize> {
     pub inelastic: Vec<SVector<f64, S>>,
     /// E4's unloading flag per cell (empty for the other laws).
     pub unloading: Vec<bool>,
+    /// The damage's largest equivalent strain per cell (empty for the other laws).
+    pub history: Vec<f64>,
     /// The residual of the free rows over the force scale.
     pub residual: f64,
     /// Numeric factorizations of the consistent tangent.
@@ -100,6 +103,8 @@ pub(crate) struct PointInput<'a, const S: usize> {
     pub inelastic0: &'a [SVector<f64, S>],
     /// E4's flags at the step's start (empty for the other laws).
     pub unloading0: &'a [bool],
+    /// The damage's largest equivalent strain at the step's start (empty for the other laws).
+    pub history0: &'a [f64],
     /// The linear step's right-hand side with the held dofs' coupling removed.
     pub base: &'a [f64],
     /// The step's force scale (that of the linear residual).
@@ -158,7 +163,11 @@ pub(crate) const LINE_SEARCH_LONGEST: f64 = 64.0;
 /// bracketed (doubling the step up to [`LINE_SEARCH_LONGEST`] when the slope is
 /// still negative at 1, e.g. a tangent stiffer than the true one) and found by
 /// regula falsi (Illinois) with a bisection safeguard, to the same acceptance.
-/// Returns the step length and the evaluation there. One law is not monotone:
+/// Returns the step length and the evaluation there. The Mullins-type damage is
+/// monotone too: its damaged strain is the `C1`-gradient of a convex function of
+/// `|e|_C` (slope `(1 - d) |e|_C`, increasing on both branches and continuous at
+/// the largest strain so far, since its virgin tangent factor stays above 0.09).
+/// One law is not monotone:
 /// strain stiffening with `a < 0` (softening); there the potential need not be
 /// convex, the slope may have several roots and the point returned need not
 /// lower the potential; the iteration's residual test still decides
@@ -273,6 +282,7 @@ where
     let ncell = mesh.num_cells();
     let ndof = model.num_dofs();
     let directional = laws.iter().any(|l| l.needs_direction());
+    let historied = laws.iter().any(|l| l.needs_history());
     let mut unloading: Vec<bool> = if directional { input.unloading0.to_vec() } else { Vec::new() };
     let not_converged = |detail: String| PressError::NotConverged { step: input.step, time_s: input.t1, detail };
     let mut factorizations = 0usize;
@@ -298,8 +308,18 @@ where
                 let e1 = cell_strain::<D, N, S>(&model.geometry[e].gradients, &model.cell_displacements(e, u));
                 let trial = (e1 - input.inelastic0[e]) * input.g[r] - input.q[e];
                 let unload = directional && flags[e];
+                let history0 = if historied { input.history0[e] } else { 0.0 };
                 laws[r]
-                    .update(&model.region_c1[r], &trial, &input.inelastic0[e], input.g[r], input.dt, unload, &e1)
+                    .update(
+                        &model.region_c1[r],
+                        &trial,
+                        &input.inelastic0[e],
+                        input.g[r],
+                        input.dt,
+                        unload,
+                        &e1,
+                        history0,
+                    )
                     .map(|p| (e1, p))
             });
             updates.into_iter().enumerate().map(|(e, x)| x.map_err(|f| (e, f))).collect()
@@ -432,9 +452,11 @@ where
                 continue;
             }
         }
+        let history = if historied { updates.iter().map(|(_, p)| p.history).collect() } else { Vec::new() };
         return Ok(PointStep {
             inelastic: updates.into_iter().map(|(_, p)| p.inelastic).collect(),
             unloading,
+            history,
             residual: if scale > 0.0 { norm / scale } else { 0.0 },
             factorizations,
         });
@@ -502,6 +524,7 @@ where
             return Ok(PointStep {
                 inelastic: input.inelastic0.to_vec(),
                 unloading: Vec::new(),
+                history: Vec::new(),
                 residual: if scale > 0.0 { norm / scale } else { 0.0 },
                 factorizations,
             });

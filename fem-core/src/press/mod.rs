@@ -63,8 +63,13 @@ where
         Integrator::Seed if !problem.tools.is_empty() => {
             Err(PressError::BadSettings("contact tools need the quasi-static integrator".into()))
         }
-        Integrator::Seed if problem.effects.material_point().is_some() => {
-            Err(PressError::BadSettings("material-point effects need the quasi-static integrator".into()))
+        Integrator::Seed
+            if problem.effects.material_point().is_some()
+                || problem.materials.iter().any(|m| m.damage_runs(problem.effects.forces_material_point_path())) =>
+        {
+            Err(PressError::BadSettings(
+                "material-point effects (and a material's Mullins damage) need the quasi-static integrator".into(),
+            ))
         }
         Integrator::Seed if problem.effects.machine_compliance_mm_per_n().is_some() => {
             Err(PressError::BadSettings("machine compliance needs the quasi-static integrator".into()))

@@ -229,7 +229,23 @@ where
             .iter()
             .map(|m| problem.effects.inelastic_law(&m.rheology))
             .collect::<Result<Vec<_>, _>>()?;
-        let point = laws.into_iter().collect::<Option<Vec<InelasticLaw>>>();
+        let mut point = laws.into_iter().collect::<Option<Vec<InelasticLaw>>>();
+        // A material's Mullins-type damage (crate::material::MullinsDamage): every
+        // region runs the damage law, at its null where a material has none (the
+        // problem's validation refuses it next to a material-point effect).
+        let forced = problem.effects.forces_material_point_path();
+        if problem.materials.iter().any(|m| m.damage_runs(forced)) {
+            point = Some(
+                problem
+                    .materials
+                    .iter()
+                    .map(|m| {
+                        let d = m.damage.unwrap_or(crate::material::MullinsDamage { d_inf: 0.0, strain_c: 1.0 });
+                        InelasticLaw::Damage { d_inf: d.d_inf, strain_c: d.strain_c }
+                    })
+                    .collect(),
+            );
+        }
         let finite = point.as_ref().and_then(|laws| {
             laws.iter().find_map(|l| match *l {
                 InelasticLaw::FiniteStrain { blend } => Some(blend),

@@ -410,8 +410,7 @@ where
             });
         }
         for (m, name) in self.materials.iter().zip(&self.mesh.region_names) {
-            Material::new(m.rheology, m.poisson)
-                .map_err(|source| PressError::Material { region: name.clone(), source })?;
+            m.validate().map_err(|source| PressError::Material { region: name.clone(), source })?;
         }
         if !(self.density_t_mm3.is_finite() && self.density_t_mm3 > 0.0) {
             return Err(PressError::BadProtocol(format!("density {} t/mm^3 must be > 0", self.density_t_mm3)));
@@ -475,6 +474,31 @@ where
                 "acts on the constrained plate only; with contact tools (or plate friction, adhesion) it is not \
                  implemented yet",
             );
+        }
+        if let Some((_, name)) = self
+            .materials
+            .iter()
+            .zip(&self.mesh.region_names)
+            .find(|(m, _)| m.damage_runs(e.forces_material_point_path()))
+        {
+            let refuse = |detail: String| {
+                Err(PressError::BadSettings(format!("material of region `{name}`: the Mullins-type damage {detail}")))
+            };
+            if contact {
+                return refuse(
+                    "runs on the constrained plate only; with contact tools (or plate friction, adhesion) it is \
+                     not implemented yet"
+                        .into(),
+                );
+            }
+            if e.is_active(EffectId::MachineCompliance) {
+                return refuse("cannot be combined with machine compliance yet".into());
+            }
+            if let Some((effect, _)) = e.material_point() {
+                return refuse(format!(
+                    "cannot be combined with the material-point effect `{effect}` (one inelastic law per run)"
+                ));
+            }
         }
         if let Some((effect, _)) = e.material_point() {
             if contact {

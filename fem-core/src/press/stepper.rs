@@ -21,7 +21,8 @@
 //! plate exactly (their acceleration is zero between kinks), so reactions carry no
 //! spurious inertia.
 //!
-//! Material-point effects (E1 to E5, [`crate::effects`]): each cell carries an
+//! Material-point effects (E1 to E5, [`crate::effects`], and a material's
+//! Mullins-type damage with its per-cell largest strain): each cell carries an
 //! inelastic strain in series with the chain, the chain's strain and histories
 //! are those of `e - e_in`, and the step is solved by the iteration of
 //! `super::inelastic` (modified Newton on the same factorization, full Newton when
@@ -108,6 +109,8 @@ struct State<const S: usize> {
     inelastic: Vec<SVector<f64, S>>,
     /// The `dual-viscosity` effect's unloading flag per cell (empty otherwise).
     unloading: Vec<bool>,
+    /// The Mullins-type damage's largest equivalent strain per cell (empty otherwise).
+    damage_history: Vec<f64>,
 }
 
 /// Per-region scalars of one step size.
@@ -170,7 +173,9 @@ where
     // The material-point path (crate::effects, E1 to E5; press::inelastic).
     if model.point.is_some() && (settings.integrator != Integrator::QuasiStatic || tracker.is_some()) {
         return Err(PressError::BadSettings(
-            "material-point effects need the quasi-static integrator and no sensitivities".into(),
+            "material-point effects (and a material's Mullins damage) need the quasi-static integrator and no \
+             sensitivities"
+                .into(),
         ));
     }
     let mut point_retries = 0usize;
@@ -240,6 +245,10 @@ where
         inelastic: if model.point.is_some() { vec![SVector::zeros(); ncell] } else { Vec::new() },
         unloading: match model.point.as_ref() {
             Some(laws) if laws.iter().any(|l| l.needs_direction()) => vec![false; ncell],
+            _ => Vec::new(),
+        },
+        damage_history: match model.point.as_ref() {
+            Some(laws) if laws.iter().any(|l| l.needs_history()) => vec![0.0; ncell],
             _ => Vec::new(),
         },
     };
@@ -875,6 +884,7 @@ where
                 chain0: &s0.strain,
                 inelastic0: &s0.inelastic,
                 unloading0: &s0.unloading,
+                history0: &s0.damage_history,
                 base: &base,
                 scale,
                 dt,
@@ -1021,12 +1031,24 @@ where
         stress.push(s1);
     }
     let strain_prev = s0.strain.clone();
-    let (inelastic, unloading, factorizations) = match point {
-        Some(p) => (p.inelastic, p.unloading, p.factorizations),
-        None => (Vec::new(), Vec::new(), 0),
+    let (inelastic, unloading, damage_history, factorizations) = match point {
+        Some(p) => (p.inelastic, p.unloading, p.history, p.factorizations),
+        None => (Vec::new(), Vec::new(), Vec::new(), 0),
     };
     Ok(StepOutcome {
-        state: State { t: t1, u: u1, v: v1, a: a1, strain, strain_prev, history, f_int, inelastic, unloading },
+        state: State {
+            t: t1,
+            u: u1,
+            v: v1,
+            a: a1,
+            strain,
+            strain_prev,
+            history,
+            f_int,
+            inelastic,
+            unloading,
+            damage_history,
+        },
         stress,
         segment,
         residual,

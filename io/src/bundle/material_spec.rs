@@ -14,12 +14,24 @@
 //! material that gives only its model and the parameters to hold fixed; a key
 //! outside the model's set is refused. Converting to an engine material
 //! ([`MaterialSpec::to_material`]) needs all of them.
+//!
+//! Any model may also carry a Mullins-type stress softening (the engine's
+//! continuum damage, [`fem_core::material::MullinsDamage`]; an extension of
+//! wagashi, not in experiment-format.md): `mullins_d_inf` (saturated damage, in
+//! [0, 0.8]) and `mullins_strain_c` (characteristic equivalent strain, > 0),
+//! both or neither. The chain then acts on `(1 - d) e` with `d = mullins_d_inf
+//! (1 - exp(-alpha / mullins_strain_c))` and `alpha` the largest equivalent
+//! strain so far. They are fixed values, not among the model's parameters
+//! (nothing identifies them; runs that need forward sensitivities stop with the
+//! engine's refusal, since the damage runs without them), and `wagashi press`
+//! runs them on the quasi-static integrator with the constrained
+//! plate (not with contact tools, machine compliance or a material-point effect).
 
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
 
-use fem_core::material::{Material, Rheology};
+use fem_core::material::{Material, MaterialError, MullinsDamage, Rheology};
 use serde::{Deserialize, Serialize};
 
 use crate::error::BundleError;
@@ -92,6 +104,12 @@ pub struct MaterialSpec {
     /// The series dashpot [MPa s].
     #[serde(rename = "c3_MPa_s", default, skip_serializing_if = "Option::is_none")]
     pub c3_mpa_s: Option<f64>,
+    /// Mullins-type damage: the saturated damage `d_inf`, in [0, 0.8] (module docs).
+    #[serde(rename = "mullins_d_inf", default, skip_serializing_if = "Option::is_none")]
+    pub mullins_d_inf: Option<f64>,
+    /// Mullins-type damage: the characteristic equivalent strain, > 0 (module docs).
+    #[serde(rename = "mullins_strain_c", default, skip_serializing_if = "Option::is_none")]
+    pub mullins_strain_c: Option<f64>,
     /// Where the table was read: the file's map and the table's key path.
     #[serde(skip)]
     pub(crate) origin: Option<Origin>,
@@ -112,7 +130,10 @@ impl std::fmt::Debug for Origin {
 
 impl PartialEq for MaterialSpec {
     fn eq(&self, other: &Self) -> bool {
-        self.model == other.model && self.poisson == other.poisson && self.parameters() == other.parameters()
+        self.model == other.model
+            && self.poisson == other.poisson
+            && self.parameters() == other.parameters()
+            && (self.mullins_d_inf, self.mullins_strain_c) == (other.mullins_d_inf, other.mullins_strain_c)
     }
 }
 
@@ -135,6 +156,8 @@ impl MaterialSpec {
             c1_mpa_s: None,
             c2_mpa_s: None,
             c3_mpa_s: None,
+            mullins_d_inf: None,
+            mullins_strain_c: None,
             origin: None,
         }
     }
@@ -166,6 +189,10 @@ impl MaterialSpec {
             },
         };
         s.poisson = Some(material.poisson);
+        if let Some(d) = material.damage {
+            s.mullins_d_inf = Some(d.d_inf);
+            s.mullins_strain_c = Some(d.strain_c);
+        }
         s
     }
 
@@ -229,7 +256,13 @@ impl MaterialSpec {
     pub fn to_material(&self) -> Result<Material, MissingParameter> {
         let rheology = self.to_rheology()?;
         let poisson = self.poisson.ok_or(MissingParameter { key: "poisson" })?;
-        Ok(Material { rheology, poisson })
+        let damage = match (self.mullins_d_inf, self.mullins_strain_c) {
+            (None, None) => None,
+            (Some(d_inf), Some(strain_c)) => Some(MullinsDamage { d_inf, strain_c }),
+            (Some(_), None) => return Err(MissingParameter { key: "mullins_strain_c" }),
+            (None, Some(_)) => return Err(MissingParameter { key: "mullins_d_inf" }),
+        };
+        Ok(Material { rheology, poisson, damage })
     }
 
     /// The file this table was read from and the line of `key` in it (of the
@@ -274,6 +307,17 @@ impl MaterialSpec {
         if let Some(nu) = self.poisson {
             if !(nu.is_finite() && nu > -1.0 && nu < 0.5) {
                 return Err(err("poisson", format!("{nu} is outside (-1, 0.5)")));
+            }
+        }
+        match (self.mullins_d_inf, self.mullins_strain_c) {
+            (None, None) => {}
+            (Some(_), None) => return Err(err("mullins_d_inf", "needs mullins_strain_c too".into())),
+            (None, Some(_)) => return Err(err("mullins_strain_c", "needs mullins_d_inf too".into())),
+            (Some(d_inf), Some(strain_c)) => {
+                if let Err(MaterialError::DamageOutOfRange { name, value, range }) = MullinsDamage::new(d_inf, strain_c)
+                {
+                    return Err(err(&format!("mullins_{name}"), format!("{value} is outside {range}")));
+                }
             }
         }
         Ok(())
