@@ -16,6 +16,11 @@
 //! 0.5 s steps 2214 s at load 12), each swap diagnosis minutes.
 //! `-- --no-symptom --quick` runs steps 1 and 3 only; `-- --fixed-steps` runs
 //! the diagnoser on fixed 0.5 s steps (session 13) instead of adaptive ones.
+//! `-- --truth stress-thinning,bingham-dashpot` matches and swaps only those
+//! causes (same noise draws as the full run); `-- --designs long-hold` runs
+//! the swap study on the hold-and-speed campaign plus a 728 s hold
+//! (`seed_gap::HOLD_SPEED_LONG_DESIGN`) instead of the default `seed,hold-speed`;
+//! `-- --help` lists the flags.
 //!
 //! Steps:
 //! 1. every kappa > 1 candidate (diagnosis-details.md §1: plastic-slider,
@@ -29,7 +34,9 @@
 //! 3. the diagnosis of a campaign that varies hold and speed: WHERE, the verdict,
 //!    and the fit with the named effect, per cell, in noise units;
 //! 4. the swap study: each candidate as the true cause, on the seed's protocol
-//!    only (two replicates) and on the hold-and-speed campaign.
+//!    only (two replicates) and on the hold-and-speed campaign (or the designs
+//!    of `--designs`); each truth's end-of-hold force and final set per trial
+//!    are printed first.
 
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -168,8 +175,86 @@ fn print_closure(bundles: &[Bundle], start: &BTreeMap<String, MaterialSpec>, d: 
     }
 }
 
+/// The swap study's designs (`--designs`).
+const DESIGNS: [&str; 3] = ["seed", "hold-speed", "long-hold"];
+
+const HELP: &str = "seed_gap: the seed's own gap, diagnosed (issue 6; module docs)
+  --quick          stop after step 3 (no swap study)
+  --no-symptom     skip step 2 (the seed's three steps)
+  --swap-only      steps 1 and 4 only
+  --fixed-steps    the diagnoser on fixed 0.5 s steps (session 13)
+  --truth IDS      the true causes to match and swap, comma-separated among
+                   plastic-slider, bingham-dashpot, stress-thinning, dual-viscosity (default: all four)
+  --designs NAMES  the swap study's campaigns, comma-separated among
+                   seed (two replicates of the seed's trial), hold-speed (4 trials: 0.2 and 0.8 mm/s,
+                   45 and 182 s holds), long-hold (hold-speed plus 0.2 mm/s with a 728 s hold)
+                   (default: seed,hold-speed)";
+
+/// The value after `flag` on the command line.
+fn flag_value(flag: &str) -> Option<String> {
+    let args: Vec<String> = std::env::args().collect();
+    args.iter().position(|a| a == flag).and_then(|i| args.get(i + 1).cloned())
+}
+
+/// Per trial of a measured campaign: the mean force over the last 10 s of the
+/// hold and the final set of the top markers (measured, noise included): the
+/// signatures that hold time and speed separate.
+fn print_signature(effect: EffectId, design: &str, bundles: &[Bundle]) {
+    let cells: Vec<String> = bundles
+        .iter()
+        .map(|b| {
+            let release = b.experiment.protocol.release_s;
+            let f: Vec<f64> = b
+                .force
+                .as_ref()
+                .map(|f| f.samples.iter().filter(|s| s.t_s > release - 10.0 && s.t_s <= release).map(|s| s.force_n))
+                .into_iter()
+                .flatten()
+                .collect();
+            let hold_force = f.iter().sum::<f64>() / f.len().max(1) as f64;
+            let tops: Vec<f64> = MARKERS
+                .iter()
+                .zip(&b.markers)
+                .filter(|(m, _)| m[1] > 2.0 / 3.0)
+                .filter_map(|(m, s)| {
+                    s.samples.last().map(|p| p.position_mm[1] - m[1] * calibrate::seed_gap::SIZE_MM[1])
+                })
+                .collect();
+            let set = tops.iter().sum::<f64>() / tops.len().max(1) as f64;
+            format!("{}: end-of-hold force {:.1} mN, final set {:.2} mm", b.experiment.name, 1e3 * hold_force, set)
+        })
+        .collect();
+    println!("- {effect} truth, {design}: {}", cells.join("; "));
+}
+
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
+    if std::env::args().any(|a| a == "--help" || a == "-h") {
+        println!("{HELP}");
+        return;
+    }
+    let truths: Vec<EffectId> = match flag_value("--truth") {
+        None => CANDIDATES.to_vec(),
+        Some(list) => list
+            .split(',')
+            .map(|id| {
+                CANDIDATES.into_iter().find(|e| e.id() == id).unwrap_or_else(|| {
+                    eprintln!("--truth: {id} is not one of the four kappa > 1 causes");
+                    std::process::exit(2)
+                })
+            })
+            .collect(),
+    };
+    let swap_designs: Vec<String> = match flag_value("--designs") {
+        None => vec!["seed".to_string(), "hold-speed".to_string()],
+        Some(list) => list.split(',').map(str::to_string).collect(),
+    };
+    if let Some(d) = swap_designs.iter().find(|d| !DESIGNS.contains(&d.as_str())) {
+        eprintln!("--designs: {d} is not one of {}", DESIGNS.join(", "));
+        std::process::exit(2);
+    }
+    let mut designs = vec!["seed".to_string(), "hold-speed".to_string()];
+    designs.extend(swap_designs.iter().filter(|d| !designs.contains(d)).cloned().collect::<Vec<_>>());
     let noise = NoiseModel::SEED;
     let start = x_force_start();
 
@@ -178,7 +263,7 @@ fn main() {
     println!("|---|---|---|---|---|---|");
     let match_noise = NoiseModel { force_sigma_n: 0.02, ..noise };
     let mut matches = Vec::new();
-    for e in CANDIDATES {
+    for (k, e) in CANDIDATES.into_iter().enumerate().filter(|(_, e)| truths.contains(e)) {
         let t0 = Instant::now();
         let m = match_table_ii(e, MATCH_SIZE_MM, &match_noise).expect("match");
         println!(
@@ -191,30 +276,42 @@ fn main() {
             m.set_mm[1]
         );
         eprintln!("  matched {e} in {:.0} s ({})", t0.elapsed().as_secs_f64(), m.stop);
-        matches.push((e, m));
+        matches.push((k, e, m));
     }
-    // The campaigns of every matched truth: the seed's protocol only (two
-    // replicates) and hold and speed varied. A truth the engine cannot run on
-    // every trial cannot be the chosen cause.
+    // The campaigns of every matched truth on every design asked for (the seed's
+    // protocol and hold and speed always, for steps 2 and 3). A truth the engine
+    // cannot run on every trial cannot be the chosen cause. Seeds by the cause's
+    // place in the library of four, so a subset (`--truth`) draws the same noise;
+    // the extended hold design shares the hold-and-speed seed, so its first four
+    // trials are those of the hold-and-speed campaign, bit for bit.
     let mut campaigns = Vec::new();
-    for (k, (e, m)) in matches.iter().enumerate() {
-        let seed = SEED + 10 * k as u64;
-        let a = campaign(&SEED_ONLY_DESIGN, &m.truth, TRUTH_SIZE_MM, &noise, seed);
-        let b = campaign(&HOLD_SPEED_DESIGN, &m.truth, TRUTH_SIZE_MM, &noise, seed + 1);
-        for (name, c) in [("seed protocol", &a), ("hold and speed", &b)] {
-            if let Err(err) = c {
-                println!("- {e}: the {name} campaign cannot be generated: {err}");
+    for (k, e, m) in &matches {
+        let seed = SEED + 10 * *k as u64;
+        let mut by_design = Vec::new();
+        for d in &designs {
+            let (trials, s): (&[SeedTrial], u64) = match d.as_str() {
+                "seed" => (&SEED_ONLY_DESIGN, seed),
+                "hold-speed" => (&HOLD_SPEED_DESIGN, seed + 1),
+                _ => (&HOLD_SPEED_LONG_DESIGN, seed + 1),
+            };
+            let c = campaign(trials, &m.truth, TRUTH_SIZE_MM, &noise, s);
+            match &c {
+                Err(err) => println!("- {e}: the {d} campaign cannot be generated: {err}"),
+                Ok(bundles) => print_signature(*e, d, bundles),
             }
+            by_design.push((d.clone(), c));
         }
-        campaigns.push((*e, m.clone(), a, b));
+        campaigns.push((*e, m.clone(), by_design));
     }
+    let design_of = |c: &[(String, Result<Vec<Bundle>, GenerateError>)], name: &str| {
+        c.iter().find(|d| d.0 == name).and_then(|d| d.1.as_ref().ok()).cloned()
+    };
     let score = |m: &TableIiMatch| m.force_rms.powi(2) + m.final_rms.powi(2) + m.keep_rms.powi(2);
-    let best = matches.iter().min_by(|a, b| score(&a.1).total_cmp(&score(&b.1))).map(|m| m.0).unwrap();
+    let best = matches.iter().min_by(|a, b| score(&a.2).total_cmp(&score(&b.2))).map(|m| m.1).unwrap();
     let (cause, chosen, a, b) = campaigns
         .iter()
-        .filter(|c| c.2.is_ok() && c.3.is_ok())
+        .filter_map(|c| Some((c.0, c.1.clone(), design_of(&c.2, "seed")?, design_of(&c.2, "hold-speed")?)))
         .min_by(|x, y| score(&x.1).total_cmp(&score(&y.1)))
-        .map(|c| (c.0, c.1.clone(), c.2.as_ref().unwrap().clone(), c.3.as_ref().unwrap().clone()))
         .expect("a cause that runs");
     println!("\nBest match to Table II: {best}. Chosen cause (best match that the engine runs on every trial): {cause}: {}\n", chosen.truth.describe());
     let swap_only = std::env::args().any(|a| a == "--swap-only");
@@ -289,28 +386,31 @@ fn main() {
     println!("\n## 4. Swap study\n");
     println!("Candidates: the four kappa > 1 explanations.\n");
     let mut rows = Vec::new();
-    for (e, _, a, b) in &campaigns {
-        let show = |c: &Result<Vec<Bundle>, GenerateError>| match c {
-            Ok(bundles) => {
-                let d = run_swap_diagnosis(bundles, &start);
-                eprintln!("  {e}: {}", d.verdict.sentence);
-                print_candidates(&d);
-                format!(
-                    "{} ({})",
-                    d.verdict.label,
-                    d.verdict.effects.iter().map(|e| e.id()).collect::<Vec<_>>().join(", ")
-                )
-            }
-            Err(_) => "not generated (the truth does not run)".to_string(),
-        };
-        println!("\n{e} as the true cause, seed protocol only:");
-        let sa = show(a);
-        println!("\n{e} as the true cause, hold and speed varied:");
-        let sb = show(b);
-        rows.push(format!("| {e} | {sa} | {sb} |"));
+    for (e, _, by_design) in &campaigns {
+        let mut cells = Vec::new();
+        for (name, c) in by_design.iter().filter(|d| swap_designs.contains(&d.0)) {
+            println!("\n{e} as the true cause, design {name}:");
+            let cell = match c {
+                Ok(bundles) => {
+                    let t0 = Instant::now();
+                    let d = run_swap_diagnosis(bundles, &start);
+                    eprintln!("  {e} on {name} ({:.0} s): {}", t0.elapsed().as_secs_f64(), d.verdict.sentence);
+                    println!("  verdict: {} — {}", d.verdict.label, d.verdict.sentence);
+                    print_candidates(&d);
+                    format!(
+                        "{} ({})",
+                        d.verdict.label,
+                        d.verdict.effects.iter().map(|e| e.id()).collect::<Vec<_>>().join(", ")
+                    )
+                }
+                Err(_) => "not generated (the truth does not run)".to_string(),
+            };
+            cells.push(cell);
+        }
+        rows.push(format!("| {e} | {} |", cells.join(" | ")));
     }
-    println!("\n| true cause | seed protocol only (2 replicates) | hold and speed varied (4 trials) |");
-    println!("|---|---|---|");
+    println!("\n| true cause | {} |", swap_designs.join(" | "));
+    println!("|---|{}", "---|".repeat(swap_designs.len()));
     for r in rows {
         println!("{r}");
     }

@@ -551,6 +551,23 @@ pub const HOLD_SPEED_DESIGN: [SeedTrial; 4] = [
     SeedTrial { speed_mm_s: 0.8, hold_s: 45.0 },
 ];
 
+/// [`HOLD_SPEED_DESIGN`] with the hold range extended by the same factor 4 the
+/// other way: a fifth trial at the seed's speed holding 728 s (4 x 182.06 s).
+/// Why (VALIDATION.md, "The swap study"): a Bingham threshold and a
+/// Cross-thinning dashpot both make c3's flow stress-dependent, and over the
+/// stresses a 45 to 182 s hold visits a dashpot that flows at `(s - s_B)/c3`
+/// above a threshold mimics one that flows at `s (1 + s/s_c)/c3`. A longer hold
+/// lets the stress relax further: the threshold stops the flow on a force
+/// plateau `F = s_B A`, thinning keeps the force decaying (diagnosis-details.md
+/// §4.3, E2 against E3). Same speeds, same depth: only the hold is varied.
+pub const HOLD_SPEED_LONG_DESIGN: [SeedTrial; 5] = [
+    SeedTrial::SEED,
+    SeedTrial { speed_mm_s: 0.8, hold_s: SEED_HOLD_S },
+    SeedTrial { speed_mm_s: 0.2, hold_s: 45.0 },
+    SeedTrial { speed_mm_s: 0.8, hold_s: 45.0 },
+    SeedTrial { speed_mm_s: 0.2, hold_s: 4.0 * SEED_HOLD_S },
+];
+
 /// The seed's protocol only: two replicates of its trial.
 pub const SEED_ONLY_DESIGN: [SeedTrial; 2] = [SeedTrial::SEED, SeedTrial::SEED];
 
