@@ -273,10 +273,20 @@ fn a_mullins_campaign_is_generated_at_its_strength() {
 /// no false attribution on the two null campaigns (both `none`) and a closure
 /// error of 0.063 on the one scoreable campaign hold; top-1 (1/5, three ties
 /// and a misattribution) and the out-of-library flag (0/1) miss.
+///
+/// Session 15: the force noise's AR(1) estimate lost its detrending bias
+/// (`model::ar1_estimate`). Every verdict of this set stayed the same, but the
+/// closure error of its one scoreable campaign (machine-compliance at lambda
+/// 100) went from 0.063 to 0.149, over the 0.10 target: that target now misses
+/// here and is no longer in [`HOLDING`]. The change was kept for what it did on
+/// development seed 101 (same campaigns, before and after): false attribution
+/// on nulls 2/7 to 0/7, top-1 at lambda >= 30 3/8 to 4/8, a poroelastic case
+/// from a wrong `machine-compliance` to `none`, median closure error 0.058 over
+/// one case to 0.101 over two.
 #[test]
 fn frozen_blind_ci_set() {
     use super::blind::{default_options, run_blind, summarise, Case, OutOfLibrary, Scatter, Truth};
-    const HOLDING: &[&str] = &["false attribution on null campaigns", "median gap-closure error, lambda >= 30"];
+    const HOLDING: &[&str] = &["false attribution on null campaigns"];
     let inlib = |e, lambda| Case { truth: Truth::InLibrary(e), lambda };
     let cases = [
         Case { truth: Truth::Null, lambda: 0.0 },
