@@ -116,6 +116,9 @@ fn main() {
                 if let Some(n) = std::env::var("PROBE_WORST").ok().and_then(|x| x.parse().ok()) {
                     diagnose(&m.mesh, &s, n);
                 }
+                if std::env::var_os("PROBE_CLASSIFY").is_some() {
+                    classify(&m.mesh, &s);
+                }
                 let (canonical, ordered, cells) = fingerprints(&m.mesh);
                 println!(
                     "mesh fingerprint {canonical:016x} (cells sorted), {ordered:016x} (as output), {cells:016x} (sorted cells alone)"
@@ -411,5 +414,49 @@ fn diagnose(mesh: &fem_core::mesh::TetMesh, s: &Surface, n: usize) {
             mesh.nodes[c[0] as usize],
             edges.iter().map(|e| format!("{e:.4}")).collect::<Vec<_>>()
         );
+    }
+}
+
+/// The tets under 10 deg by how many of their corners are input vertices (I),
+/// other boundary points (B) and interior points, and by how many of their
+/// faces lie on the boundary; with the smallest angle of each class.
+fn classify(mesh: &fem_core::mesh::TetMesh, s: &Surface) {
+    let input: std::collections::HashSet<[u64; 3]> = s.vertices.iter().map(|p| p.map(f64::to_bits)).collect();
+    let boundary: std::collections::HashSet<u32> = mesh.node_sets["boundary"].iter().copied().collect();
+    let faces: std::collections::HashSet<[u32; 3]> = mesh
+        .boundary_facets()
+        .iter()
+        .map(|f| {
+            let mut k = *f;
+            k.sort_unstable();
+            k
+        })
+        .collect();
+    let mut classes: std::collections::BTreeMap<(usize, usize, usize), (usize, f64)> = Default::default();
+    let mut total = 0;
+    for c in &mesh.cells {
+        let q = c.map(|v| mesh.nodes[v as usize]);
+        let t = meshing::quality::tet_quality(&q);
+        if t.min_dihedral_deg >= 10.0 {
+            continue;
+        }
+        total += 1;
+        let ni = q.iter().filter(|p| input.contains(&p.map(f64::to_bits))).count();
+        let nb = c.iter().filter(|v| boundary.contains(v)).count() - ni;
+        let nf = [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]]
+            .iter()
+            .filter(|f| {
+                let mut k = f.map(|j: usize| c[j]);
+                k.sort_unstable();
+                faces.contains(&k)
+            })
+            .count();
+        let e = classes.entry((ni, nb, nf)).or_insert((0, f64::INFINITY));
+        e.0 += 1;
+        e.1 = e.1.min(t.min_dihedral_deg);
+    }
+    println!("{total} tets under 10 deg, by (input corners, other boundary corners, boundary faces): count, min deg");
+    for (k, (n, d)) in classes {
+        println!("  {k:?}: {n} ({d:.3} deg)");
     }
 }
