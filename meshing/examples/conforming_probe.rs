@@ -14,6 +14,9 @@
 //! corners and the `PROBE_TOP` (30) tets of largest ratio with the kinds of
 //! their corners (I input vertex, S on a sharp input edge, F on the surface,
 //! V inside) and of their shortest edge's ends.
+//! `PROBE_CLASSIFY=1` counts the tets under 10 deg by how many of their
+//! corners are input vertices and other boundary points and how many of their
+//! faces lie on the boundary (`classify`).
 //! The mesh's fingerprints (hashes of its nodes and cells, with the cells
 //! sorted and as output) tell identical meshes apart from merely similar ones.
 //!
@@ -126,7 +129,7 @@ fn main() {
                 let r = report(&m.mesh, &s, t);
                 println!(
                     "h {h:?} q {q} sliver {sliver}: {} tets, dihedral {:.2}..{:.2}, <10deg {:.3} %, r-e max {:.2} p99.9 {:.3}, \
-                     vol err {:.1e}, Hausdorff {:.1e}, {t:.2} s\n  {:?}",
+                     vol err {:.1e}, Hausdorff {:.1e}, {t:.2} s\n  {:?}\n  {:?}",
                     r.num_cells,
                     r.min_dihedral_deg,
                     r.max_dihedral_deg,
@@ -135,7 +138,8 @@ fn main() {
                     r.p999_radius_edge,
                     r.volume_error,
                     r.hausdorff_relative,
-                    m.stats.refinement
+                    m.stats.refinement,
+                    m.stats.flips
                 );
             }
             Err(e) => println!("h {h:?}: {e}"),

@@ -159,8 +159,6 @@ impl Recovery {
         // tetrahedralization: a pass evaluates only the tets created since
         // (the passes rescanned every tet, about 1e6 on the armadillo).
         let mut good: Vec<[u32; 4]> = Vec::new();
-        let dbg = std::env::var_os("WAGASHI_REFINE_DEBUG").is_some();
-        let mut why: std::collections::BTreeMap<(&'static str, usize, bool), usize> = Default::default();
         for _pass in 0..64 {
             stats.passes += 1;
             let (inside, _) = interior_components(&self.dt, &self.face_owner);
@@ -217,7 +215,6 @@ impl Recovery {
                     .map(|(i, j)| dot(sub(q[j], q[i]), sub(q[j], q[i])).sqrt())
                     .fold(0.0, f64::max);
                 let r = dot(sub(q[0], c), sub(q[0], c)).sqrt();
-                let ball = (c, r);
                 // A flat tet (coplanar corners: its circumcentre is at infinity
                 // or far off): candidates about its centroid instead.
                 let (c, r) = if c.iter().all(|x| x.is_finite()) && r <= 1e3 * longest {
@@ -230,7 +227,7 @@ impl Recovery {
                 let mut best: Option<(f64, Point)> = None;
                 let mut blocked_by: Option<[u32; 3]> = None;
                 let off = off_centres(q, c);
-                                let candidates: Vec<Point> = (0..CANDIDATES + off.len())
+                let candidates: Vec<Point> = (0..CANDIDATES + off.len())
                     .map(|k| match k {
                         0 => c,
                         k if k < CANDIDATES => near(c, OFF_CENTRE * r, &mut rng),
@@ -270,51 +267,6 @@ impl Recovery {
                         }
                         Candidate::Duplicate => {}
                     }
-                }
-                // A sliver that no boundary rule below would refine (module
-                // docs): points beyond its subfacets' equatorial balls, inside
-                // its circumball, are tried next.
-                if best.is_none() && !too_big && own < bounds.min_dihedral_deg {
-                    let rules = caps_left > 0
-                        && self.boundary_room()
-                        && (v.iter().all(|&x| (x as usize) < self.num_input())
-                            || self.cap_edge(v).is_some()
-                            || blocked_by.is_some_and(|f| re > PLANE_RADIUS_EDGE && self.plane_subfacet_larger(f, v)));
-                    if !rules {
-                        let beyond = self.beyond_subfacets(v, q, ball.0, ball.1);
-                        let verdicts: Vec<Candidate> = beyond
-                            .par_iter()
-                            .map(|&p| {
-                                PROBE.with(|s| {
-                                    let (scratch, star, destroyed) = &mut *s.borrow_mut();
-                                    this.try_candidate(p, t, true, scratch, star, destroyed)
-                                })
-                            })
-                            .collect();
-                        for (&p, verdict) in beyond.iter().zip(verdicts) {
-                            if let Candidate::Free(quality) = verdict {
-                                if quality > own && best.is_none_or(|(b, _)| quality > b) {
-                                    best = Some((quality, p));
-                                }
-                            }
-                        }
-                        if dbg && best.is_some() {
-                            *why.entry(("beyond", 0, only_sliver)).or_default() += 1;
-                        }
-                    }
-                }
-                if dbg {
-                    let ns = v.iter().filter(|&&x| self.on_surface(x)).count();
-                    let reason = match (best, blocked_by) {
-                        (Some((quality, _)), _) if only_sliver && quality <= own => "no-better",
-                        (Some(_), _) => "inserted",
-                        (None, Some(_)) if too_big => "big-face",
-                        (None, Some(_)) if v.iter().all(|&x| (x as usize) < self.num_input()) => "four-input",
-                        (None, Some(_)) if self.cap_edge(v).is_some() => "cap",
-                        (None, Some(_)) => "blocked-left",
-                        (None, None) => "none",
-                    };
-                    *why.entry((reason, ns, only_sliver)).or_default() += 1;
                 }
                 match (best, blocked_by) {
                     (Some((quality, _)), _) if only_sliver && quality <= own => {
@@ -398,57 +350,7 @@ impl Recovery {
                 self.recover_pending()?;
             }
         }
-        if dbg {
-            for (k, n) in &why {
-                eprintln!("refine debug {k:?}: {n}");
-            }
-        }
         Ok(stats)
-    }
-
-    /// Points inside tet `v`'s circumball (centre `c`, radius `r`; corners
-    /// `q`) beyond the equatorial balls of its subfacet faces: on the line
-    /// from its centroid along the mean of those faces' unit normals turned
-    /// into the tet, at [`BEYOND_SUBFACET`] times the largest of their
-    /// circumradii. Empty when the tet has no subfacet face.
-    fn beyond_subfacets(&self, v: [u32; 4], q: [Point; 4], c: Point, r: f64) -> Vec<Point> {
-        let mut dir = [0.0; 3];
-        let mut radius: f64 = 0.0;
-        let mut count = 0;
-        for (i, f) in super::delaunay::FACE.iter().enumerate() {
-            let mut k = f.map(|j| v[j]);
-            k.sort_unstable();
-            if !self.face_owner.contains_key(&k) {
-                continue;
-            }
-            let t = f.map(|j| q[j]);
-            let mut n = cross(sub(t[1], t[0]), sub(t[2], t[0]));
-            let l = dot(n, n).sqrt();
-            if !(l > 0.0) {
-                continue;
-            }
-            if dot(n, sub(q[i], t[0])) < 0.0 {
-                n = n.map(|x| -x / l);
-            } else {
-                n = n.map(|x| x / l);
-            }
-            dir = [0, 1, 2].map(|k| dir[k] + n[k]);
-            count += 1;
-            let cc = super::recover::circumcentre(t);
-            radius = radius.max(dot(sub(t[0], cc), sub(t[0], cc)).sqrt());
-        }
-        let l = dot(dir, dir).sqrt();
-        let min_faces: usize = std::env::var("WAGASHI_BEYOND_FACES").ok().and_then(|x| x.parse().ok()).unwrap_or(1);
-        if !(l > 0.0 && radius > 0.0) || count < min_faces {
-            return Vec::new();
-        }
-        let g = [0, 1, 2].map(|k| (q[0][k] + q[1][k] + q[2][k] + q[3][k]) / 4.0);
-        let finite = c.iter().all(|x| x.is_finite()) && r.is_finite();
-        BEYOND_SUBFACET
-            .iter()
-            .map(|&f| [0, 1, 2].map(|k| g[k] + f * radius / l * dir[k]))
-            .filter(|p| !finite || dot(sub(*p, c), sub(*p, c)) < r * r)
-            .collect()
     }
 
     /// Refines the subfacet with sorted corners `face` (`Recovery::refine_subfacet`).
@@ -647,11 +549,6 @@ fn off_centres(q: [Point; 4], c: Point) -> Vec<Point> {
         .map(|&f| [0, 1, 2].map(|k| m[k] + f * l / dist * to[k]))
         .collect()
 }
-
-/// Distances, in the largest circumradius of a bad tet's subfacet faces, of
-/// the candidates placed beyond those faces' equatorial balls
-/// (`Recovery::beyond_subfacets`).
-pub const BEYOND_SUBFACET: [f64; 4] = [1.1, 1.4, 1.8, 2.4];
 
 /// Distances of the off-centres from the shortest edge's midpoint, in its
 /// lengths: 2.74 is where the triangle of the edge and the point has the
