@@ -138,10 +138,10 @@ const MODELS: [Model; 6] = [
     // 127 x 151 x 115 mm, input edges 1.33 mm median): the counts are set by
     // the surface, not by h (TetGen: 956 704 tets at 4 mm, 891 693 at 8 mm),
     // so 8 mm, the cheaper. Count, orientation, volume and Hausdorff hold
-    // (measured: 485 253 tets, volume error 7e-15, Hausdorff 8e-14); the
-    // quality gates miss by far (0.00..176.23 deg against TetGen's
-    // 1.82..174.72, 3.63 % under 10 deg against 1.03 %, p99.9 radius-edge 3e4
-    // against 4.32): 85 % of the tets under 10 deg are flat caps over the
+    // (measured: 482 205 tets, volume error 4e-14, Hausdorff 1e-13); the
+    // quality gates miss by far (0.00..178.44 deg against TetGen's
+    // 1.82..174.72, 3.48 % under 10 deg against 1.03 %, p99.9 radius-edge 3e4
+    // against 4.32): 90 % of the tets under 10 deg are flat caps over the
     // scan's bent input edges, which conforming Delaunay refinement cannot
     // remove (module docs of `meshing::conforming`, "What is not done").
     // About 2.5 min of CPU for ours, 20 s for TetGen (BENCHMARKS.md).
