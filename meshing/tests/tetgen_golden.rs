@@ -144,12 +144,16 @@ const MODELS: [Model; 6] = [
     // against 4.32): 90 % of the tets under 10 deg are flat caps over the
     // scan's bent input edges, which conforming Delaunay refinement cannot
     // remove (module docs of `meshing::conforming`, "What is not done").
-    // About 2.5 min of CPU for ours, 20 s for TetGen (BENCHMARKS.md).
+    // Ours takes about 3 min of CPU on it (176 s user; 366 s wall in this
+    // test at load 8 to 12), TetGen 19 s: over the 2 min a model may take in
+    // CI, so only TetGen's figures are checked here (`gates: None`); with
+    // `gates: Some(&[Gate::Count])` the test runs ours and asserts count,
+    // orientation, volume and Hausdorff (passed, session 15).
     Model {
         name: "armadillo",
         source: Source::Debian { package: "libcgal-demo", path: CGAL_DATA, member: Some("data/meshes/armadillo.off") },
         size_mm: 8.0,
-        gates: Some(&[Gate::Count]),
+        gates: None,
         forced_radius_edge: false,
     },
 ];
