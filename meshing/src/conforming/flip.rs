@@ -1,4 +1,4 @@
-//! Sliver removal by 3-2 flips (stage 4b), after refinement and before
+//! Sliver removal by 3-2 flips (stage 5), after refinement and before
 //! smoothing.
 //!
 //! A tet under the sliver bound with an interior edge `cd` around which

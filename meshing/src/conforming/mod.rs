@@ -99,14 +99,14 @@
 //!    1e-12 of the diagonal, with a face on the boundary (on coplanar input triangles, where
 //!    the symbolic perturbation of stage 1 makes zero-volume tets legal) are
 //!    removed: the boundary becomes their other faces, the same piece of plane.
-//! 4b. **3-2 flips** (`flip.rs`): a sliver with an interior edge around which
+//! 5. **3-2 flips** (`flip.rs`): a sliver with an interior edge around which
 //!    exactly three tets lie is replaced, with the two others, by two tets
 //!    sharing the triangle of the three other corners, when they fill the
 //!    same space (exact `orient3d`) and are better; the boundary does not
 //!    change. Measured (tets under 10 deg): bunny 0.016 % to 0.007 % (38
 //!    flips), armadillo at 8 mm 3.63 % to 3.48 % (3 048 flips; its caps have
 //!    rings of more than three tets).
-//! 5. **Smoothing** (`smooth.rs`): Steiner vertices of bad tets (smallest
+//! 6. **Smoothing** (`smooth.rs`): Steiner vertices of bad tets (smallest
 //!    dihedral angle, or 180 deg minus the largest, under the sliver bound)
 //!    move to the candidate position that most raises that quality over their
 //!    star, never inverting a tet (exact `orient3d`) nor exceeding the volume
@@ -170,7 +170,7 @@
 //! 1.47 (it was 2.23; 1.74 with the facets refined first but before
 //! smoothing for the ratio). No flips are done during refinement: it keeps
 //! the tetrahedralization Delaunay, which boundary recovery relies on; the
-//! 3-2 flips of stage 4b come after it.
+//! 3-2 flips of stage 5 come after it.
 
 //! **A coarse, bent scan (CGAL's armadillo) keeps thousands of flat caps.**
 //! Measured at h = 8 mm (`conforming_probe` with `PROBE_CLASSIFY=1`): 85 % of
@@ -187,7 +187,7 @@
 //! has flat tets over the same hinges, whose circumballs reach under the
 //! surface, so such a point would remove a subfacet (not kept: 3.55 % under
 //! 10 deg instead of 3.63 %). What would remove them is not Delaunay: the
-//! 3-2 flips of stage 4b remove the edge between a cap's two apexes only
+//! 3-2 flips of stage 5 remove the edge between a cap's two apexes only
 //! when three tets lie around it, which is rare for caps (15 080 caps
 //! before them, 15 135 after); general edge removal
 //! (a ring of n tets into 2n - 4) or cavities of interior points bounded by
