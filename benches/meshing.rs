@@ -10,8 +10,11 @@
 //!   (`meshing/tests/tetgen_golden.rs`): the shared Stanford bunny at 0.3 mm,
 //!   and the CAD models from Debian packages, CGAL's fandisk at 0.05 mm
 //!   (`libcgal-demo`'s `data.tar.gz`, read with `tar`) and Netgen's hinge at
-//!   2 mm (`netgen-doc`); a model whose package is absent is skipped with a
-//!   message. TetGen's times for the same runs are in BENCHMARKS.md.
+//!   2 mm (`netgen-doc`), and CGAL's armadillo scan at 8 mm (`libcgal-demo`;
+//!   about 3 min a run on the shared machine, so 10 samples take over half an
+//!   hour: filter it in or out by name); a model whose package is absent is
+//!   skipped with a message. TetGen's times for the same runs are in
+//!   BENCHMARKS.md.
 
 use std::path::Path;
 use std::process::Command;
@@ -76,19 +79,25 @@ fn models() -> Vec<(&'static str, Surface, f64)> {
         Err(e) => eprintln!("bunny skipped: {e}"),
     }
     let cgal = "/usr/share/doc/libcgal-dev/data.tar.gz";
-    let fandisk = Path::new(cgal)
-        .exists()
-        .then(|| Command::new("tar").args(["-xzOf", cgal, "data/meshes/fandisk.off"]).output().ok())
-        .flatten()
-        .filter(|o| o.status.success())
-        .and_then(|o| parse_off(&String::from_utf8_lossy(&o.stdout)));
-    match fandisk {
+    let cgal_member = |member: &str| {
+        Path::new(cgal)
+            .exists()
+            .then(|| Command::new("tar").args(["-xzOf", cgal, member]).output().ok())
+            .flatten()
+            .filter(|o| o.status.success())
+            .and_then(|o| parse_off(&String::from_utf8_lossy(&o.stdout)))
+    };
+    match cgal_member("data/meshes/fandisk.off") {
         Some(s) => out.push(("fandisk_0.05", s, 0.05)),
         None => eprintln!("fandisk skipped: {cgal} absent or unreadable (apt-get install libcgal-demo)"),
     }
     match read("/usr/share/doc/netgen/examples/hinge.stl") {
         Ok(s) => out.push(("hinge_2", s, 2.0)),
         Err(e) => eprintln!("hinge skipped (apt-get install netgen-doc): {e}"),
+    }
+    match cgal_member("data/meshes/armadillo.off") {
+        Some(s) => out.push(("armadillo_8", s, 8.0)),
+        None => eprintln!("armadillo skipped: {cgal} absent or unreadable (apt-get install libcgal-demo)"),
     }
     out
 }

@@ -14,6 +14,9 @@
 //! corners and the `PROBE_TOP` (30) tets of largest ratio with the kinds of
 //! their corners (I input vertex, S on a sharp input edge, F on the surface,
 //! V inside) and of their shortest edge's ends.
+//! `PROBE_CLASSIFY=1` counts the tets under 10 deg by how many of their
+//! corners are input vertices and other boundary points and how many of their
+//! faces lie on the boundary (`classify`).
 //! The mesh's fingerprints (hashes of its nodes and cells, with the cells
 //! sorted and as output) tell identical meshes apart from merely similar ones.
 //!
@@ -116,6 +119,9 @@ fn main() {
                 if let Some(n) = std::env::var("PROBE_WORST").ok().and_then(|x| x.parse().ok()) {
                     diagnose(&m.mesh, &s, n);
                 }
+                if std::env::var_os("PROBE_CLASSIFY").is_some() {
+                    classify(&m.mesh, &s);
+                }
                 let (canonical, ordered, cells) = fingerprints(&m.mesh);
                 println!(
                     "mesh fingerprint {canonical:016x} (cells sorted), {ordered:016x} (as output), {cells:016x} (sorted cells alone)"
@@ -123,7 +129,7 @@ fn main() {
                 let r = report(&m.mesh, &s, t);
                 println!(
                     "h {h:?} q {q} sliver {sliver}: {} tets, dihedral {:.2}..{:.2}, <10deg {:.3} %, r-e max {:.2} p99.9 {:.3}, \
-                     vol err {:.1e}, Hausdorff {:.1e}, {t:.2} s\n  {:?}",
+                     vol err {:.1e}, Hausdorff {:.1e}, {t:.2} s\n  {:?}\n  {:?}",
                     r.num_cells,
                     r.min_dihedral_deg,
                     r.max_dihedral_deg,
@@ -132,7 +138,8 @@ fn main() {
                     r.p999_radius_edge,
                     r.volume_error,
                     r.hausdorff_relative,
-                    m.stats.refinement
+                    m.stats.refinement,
+                    m.stats.flips
                 );
             }
             Err(e) => println!("h {h:?}: {e}"),
@@ -411,5 +418,49 @@ fn diagnose(mesh: &fem_core::mesh::TetMesh, s: &Surface, n: usize) {
             mesh.nodes[c[0] as usize],
             edges.iter().map(|e| format!("{e:.4}")).collect::<Vec<_>>()
         );
+    }
+}
+
+/// The tets under 10 deg by how many of their corners are input vertices (I),
+/// other boundary points (B) and interior points, and by how many of their
+/// faces lie on the boundary; with the smallest angle of each class.
+fn classify(mesh: &fem_core::mesh::TetMesh, s: &Surface) {
+    let input: std::collections::HashSet<[u64; 3]> = s.vertices.iter().map(|p| p.map(f64::to_bits)).collect();
+    let boundary: std::collections::HashSet<u32> = mesh.node_sets["boundary"].iter().copied().collect();
+    let faces: std::collections::HashSet<[u32; 3]> = mesh
+        .boundary_facets()
+        .iter()
+        .map(|f| {
+            let mut k = *f;
+            k.sort_unstable();
+            k
+        })
+        .collect();
+    let mut classes: std::collections::BTreeMap<(usize, usize, usize), (usize, f64)> = Default::default();
+    let mut total = 0;
+    for c in &mesh.cells {
+        let q = c.map(|v| mesh.nodes[v as usize]);
+        let t = meshing::quality::tet_quality(&q);
+        if t.min_dihedral_deg >= 10.0 {
+            continue;
+        }
+        total += 1;
+        let ni = q.iter().filter(|p| input.contains(&p.map(f64::to_bits))).count();
+        let nb = c.iter().filter(|v| boundary.contains(v)).count() - ni;
+        let nf = [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]]
+            .iter()
+            .filter(|f| {
+                let mut k = f.map(|j: usize| c[j]);
+                k.sort_unstable();
+                faces.contains(&k)
+            })
+            .count();
+        let e = classes.entry((ni, nb, nf)).or_insert((0, f64::INFINITY));
+        e.0 += 1;
+        e.1 = e.1.min(t.min_dihedral_deg);
+    }
+    println!("{total} tets under 10 deg, by (input corners, other boundary corners, boundary faces): count, min deg");
+    for (k, (n, d)) in classes {
+        println!("  {k:?}: {n} ({d:.3} deg)");
     }
 }

@@ -1,7 +1,8 @@
 //! Conforming mode against TetGen (issue 3's cross-check), on the shared models
 //! (the Stanford bunny, the three-region layered bunny and two boxes sharing a
 //! face) and on CAD models from Debian packages (CGAL's fandisk from
-//! `libcgal-demo`'s `data.tar.gz`, Netgen's `hinge.stl` from `netgen-doc`),
+//! `libcgal-demo`'s `data.tar.gz`, Netgen's `hinge.stl` from `netgen-doc`,
+//! CGAL's armadillo scan from `libcgal-demo`),
 //! read where Debian installs them. `.ci/run` installs those packages; under
 //! `CI` a missing one fails the tests, elsewhere its model is skipped with a
 //! message.
@@ -64,28 +65,30 @@ struct Model {
     source: Source,
     size_mm: f64,
     gates: Option<&'static [Gate]>,
+    /// Whether a miss of the p99.9 radius-edge gate is forced by the input
+    /// (asserted: more than 0.1 % of the tets have a boundary face of ratio
+    /// over TetGen's figure).
+    forced_radius_edge: bool,
 }
 
 const ALL: &[Gate] = &[Gate::Count, Gate::MinDihedral, Gate::MaxDihedral, Gate::Below10, Gate::RadiusEdge];
 
 const CGAL_DATA: &str = "/usr/share/doc/libcgal-dev/data.tar.gz";
 
-// CGAL's armadillo (libcgal-demo, 52 000 triangles) at h = 4 mm is not
-// listed: since session 14 it finishes (508 422 tets, 91 s of CPU against
-// TetGen's 54 s), but its quality gates miss by far (0.00..178.92 deg, 3.3 %
-// under 10 deg, p99.9 radius-edge 4.6e4; BENCHMARKS.md, session 14).
-const MODELS: [Model; 5] = [
+const MODELS: [Model; 6] = [
     Model {
         name: "bunny",
         source: Source::Shared { file: "meshes/npm_bunny.obj", repair: false },
         size_mm: 0.3,
         gates: Some(ALL),
+        forced_radius_edge: false,
     },
     Model {
         name: "layered_bunny",
         source: Source::Shared { file: "meshes/layered_bunny.obj", repair: false },
         size_mm: 0.3,
         gates: Some(ALL),
+        forced_radius_edge: false,
     },
     // The fixture's x = 0 face faces into box 1: meshed once repaired.
     Model {
@@ -93,6 +96,7 @@ const MODELS: [Model; 5] = [
         source: Source::Shared { file: "meshes/layered_two_boxes.obj", repair: true },
         size_mm: 0.1,
         gates: Some(ALL),
+        forced_radius_edge: false,
     },
     // CGAL's fandisk (CAD, 12 946 triangles): all hold since coplanar input
     // triangles merge into facets, bad tets on four input vertices refine the
@@ -104,6 +108,7 @@ const MODELS: [Model; 5] = [
         source: Source::Debian { package: "libcgal-demo", path: CGAL_DATA, member: Some("data/meshes/fandisk.off") },
         size_mm: 0.05,
         gates: Some(ALL),
+        forced_radius_edge: false,
     },
     // Netgen's hinge (CAD STL, 1 212 triangles, needle-heavy, coordinates with
     // 7 digits): the p99.9 radius-edge ratio misses (measured: 1.468 against
@@ -127,6 +132,29 @@ const MODELS: [Model; 5] = [
         },
         size_mm: 2.0,
         gates: Some(&[Gate::Count, Gate::MinDihedral, Gate::MaxDihedral, Gate::Below10]),
+        forced_radius_edge: true,
+    },
+    // CGAL's armadillo scan (libcgal-demo, 26 002 vertices, 52 000 triangles,
+    // 127 x 151 x 115 mm, input edges 1.33 mm median): the counts are set by
+    // the surface, not by h (TetGen: 956 704 tets at 4 mm, 891 693 at 8 mm),
+    // so 8 mm, the cheaper. Count, orientation, volume and Hausdorff hold
+    // (measured: 482 205 tets, volume error 4e-14, Hausdorff 1e-13); the
+    // quality gates miss by far (0.00..178.44 deg against TetGen's
+    // 1.82..174.72, 3.48 % under 10 deg against 1.03 %, p99.9 radius-edge 3e4
+    // against 4.32): 90 % of the tets under 10 deg are flat caps over the
+    // scan's bent input edges, which conforming Delaunay refinement cannot
+    // remove (module docs of `meshing::conforming`, "What is not done").
+    // Ours takes about 3 min of CPU on it (176 s user; 366 s wall in this
+    // test at load 8 to 12), TetGen 19 s: over the 2 min a model may take in
+    // CI, so only TetGen's figures are checked here (`gates: None`); with
+    // `gates: Some(&[Gate::Count])` the test runs ours and asserts count,
+    // orientation, volume and Hausdorff (passed, session 15).
+    Model {
+        name: "armadillo",
+        source: Source::Debian { package: "libcgal-demo", path: CGAL_DATA, member: Some("data/meshes/armadillo.off") },
+        size_mm: 8.0,
+        gates: None,
+        forced_radius_edge: false,
     },
 ];
 
@@ -261,7 +289,7 @@ fn our_conforming_meshes_pass_the_gates_against_tetgens_golden_figures() {
             };
             if gates.contains(gate) {
                 assert!(ok, "{}: gate {gate:?} misses: ours {what}, TetGen {g:?}", m.name);
-            } else if !ok && *gate == Gate::RadiusEdge {
+            } else if !ok && *gate == Gate::RadiusEdge && m.forced_radius_edge {
                 // A known miss of the p99.9 radius-edge ratio must be forced:
                 // more than 0.1 % of the tets have a boundary face whose own
                 // radius-edge ratio is over TetGen's figure (a tet's ratio is
