@@ -152,3 +152,60 @@ pub fn flip_slivers(nodes: &[Point], cells: &mut Vec<[u32; 4]>, regions: &mut Ve
     }
     stats
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn volume(nodes: &[Point], t: [u32; 4]) -> f64 {
+        let [a, b, c, d] = t.map(|v| nodes[v as usize]);
+        let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+        let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+        let w = [d[0] - a[0], d[1] - a[1], d[2] - a[2]];
+        (u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0]))
+            / 6.0
+    }
+
+    /// Three tets around the edge `cd` (a = 0, b = 1, p = 2, c = 3, d = 4); the
+    /// edge passes through the triangle `abp` at `(0.5, y, 0)`.
+    fn ring(y: f64) -> (Vec<Point>, Vec<[u32; 4]>) {
+        let nodes = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 1.0, 0.0], [0.5, y, 0.8], [0.5, y, -0.8]];
+        let cells = [[3, 4, 0, 1], [3, 4, 1, 2], [3, 4, 2, 0]].map(|t| positive(&nodes, t).unwrap()).to_vec();
+        (nodes, cells)
+    }
+
+    /// The edge 0.02 from `ab`: the tet `(c, d, a, b)` is a sliver (its corners
+    /// nearly coplanar), and the flip gives two tets on `abp` that fill the same
+    /// volume (1e-12) with every dihedral angle over the 10 deg bound.
+    #[test]
+    fn a_sliver_on_a_three_tet_edge_is_flipped_into_two_good_tets() {
+        let (nodes, mut cells) = ring(0.02);
+        let before: f64 = cells.iter().map(|&t| volume(&nodes, t)).sum();
+        let worst = cells.iter().map(|&t| dihedral_range_deg(&t.map(|v| nodes[v as usize])).0).fold(180.0, f64::min);
+        assert!(worst < 10.0, "{worst}");
+        let mut regions = vec![0u16; 3];
+        let stats = flip_slivers(&nodes, &mut cells, &mut regions, 10.0);
+        assert_eq!(stats.flips, 1);
+        assert_eq!((cells.len(), regions.len()), (2, 2));
+        let after: f64 = cells.iter().map(|&t| volume(&nodes, t)).sum();
+        assert!((after - before).abs() < 1e-12, "{before} -> {after}");
+        for &t in &cells {
+            assert!(volume(&nodes, t) > 0.0, "{t:?}");
+            assert!(t.contains(&0) && t.contains(&1) && t.contains(&2), "{t:?}");
+            let (lo, _) = dihedral_range_deg(&t.map(|v| nodes[v as usize]));
+            assert!(lo > 10.0, "{t:?}: {lo}");
+        }
+    }
+
+    /// The edge outside the triangle (`y` < 0): the two tets on `abp` would not
+    /// fill the ring's space, so nothing flips.
+    #[test]
+    fn no_flip_when_the_edge_misses_the_triangle() {
+        let (nodes, mut cells) = ring(-0.02);
+        let kept = cells.clone();
+        let mut regions = vec![0u16; 3];
+        let stats = flip_slivers(&nodes, &mut cells, &mut regions, 10.0);
+        assert_eq!(stats.flips, 0);
+        assert_eq!(cells, kept);
+    }
+}
