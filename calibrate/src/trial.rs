@@ -29,13 +29,13 @@
 //! Marker observations at `t = 0` are the definition of the material points and
 //! carry no residual.
 //!
-//! A bundle's `[effects]` (`fem_core::effects`) are held at their values while the
-//! materials are fitted. With `force-offset` and `gravity` alone the Jacobian
+//! A bundle's `[effects]` (`fem_core::effects`), and a material's Mullins-type
+//! damage, are held at their values while the materials are fitted. With `force-offset` and `gravity` alone the Jacobian
 //! comes from the engine's forward sensitivities. With an active effect whose
 //! sensitivities the engine does not carry (`ageing`, `machine-compliance` and
 //! the material-point effects `plastic-slider`, `bingham-dashpot`,
-//! `stress-thinning`, `dual-viscosity`, `strain-stiffening`, `finite-strain`) the
-//! trial's Jacobian columns are *forward differences on a frozen discretisation*:
+//! `stress-thinning`, `dual-viscosity`, `strain-stiffening`, `finite-strain`), or
+//! with a material's Mullins-type damage, the trial's Jacobian columns are *forward differences on a frozen discretisation*:
 //! the run at the point fixes the step ends, the point is replayed on them
 //! (`Settings::step_ends_s`) and so is each perturbed run, so the adaptive step
 //! choice does not enter the difference (the diagnosis's rule,
@@ -606,7 +606,8 @@ impl<'c> Objective<'c> {
         let problem = trial.with_materials(materials.clone());
         // Effects without forward sensitivities, and contact tools: forward
         // differences (module docs).
-        let differenced = problem.effects().check_sensitivities().is_err() || problem.has_tools();
+        let differenced =
+            problem.effects().check_sensitivities().is_err() || problem.has_tools() || problem.has_damage();
         // The free unknowns that act on this trial, as engine parameters.
         let mut acting: Vec<(usize, SensitivityParameter)> = Vec::new();
         if want_jacobian {
@@ -673,9 +674,11 @@ impl<'c> Objective<'c> {
             } else {
                 run(table, &frozen).and_then(|base| columns(&frozen, &base, FD_STEP))
             };
+            // Only contact may fall back; any other failed replay stops the fit.
             jac = match replayed {
                 Ok(jac) => jac,
-                Err(_) => columns(settings, &res, ADAPTIVE_FD_STEP)?,
+                Err(_) if contact_effect || problem.has_tools() => columns(settings, &res, ADAPTIVE_FD_STEP)?,
+                Err(e) => return Err(e),
             };
             return Ok((res, jac));
         }

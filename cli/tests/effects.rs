@@ -269,3 +269,29 @@ fn press_runs_material_point_effects() {
     let e = fit["sets"]["joint"]["gel"]["E_MPa"]["value"].as_f64().unwrap_or_else(|| panic!("{fit}"));
     assert!((e - 0.05).abs() < 1e-4 * 0.05, "E = {e}");
 }
+
+/// A material with a Mullins-type damage (`mullins_d_inf`, `mullins_strain_c`)
+/// runs without forward sensitivities, so `wagashi fit` differences it on the
+/// run's frozen step ends: a trial simulated with the damage is fitted back
+/// with it held (E to 1e-4). Before, the fit stopped with the engine's refusal.
+#[test]
+fn fit_holds_a_mullins_damage() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cwd = tmp.path();
+    let dir = cwd.join("in");
+    std::fs::create_dir_all(&dir).unwrap();
+    let damaged = TRIAL.replace("E_MPa = 0.05\n", "E_MPa = 0.05\nmullins_d_inf = 0.3\nmullins_strain_c = 0.05\n");
+    assert!(damaged.contains("mullins_d_inf"));
+    std::fs::write(dir.join("experiment.toml"), damaged).unwrap();
+    assert_success(&wagashi_in(cwd, ["press", "in", "-o", "measured", "--size-mm", "2.5"]));
+    let measured = cwd.join("measured/experiment.toml");
+    let text = std::fs::read_to_string(&measured).unwrap();
+    assert!(text.contains("mullins_d_inf = 0.3"), "{text}");
+    std::fs::write(&measured, text.replace("E_MPa = 0.05\n", "")).unwrap();
+    let o = wagashi_in(cwd, ["fit", "measured", "--size-mm", "2.5", "--procedure", "joint", "-o", "fit"]);
+    assert_success(&o);
+    let fit: serde_json::Value = serde_json::from_slice(&std::fs::read(cwd.join("fit/fit.json")).unwrap()).unwrap();
+    let e = fit["sets"]["joint"]["gel"]["E_MPa"]["value"].as_f64().unwrap_or_else(|| panic!("{fit}"));
+    println!("E = {e}");
+    assert!((e - 0.05).abs() < 1e-4 * 0.05, "E = {e}");
+}

@@ -76,7 +76,8 @@
 //! equivalent strain so far; stress softening on first loading, softer
 //! unloading) on the three-element truth, with `d_inf = 0.1 a` up to the law's
 //! bound 0.8 ([`MULLINS_STRAIN_C`], [`MULLINS_D_INF_PER_AMPLITUDE`]). The
-//! generator sets it on the truth's engine problem (it is no bundle key). Adding
+//! generator sets it on the truth's engine problem (the bundles the diagnoser
+//! gets carry no `mullins_*` key). Adding
 //! it to [`OutOfLibrary::ALL`] lengthened [`full_cycle`], so the
 //! plans of the development seeds below, drawn before it, no longer come out of
 //! [`plan`] case for case.

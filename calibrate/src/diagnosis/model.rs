@@ -1060,8 +1060,9 @@ impl Model {
         let problem = self.problem(k, theta, effect)?;
         let p = self.unknowns.len();
         let d = candidate.map_or(0, |(c, _)| c.dim());
-        // Contact runs have no sensitivities: their columns come from differences.
-        let sens_ok = problem.effects().check_sensitivities().is_ok() && !problem.has_tools();
+        // Contact runs and damaged materials have no sensitivities: their columns
+        // come from differences.
+        let sens_ok = problem.effects().check_sensitivities().is_ok() && !problem.has_tools() && !problem.has_damage();
         let acting = if theta_columns { self.sensitivity_parameters(k, &problem) } else { Vec::new() };
         let (r, mut columns, steps) = if sens_ok && !acting.is_empty() {
             let params: Vec<SensitivityParameter> = acting.iter().map(|a| a.1.clone()).collect();

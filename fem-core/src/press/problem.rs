@@ -237,6 +237,17 @@ impl AnyPress {
         }
     }
 
+    /// Whether a material carries a Mullins-type damage that runs (which, like
+    /// the material-point effects, runs without sensitivities).
+    pub fn has_damage(&self) -> bool {
+        let forced = self.effects().forces_material_point_path();
+        match self {
+            AnyPress::Plane(p) => p.materials.iter().any(|m| m.damage_runs(forced)),
+            AnyPress::Solid(p) => p.materials.iter().any(|m| m.damage_runs(forced)),
+            AnyPress::Axisymmetric(p) => p.materials.iter().any(|m| m.damage_runs(forced)),
+        }
+    }
+
     /// The problem's effects.
     pub fn effects(&self) -> &Effects {
         match self {

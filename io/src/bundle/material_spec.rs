@@ -22,8 +22,8 @@
 //! both or neither. The chain then acts on `(1 - d) e` with `d = mullins_d_inf
 //! (1 - exp(-alpha / mullins_strain_c))` and `alpha` the largest equivalent
 //! strain so far. They are fixed values, not among the model's parameters
-//! (nothing identifies them; runs that need forward sensitivities stop with the
-//! engine's refusal, since the damage runs without them), and `wagashi press`
+//! (nothing identifies them; `wagashi fit` and the diagnosis difference such
+//! trials, since the damage runs without forward sensitivities), and `wagashi press`
 //! runs them on the quasi-static integrator with the constrained
 //! plate (not with contact tools, machine compliance or a material-point effect).
 
