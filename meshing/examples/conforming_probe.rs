@@ -22,27 +22,14 @@
 //!
 //! ```text
 //! ```
+mod common;
+
 use std::time::Instant;
 
+use common::read_obj;
 use meshing::conforming::{conforming_mesh, ConformingOptions};
 use meshing::quality::report;
 use meshing::Surface;
-
-fn read_obj(path: &str) -> Surface {
-    let (models, _) = tobj::load_obj(path, &tobj::LoadOptions { triangulate: true, ..Default::default() })
-        .unwrap_or_else(|e| panic!("{path}: {e}"));
-    let mut s =
-        Surface { vertices: Vec::new(), triangles: Vec::new(), triangle_regions: Vec::new(), region_names: Vec::new() };
-    for (r, m) in models.iter().enumerate() {
-        let base = s.vertices.len() as u32;
-        let p = &m.mesh.positions;
-        s.vertices.extend(p.chunks(3).map(|c| [c[0] as f64, c[1] as f64, c[2] as f64]));
-        s.triangles.extend(m.mesh.indices.chunks(3).map(|t| [base + t[0], base + t[1], base + t[2]]));
-        s.triangle_regions.extend(std::iter::repeat_n(r as u32, m.mesh.indices.len() / 3));
-        s.region_names.push(m.name.clone());
-    }
-    s
-}
 
 /// An OFF file (polygons as fans) or an ASCII STL file (identical coordinates
 /// become one vertex), one region.

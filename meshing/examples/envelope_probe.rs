@@ -6,28 +6,15 @@
 //! ```text
 //! cargo run --release -p wagashi-meshing --example envelope_probe -- ../shared/data/meshes/npm_bunny.obj 0.3 0.2 0.1
 //! ```
+mod common;
+
 use std::time::Instant;
 
+use common::read_obj;
 use meshing::envelope::{envelope_mesh_with_progress, EnvelopeOptions, TriangleTree};
 use meshing::quality::report;
-use meshing::Surface;
 
 type P = [f64; 3];
-
-fn read_obj(path: &str) -> Surface {
-    let (models, _) = tobj::load_obj(path, &tobj::LoadOptions { triangulate: true, ..Default::default() })
-        .unwrap_or_else(|e| panic!("{path}: {e}"));
-    let mut s = Surface::default();
-    for (r, m) in models.iter().enumerate() {
-        let base = s.vertices.len() as u32;
-        let p = &m.mesh.positions;
-        s.vertices.extend(p.chunks(3).map(|c| [c[0] as f64, c[1] as f64, c[2] as f64]));
-        s.triangles.extend(m.mesh.indices.chunks(3).map(|t| [base + t[0], base + t[1], base + t[2]]));
-        s.triangle_regions.extend(std::iter::repeat_n(r as u32, m.mesh.indices.len() / 3));
-        s.region_names.push(m.name.clone());
-    }
-    s
-}
 
 fn sub(a: P, b: P) -> P {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]

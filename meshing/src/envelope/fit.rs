@@ -104,6 +104,16 @@ pub(crate) fn fit(
         let mut snaps: Vec<(f64, [u32; 3], P)> = Vec::new();
         let key = |a: u32, b: u32| if a < b { (a, b) } else { (b, a) };
         let movable = |w: &Work, v: u32| w.mobility[v as usize] == Mobility::OnSurface;
+        // A boundary triangle's edges that may be split, longest first (ties by key).
+        let longest_movable_edges = |w: &Work, f: [u32; 3]| -> Vec<(u32, u32)> {
+            let mut e: Vec<(f64, (u32, u32))> = [(f[0], f[1]), (f[1], f[2]), (f[2], f[0])]
+                .into_iter()
+                .filter(|&(a, b)| movable(w, a) && movable(w, b))
+                .map(|(a, b)| (norm(sub(w.nodes[a as usize], w.nodes[b as usize])), key(a, b)))
+                .collect();
+            e.sort_by(|x, y| y.0.total_cmp(&x.0).then(x.1.cmp(&y.1)));
+            e.into_iter().map(|x| x.1).collect()
+        };
         // Output -> input: boundary edge midpoints.
         let mut edges: Vec<(u32, u32)> =
             faces.iter().flat_map(|f| [key(f[0], f[1]), key(f[1], f[2]), key(f[0], f[2])]).collect();
@@ -144,14 +154,9 @@ pub(crate) fn fit(
             if d <= tol {
                 continue;
             }
-            let mut e: Vec<(f64, (u32, u32))> = [(f[0], f[1]), (f[1], f[2]), (f[2], f[0])]
-                .into_iter()
-                .filter(|&(a, b)| movable(&w, a) && movable(&w, b))
-                .map(|(a, b)| (norm(sub(w.nodes[a as usize], w.nodes[b as usize])), key(a, b)))
-                .collect();
-            e.sort_by(|x, y| y.0.total_cmp(&x.0).then(x.1.cmp(&y.1)));
+            let e = longest_movable_edges(&w, *f);
             if !e.is_empty() {
-                candidates.push((d, e.into_iter().map(|x| x.1).collect(), None));
+                candidates.push((d, e, None));
             }
         }
         // Input -> output: the edges of the nearest boundary triangle, longest first.
@@ -166,14 +171,9 @@ pub(crate) fn fit(
             still_far.push(p);
             let f = faces[t as usize];
             snaps.push((d, f, p));
-            let mut e: Vec<(f64, (u32, u32))> = [(f[0], f[1]), (f[1], f[2]), (f[2], f[0])]
-                .into_iter()
-                .filter(|&(a, b)| movable(&w, a) && movable(&w, b))
-                .map(|(a, b)| (norm(sub(w.nodes[a as usize], w.nodes[b as usize])), key(a, b)))
-                .collect();
-            e.sort_by(|x, y| y.0.total_cmp(&x.0).then(x.1.cmp(&y.1)));
+            let e = longest_movable_edges(&w, f);
             if !e.is_empty() {
-                candidates.push((d, e.into_iter().map(|x| x.1).collect(), Some(p)));
+                candidates.push((d, e, Some(p)));
             }
         }
         far_points = still_far;
