@@ -9,6 +9,8 @@
 pub mod bvh;
 pub mod conforming;
 pub mod envelope;
+#[cfg(test)]
+mod fixtures;
 pub mod layers;
 pub mod predicates;
 pub mod quality;

@@ -290,25 +290,7 @@ mod tests {
     /// tet positive and no tet's angles under the bound they were over.
     #[test]
     fn radius_edge_smoothing_lowers_the_stars_ratio_and_keeps_its_angles() {
-        let mut nodes: Vec<Point> = vec![
-            [0.55, 0.3, -0.2],
-            [1.0, 0.0, 0.0],
-            [-1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, -1.0, 0.0],
-            [0.0, 0.0, 1.0],
-            [0.0, 0.0, -1.0],
-        ];
-        let mut cells = Vec::new();
-        for x in [1u32, 2] {
-            for y in [3u32, 4] {
-                for z in [5u32, 6] {
-                    let c = [0, x, y, z];
-                    let q = c.map(|v| nodes[v as usize]);
-                    cells.push(if orient3d(q[0], q[1], q[2], q[3]) == 1 { c } else { [0, y, x, z] });
-                }
-            }
-        }
+        let (mut nodes, cells) = crate::fixtures::octahedron_star([0.55, 0.3, -0.2]);
         let measure = |nodes: &[Point]| {
             cells.iter().fold((0.0f64, f64::INFINITY), |(r, a), c| {
                 let t = tet_quality(&c.map(|v| nodes[v as usize]));

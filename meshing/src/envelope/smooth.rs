@@ -181,26 +181,7 @@ mod tests {
     #[test]
     fn a_bad_interior_node_is_moved_to_a_better_place() {
         // An octahedron around a node pushed towards one corner.
-        let mut nodes = vec![
-            [0.9, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [-1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, -1.0, 0.0],
-            [0.0, 0.0, 1.0],
-            [0.0, 0.0, -1.0],
-        ];
-        let mut cells = Vec::new();
-        for &(a, b) in &[(1, 3), (3, 2), (2, 4), (4, 1)] {
-            for &c in &[5u32, 6] {
-                let mut t = [0u32, a, b, c];
-                let p = t.map(|x| nodes[x as usize]);
-                if dot(sub(p[1], p[0]), cross(sub(p[2], p[0]), sub(p[3], p[0]))) < 0.0 {
-                    t.swap(2, 3);
-                }
-                cells.push(t);
-            }
-        }
+        let (mut nodes, cells) = crate::fixtures::octahedron_star([0.9, 0.0, 0.0]);
         let before = cells.iter().map(|c| score(&c.map(|x| nodes[x as usize]))).fold(f64::INFINITY, f64::min);
         let mut mobility = vec![Mobility::Fixed; 7];
         mobility[0] = Mobility::Free;
