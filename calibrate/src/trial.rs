@@ -141,6 +141,41 @@ pub fn set_parameter(spec: &mut MaterialSpec, key: &str, value: f64) -> bool {
     true
 }
 
+/// Merges `new`, the same material as another trial gives it, into `old`: a key
+/// given by either is given (so the campaign does not depend on the order of its
+/// trials); a key both give with different values is an error, returned as
+/// `(key, old value, new value)`. `old` is unchanged on error.
+fn merge_spec(old: &mut MaterialSpec, new: &MaterialSpec) -> Result<(), (&'static str, f64, f64)> {
+    let pairs = |s: &MaterialSpec| {
+        let mut v: Vec<(&'static str, Option<f64>)> = vec![("poisson", s.poisson)];
+        v.extend(s.parameters());
+        v.push(("mullins_d_inf", s.mullins_d_inf));
+        v.push(("mullins_strain_c", s.mullins_strain_c));
+        v
+    };
+    for ((key, a), (_, b)) in pairs(old).into_iter().zip(pairs(new)) {
+        if let (Some(a), Some(b)) = (a, b) {
+            if a != b {
+                return Err((key, a, b));
+            }
+        }
+    }
+    let mut merged = old.clone();
+    for (key, value) in pairs(new) {
+        if let (Some(v), None) = (value, pairs(old).into_iter().find(|(k, _)| *k == key).and_then(|(_, v)| v)) {
+            match key {
+                "mullins_d_inf" => merged.mullins_d_inf = Some(v),
+                "mullins_strain_c" => merged.mullins_strain_c = Some(v),
+                _ => {
+                    set_parameter(&mut merged, key, v);
+                }
+            }
+        }
+    }
+    *old = merged;
+    Ok(())
+}
+
 /// The bundle key of an engine rheology parameter name (`E1` -> `E1_MPa`).
 fn key_of(name: &str) -> &'static str {
     match name {
@@ -324,6 +359,9 @@ impl Campaign {
     /// r-y section (markers compared at `r = sqrt(x^2 + z^2)`). `start` gives values for unknowns and may
     /// free given ones: its parameters override the bundles' (they are starting
     /// values); parameters the bundles give and `start` does not are held fixed.
+    /// Trials naming the same material give one material: the keys any of them
+    /// gives are given, and a key two trials give with different values is an
+    /// error naming the second trial's file.
     pub fn new(
         bundles: &[Bundle],
         start: &BTreeMap<String, MaterialSpec>,
@@ -344,7 +382,7 @@ impl Campaign {
                         b.experiment_file().display()
                     )));
                 };
-                match materials.get(name) {
+                match materials.get_mut(name) {
                     Some(old) if old.model != spec.model => {
                         return Err(CampaignError::Invalid(format!(
                             "material {name} is {} in one trial and {} in {}",
@@ -353,7 +391,14 @@ impl Campaign {
                             b.experiment_file().display()
                         )))
                     }
-                    Some(_) => {}
+                    Some(old) => merge_spec(old, &spec).map_err(|(key, was, now)| {
+                        CampaignError::Invalid(format!(
+                            "{}: material {name} gives {key} = {now}, but an earlier trial gave {was}: a campaign \
+                             fits one material, so its given (fixed) parameters must agree; give the value once, or \
+                             free it with --materials",
+                            b.experiment_file().display()
+                        ))
+                    })?,
                     None => {
                         materials.insert(name.to_string(), spec);
                     }
@@ -764,5 +809,66 @@ impl LeastSquares for Objective<'_> {
             DMatrix::from_fn(rows.len(), self.free.len(), |i, j| rows[i][j])
         });
         Ok(Evaluation { residuals, jacobian })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use wagashi_io::bundle::Model;
+
+    fn three(e1: Option<f64>, damage: Option<(f64, f64)>) -> MaterialSpec {
+        let mut s = MaterialSpec::new(Model::ThreeElement);
+        s.e1_mpa = e1;
+        s.poisson = Some(0.3);
+        if let Some((d, c)) = damage {
+            s.mullins_d_inf = Some(d);
+            s.mullins_strain_c = Some(c);
+        }
+        s
+    }
+
+    #[test]
+    fn merged_specs_take_the_union_of_the_given_keys_whatever_the_order() {
+        let a = three(Some(0.03), None);
+        let b = three(None, Some((0.4, 0.05)));
+        let (mut ab, mut ba) = (a.clone(), b.clone());
+        merge_spec(&mut ab, &b).unwrap();
+        merge_spec(&mut ba, &a).unwrap();
+        assert_eq!(ab, ba);
+        assert_eq!(ab.e1_mpa, Some(0.03));
+        assert_eq!((ab.mullins_d_inf, ab.mullins_strain_c), (Some(0.4), Some(0.05)));
+    }
+
+    #[test]
+    fn merged_specs_refuse_a_key_given_twice_with_different_values() {
+        let mut a = three(Some(0.03), Some((0.4, 0.05)));
+        let before = a.clone();
+        assert_eq!(merge_spec(&mut a, &three(Some(0.03), Some((0.5, 0.05)))), Err(("mullins_d_inf", 0.4, 0.5)));
+        assert_eq!(merge_spec(&mut a, &three(Some(0.04), None)), Err(("E1_MPa", 0.03, 0.04)));
+        assert_eq!(a, before, "unchanged on error");
+        // The same values agree.
+        merge_spec(&mut a, &before.clone()).unwrap();
+        assert_eq!(a, before);
+    }
+
+    #[test]
+    fn a_campaign_names_the_trial_whose_fixed_parameter_disagrees() {
+        let toml = |poisson: f64| {
+            format!(
+                "format = \"wagashi-experiment/1\"\nname = \"t\"\ndimension = 2\n\n[specimen]\nshape = \"block\"\n\
+                 size_mm = [20.0, 15.0, 10.0]\nmaterial = \"gel\"\n\n[materials.gel]\nmodel = \"elastic\"\n\
+                 poisson = {poisson}\n\n[protocol]\ntool = \"plate\"\ntool_contact = \"glued\"\nsupport = \"glued\"\nwaypoints = [[0.0, 0.0], [10.0, 1.0]]\nrelease_s = 10.0\n\
+                 end_s = 20.0\n"
+            )
+        };
+        let none = BTreeMap::new();
+        let a = wagashi_io::read_bundle_from_str("first", &toml(0.3), &none).unwrap();
+        let b = wagashi_io::read_bundle_from_str("second", &toml(0.4), &none).unwrap();
+        let Err(CampaignError::Invalid(message)) = Campaign::new(&[a.clone(), b], &none, Some(5.0), false) else {
+            panic!("conflicting poisson accepted");
+        };
+        assert!(message.contains("second/experiment.toml") && message.contains("poisson = 0.4"), "{message}");
+        assert!(Campaign::new(&[a.clone(), a], &none, Some(5.0), false).is_ok());
     }
 }
