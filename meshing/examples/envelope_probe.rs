@@ -37,6 +37,14 @@ fn main() {
         if let Ok(f) = std::env::var("PROBE_FIT") {
             opts.fit_tolerance = f.parse().unwrap_or(0.0);
         }
+        // PROBE_GRADE=levels[,tolerance]: the graded lattice.
+        if let Ok(g) = std::env::var("PROBE_GRADE") {
+            let mut it = g.split(',');
+            opts.grade_levels = it.next().and_then(|x| x.parse().ok()).unwrap_or(0);
+            if let Some(t) = it.next().and_then(|x| x.parse().ok()) {
+                opts.grade_tolerance = t;
+            }
+        }
         let stage = std::sync::Mutex::new(String::new());
         let timing = |name: &str, _: f64| {
             let mut last = stage.lock().unwrap_or_else(|e| e.into_inner());

@@ -78,6 +78,7 @@
 
 pub(crate) mod cut;
 pub(crate) mod fit;
+pub(crate) mod graded;
 pub(crate) mod lattice;
 pub(crate) mod smooth;
 pub(crate) mod stuffing;
@@ -118,6 +119,13 @@ pub struct EnvelopeOptions {
     pub fit_tolerance: f64,
     /// At most this many fitting rounds (default 10).
     pub max_fit_rounds: usize,
+    /// Grading (`graded.rs`): the lattice is refined by bisection down to
+    /// `size_mm / 2^grade_levels` where the input is curved, creased or thin at
+    /// the scale of the cells; 0 (default): the uniform lattice. At most 8.
+    pub grade_levels: u32,
+    /// The grading's chord-error tolerance, relative to the bounding-box diagonal
+    /// (default 5e-4): a cell is cut while its estimated chord error exceeds it.
+    pub grade_tolerance: f64,
 }
 
 impl EnvelopeOptions {
@@ -129,6 +137,8 @@ impl EnvelopeOptions {
             max_lattice_vertices: 40_000_000,
             fit_tolerance: 1e-3,
             max_fit_rounds: 10,
+            grade_levels: 0,
+            grade_tolerance: 5e-4,
         }
     }
 }
@@ -283,6 +293,10 @@ pub struct EnvelopeStats {
     pub interface_new_nodes: usize,
     /// Nodes moved by the quality improvement.
     pub smoothed_nodes: usize,
+    /// Tets of the lattice stuffed (after grading).
+    pub lattice_tets: usize,
+    /// Bisections of the grading (0 on the uniform lattice).
+    pub grade_bisections: usize,
     /// Boundary fitting rounds run.
     pub fit_rounds: usize,
     /// Edges split by the fitting (boundary ones, and inside ones by its longest-edge propagation).
@@ -368,7 +382,21 @@ pub fn envelope_mesh_with_progress(
     progress("inside test", 0.0);
     let winding = WindingNumber::new(surface);
     let eps = 1e-9 * diag.max(f64::MIN_POSITIVE);
-    let stuffed = stuffing::stuff(winding.tree(), lo, hi, h, eps, &|f| progress("stuffing", f));
+    let (stuffed, grade_bisections) = if options.grade_levels > 0 {
+        progress("grading", 0.0);
+        let (g, gs) = graded::GradedLattice::new(
+            winding.tree(),
+            lo,
+            hi,
+            h,
+            options.grade_levels,
+            options.grade_tolerance * diag,
+            options.max_lattice_vertices,
+        );
+        (stuffing::stuff_grid(&g, winding.tree(), eps, &|f| progress("stuffing", f)), gs.bisections)
+    } else {
+        (stuffing::stuff(winding.tree(), lo, hi, h, eps, &|f| progress("stuffing", f)), 0)
+    };
     if stuffed.num_inside_vertices == 0 || stuffed.cells.is_empty() {
         return Err(EnvelopeError::NothingInside { size_mm: h });
     }
@@ -378,6 +406,8 @@ pub fn envelope_mesh_with_progress(
         inside_vertices: stuffed.num_inside_vertices,
         cut_points: stuffed.num_cut_points,
         warped_vertices: stuffed.num_warped,
+        lattice_tets: stuffed.num_lattice_tets,
+        grade_bisections,
         ..EnvelopeStats::default()
     };
     let mut mesh = TetMesh {
