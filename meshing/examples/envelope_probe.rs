@@ -93,6 +93,19 @@ fn main() {
             "  fit: {} rounds, {} splits, {} refused",
             out.stats.fit_rounds, out.stats.fit_splits, out.stats.fit_refused
         );
+        let outside_angles = out
+            .mesh
+            .cells
+            .iter()
+            .filter(|c| {
+                let (lo, hi) = meshing::quality::dihedral_range_deg(&c.map(|x| out.mesh.nodes[x as usize]));
+                lo < 12.0 || hi > 155.0
+            })
+            .count();
+        println!(
+            "  lattice tets {}, grading bisections {}, peeled slivers {}, tets outside [12, 155] deg: {outside_angles}",
+            out.stats.lattice_tets, out.stats.grade_bisections, out.stats.peeled_slivers
+        );
         println!(
             "  input vertices farther than 1e-3/3e-3/1e-2 diag: {} / {} / {} of {}; boundary centroids: {} / {} / {} of {}",
             over(1e-3),

@@ -54,7 +54,7 @@
 
 use rayon::prelude::*;
 
-use super::stuffing::{Grid, ALPHA_LONG, ALPHA_SHORT};
+use super::stuffing::Grid;
 use super::tree::{cross, dot, norm, scale, sub, TriangleTree};
 
 type P = [f64; 3];
@@ -66,9 +66,13 @@ const BITS_PER_LEVEL: u32 = 3;
 /// The most halvings of the base spacing (the smallest long edge is `h / 2^MAX_LEVELS`).
 pub(crate) const MAX_LEVELS: u32 = 8;
 
-/// Warping threshold on face-diagonal edges (between `α_long` and `α_short`, as
-/// their length is between the two; measured, not proven).
-pub(crate) const ALPHA_FACE: f64 = 0.3;
+/// Warping threshold on axis-parallel edges of the graded lattice (measured, not
+/// proven: see the module docs).
+pub(crate) const ALPHA_AXIS: f64 = 0.2;
+/// Warping threshold on face-diagonal edges of the graded lattice.
+pub(crate) const ALPHA_FACE: f64 = 0.25;
+/// Warping threshold on body-diagonal edges of the graded lattice.
+pub(crate) const ALPHA_BODY: f64 = 0.3;
 
 /// A conforming tet mesh of the box refined from the BCC lattice (see the module docs).
 #[derive(Debug, Clone)]
@@ -199,8 +203,8 @@ impl Grid for GradedLattice {
     }
     fn alpha(&self, a: u32, b: u32) -> f64 {
         match self.direction_class(a, b) {
-            1 => ALPHA_LONG,
-            3 => ALPHA_SHORT,
+            1 => ALPHA_AXIS,
+            3 => ALPHA_BODY,
             _ => ALPHA_FACE,
         }
     }
@@ -246,6 +250,80 @@ fn too_coarse(surface: &TriangleTree, p: &[P; 4], tol: f64) -> bool {
         normals.iter().map(|&n| if dot(n, mean) <= 0.0 { 1.0 } else { norm(cross(n, mean)) }).fold(0.0, f64::max)
     };
     0.25 * longest * sin_theta > tol
+}
+
+/// Removes the tets with dihedral angles outside [12°, 155°] (score under 1)
+/// that have a face on the boundary and all four corners within `near` [mm] of
+/// the input, in index order, for up to `rounds` rounds (a removal exposes the
+/// next layer): the stuffing on the graded lattice leaves such slivers where
+/// vertices warped onto one flat input triangle (see the module docs). The
+/// exposed faces are within `near` of the input. Unused nodes are dropped.
+/// Returns the number of tets removed.
+pub(crate) fn peel_slivers(
+    nodes: &mut Vec<P>,
+    cells: &mut Vec<[u32; 4]>,
+    surface: &TriangleTree,
+    near: f64,
+    rounds: usize,
+) -> usize {
+    let close: Vec<bool> = nodes.par_iter().map(|&p| surface.closest_point_within(p, near).is_some()).collect();
+    let mut removed = 0;
+    for _ in 0..rounds {
+        let mut count = std::collections::HashMap::<[u32; 3], u32>::new();
+        for c in cells.iter() {
+            for i in 0..4 {
+                let mut f = [c[(i + 1) % 4], c[(i + 2) % 4], c[(i + 3) % 4]];
+                f.sort_unstable();
+                *count.entry(f).or_default() += 1;
+            }
+        }
+        let on_boundary = |c: &[u32; 4]| {
+            (0..4).any(|i| {
+                let mut f = [c[(i + 1) % 4], c[(i + 2) % 4], c[(i + 3) % 4]];
+                f.sort_unstable();
+                count.get(&f) == Some(&1)
+            })
+        };
+        let bad: Vec<bool> = cells
+            .par_iter()
+            .map(|c| {
+                c.iter().all(|&v| close[v as usize])
+                    && super::smooth::score(&c.map(|v| nodes[v as usize])) < 1.0
+            })
+            .collect();
+        let before = cells.len();
+        let mut k = 0;
+        cells.retain(|c| {
+            let drop = bad[k] && on_boundary(c);
+            k += 1;
+            !drop
+        });
+        if cells.len() == before {
+            break;
+        }
+        removed += before - cells.len();
+    }
+    // Compaction.
+    let mut new_id = vec![u32::MAX; nodes.len()];
+    let mut kept = Vec::with_capacity(nodes.len());
+    for c in cells.iter() {
+        for &v in c {
+            if new_id[v as usize] == u32::MAX {
+                new_id[v as usize] = 0;
+            }
+        }
+    }
+    for (v, id) in new_id.iter_mut().enumerate() {
+        if *id == 0 {
+            *id = kept.len() as u32;
+            kept.push(nodes[v]);
+        }
+    }
+    for c in cells.iter_mut() {
+        *c = c.map(|v| new_id[v as usize]);
+    }
+    *nodes = kept;
+    removed
 }
 
 struct Refiner {

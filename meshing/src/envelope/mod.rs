@@ -297,6 +297,8 @@ pub struct EnvelopeStats {
     pub lattice_tets: usize,
     /// Bisections of the grading (0 on the uniform lattice).
     pub grade_bisections: usize,
+    /// Boundary slivers removed after the stuffing on the graded lattice.
+    pub peeled_slivers: usize,
     /// Boundary fitting rounds run.
     pub fit_rounds: usize,
     /// Edges split by the fitting (boundary ones, and inside ones by its longest-edge propagation).
@@ -418,6 +420,10 @@ pub fn envelope_mesh_with_progress(
         node_sets: BTreeMap::new(),
         face_sets: BTreeMap::new(),
     };
+    if options.grade_levels > 0 {
+        let near = 0.5 * options.grade_tolerance.max(options.fit_tolerance) * diag;
+        stats.peeled_slivers = graded::peel_slivers(&mut mesh.nodes, &mut mesh.cells, winding.tree(), near, 10);
+    }
     mesh.cell_regions = vec![0; mesh.cells.len()];
 
     // 3-4. Interfaces: layer planes, or region shells.
@@ -437,6 +443,10 @@ pub fn envelope_mesh_with_progress(
     progress("smoothing", 0.0);
     let mut mobility = mobility(&mesh, winding.tree(), eps);
     stats.smoothed_nodes = smooth::improve(&mut mesh.nodes, &mesh.cells, &mobility, winding.tree());
+    if options.grade_levels > 0 {
+        // The graded lattice's stencils have no proven angle bound: a second pass.
+        stats.smoothed_nodes += smooth::improve(&mut mesh.nodes, &mesh.cells, &mobility, winding.tree());
+    }
 
     // 6. Boundary fitting towards the input.
     if options.fit_tolerance > 0.0 && options.max_fit_rounds > 0 {

@@ -481,7 +481,17 @@ fn fill(
                 let p = position(v);
                 [acc[0] + 0.25 * p[0], acc[1] + 0.25 * p[1], acc[2] + 0.25 * p[2]]
             });
-            if tree.winding_number(c) > 0.5 {
+            // Four vertices warped onto one flat patch of the input make a flat
+            // tet whose centroid is on the input (on the graded lattice, cells
+            // smaller than the input's triangles): not kept.
+            let mut longest: f64 = 0.0;
+            for i in 0..4 {
+                for j in i + 1..4 {
+                    let d = sub(position(t[i]), position(t[j]));
+                    longest = longest.max(dot(d, d).sqrt());
+                }
+            }
+            if tree.winding_number(c) > 0.5 && tree.closest_point_within(c, 1e-3 * longest).is_none() {
                 out.push(*t);
             }
         }
