@@ -371,7 +371,9 @@ fn bunny_meets_the_angle_and_volume_targets() {
 #[test]
 fn graded_bunny_meets_the_hausdorff_angle_and_volume_targets() {
     let s = obj("npm_bunny.obj");
-    let options = EnvelopeOptions { grade_levels: 3, grade_tolerance: 3e-4, ..EnvelopeOptions::new(0.2) };
+    // Measured: 713k tets, dihedral [13.80, 151.24] deg, volume error -4.4e-4,
+    // Hausdorff 9.98e-4 (a thin margin: BENCHMARKS.md).
+    let options = EnvelopeOptions { grade_levels: 3, ..EnvelopeOptions::new(0.2) };
     let (out, q) = mesh_and_report_with(&s, &options);
     assert_eq!(q.num_inverted, 0);
     assert_issue_angles(&q);

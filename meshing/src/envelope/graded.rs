@@ -296,10 +296,7 @@ pub(crate) fn peel_slivers(
         };
         let bad: Vec<bool> = cells
             .par_iter()
-            .map(|c| {
-                c.iter().all(|&v| close[v as usize])
-                    && super::smooth::score(&c.map(|v| nodes[v as usize])) < 1.0
-            })
+            .map(|c| c.iter().all(|&v| close[v as usize]) && super::smooth::score(&c.map(|v| nodes[v as usize])) < 1.0)
             .collect();
         let before = cells.len();
         let mut k = 0;
@@ -430,7 +427,8 @@ mod tests {
 
     /// An octahedron of "radius" 1 around the origin (a crease at each edge, a corner at each vertex).
     fn octahedron() -> TriangleTree {
-        let v = [[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]];
+        let v =
+            [[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]];
         let mut t = Vec::new();
         for &x in &[0usize, 1] {
             for &y in &[2usize, 3] {
