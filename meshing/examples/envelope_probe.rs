@@ -37,6 +37,14 @@ fn main() {
         if let Ok(f) = std::env::var("PROBE_FIT") {
             opts.fit_tolerance = f.parse().unwrap_or(0.0);
         }
+        // PROBE_GRADE=levels[,tolerance]: the graded lattice.
+        if let Ok(g) = std::env::var("PROBE_GRADE") {
+            let mut it = g.split(',');
+            opts.grade_levels = it.next().and_then(|x| x.parse().ok()).unwrap_or(0);
+            if let Some(t) = it.next().and_then(|x| x.parse().ok()) {
+                opts.grade_tolerance = t;
+            }
+        }
         let stage = std::sync::Mutex::new(String::new());
         let timing = |name: &str, _: f64| {
             let mut last = stage.lock().unwrap_or_else(|e| e.into_inner());
@@ -84,6 +92,19 @@ fn main() {
         println!(
             "  fit: {} rounds, {} splits, {} refused",
             out.stats.fit_rounds, out.stats.fit_splits, out.stats.fit_refused
+        );
+        let outside_angles = out
+            .mesh
+            .cells
+            .iter()
+            .filter(|c| {
+                let (lo, hi) = meshing::quality::dihedral_range_deg(&c.map(|x| out.mesh.nodes[x as usize]));
+                lo < 12.0 || hi > 155.0
+            })
+            .count();
+        println!(
+            "  lattice tets {}, grading bisections {}, peeled slivers {}, tets outside [12, 155] deg: {outside_angles}",
+            out.stats.lattice_tets, out.stats.grade_bisections, out.stats.peeled_slivers
         );
         println!(
             "  input vertices farther than 1e-3/3e-3/1e-2 diag: {} / {} / {} of {}; boundary centroids: {} / {} / {} of {}",

@@ -45,6 +45,7 @@ pub(crate) struct Stuffed {
     pub cells: Vec<[u32; 4]>,
     /// Counts for the report.
     pub num_lattice_vertices: usize,
+    pub num_lattice_tets: usize,
     pub num_inside_vertices: usize,
     pub num_cut_points: usize,
     pub num_warped: usize,
@@ -113,11 +114,66 @@ impl Cuts {
     }
 }
 
+/// A tetrahedral grid to stuff: the uniform BCC [`Lattice`] or the graded one
+/// (`super::graded`). Its tets must be conforming and positively or negatively
+/// oriented (the output is oriented afterwards).
+pub(crate) trait Grid: Sync {
+    fn num_vertices(&self) -> usize;
+    fn position(&self, v: u32) -> P;
+    /// The tets, in a fixed order.
+    fn tets(&self) -> Vec<[u32; 4]>;
+    /// The warping threshold of edge `(a, b)` (a fraction of its length).
+    fn alpha(&self, a: u32, b: u32) -> f64;
+    /// The distance from the edge's end to a cut point at parameter `t` along it.
+    fn warp_distance(&self, a: u32, b: u32, t: f64) -> f64;
+    /// Which inside vertex of face `(a, b, p)` (`a`, `b` inside, `p` outside) the
+    /// diagonal of its quadrilateral `(a, b, c_bp, c_ap)` starts from: `a` or `b`.
+    /// It must depend on the face only (both tets of a face agree) and, around
+    /// each tet, leave no cycle (a prism with cyclic diagonals has no triangulation).
+    fn diagonal_from(&self, a: u32, b: u32, p: u32) -> u32;
+}
+
+impl Grid for Lattice {
+    fn num_vertices(&self) -> usize {
+        Lattice::num_vertices(self)
+    }
+    fn position(&self, v: u32) -> P {
+        Lattice::position(self, v)
+    }
+    fn tets(&self) -> Vec<[u32; 4]> {
+        Lattice::tets(self)
+    }
+    fn alpha(&self, a: u32, b: u32) -> f64 {
+        if self.is_long(a, b) {
+            ALPHA_LONG
+        } else {
+            ALPHA_SHORT
+        }
+    }
+    fn warp_distance(&self, a: u32, b: u32, t: f64) -> f64 {
+        // Comparable across edges: the long/short length ratio is fixed.
+        let d = t * self.h;
+        if self.is_long(a, b) {
+            d
+        } else {
+            d * 0.75f64.sqrt()
+        }
+    }
+    fn diagonal_from(&self, a: u32, b: u32, p: u32) -> u32 {
+        diagonal_from(self, a, b, p)
+    }
+}
+
 /// Stuffs the inside of `tree` (winding number > 1/2) on a lattice of spacing `h`
 /// [mm] covering the box `lo..hi` grown by `h`. `eps` [mm]: lattice vertices this
 /// close to a triangle count as on the surface. `progress(fraction)` is called
 /// between the phases.
 pub(crate) fn stuff(tree: &TriangleTree, lo: P, hi: P, h: f64, eps: f64, progress: &(dyn Fn(f64) + Sync)) -> Stuffed {
+    stuff_grid(&uniform_lattice(lo, hi, h), tree, eps, progress)
+}
+
+/// The uniform lattice of spacing `h` covering the box `lo..hi` grown by `h`, centred on it.
+pub(crate) fn uniform_lattice(lo: P, hi: P, h: f64) -> Lattice {
     let margin = h;
     let mut n = [0usize; 3];
     let mut origin = [0.0; 3];
@@ -127,7 +183,16 @@ pub(crate) fn stuff(tree: &TriangleTree, lo: P, hi: P, h: f64, eps: f64, progres
         // Centre the lattice on the box.
         origin[k] = 0.5 * (lo[k] + hi[k]) - 0.5 * n[k] as f64 * h;
     }
-    let lattice = Lattice { origin, h, n };
+    Lattice { origin, h, n }
+}
+
+/// Stuffs the inside of `tree` on `lattice` (see the module docs).
+pub(crate) fn stuff_grid(
+    lattice: &impl Grid,
+    tree: &TriangleTree,
+    eps: f64,
+    progress: &(dyn Fn(f64) + Sync),
+) -> Stuffed {
     let nv = lattice.num_vertices();
 
     // 1. Signs.
@@ -150,8 +215,9 @@ pub(crate) fn stuff(tree: &TriangleTree, lo: P, hi: P, h: f64, eps: f64, progres
     let num_inside_vertices = sign.iter().filter(|&&s| s < 0).count();
 
     // Lattice tets with an inside vertex, or with all four on the surface.
-    let tets: Vec<[u32; 4]> = lattice
-        .tets()
+    let all_tets = lattice.tets();
+    let num_lattice_tets = all_tets.len();
+    let tets: Vec<[u32; 4]> = all_tets
         .into_iter()
         .filter(|t| t.iter().any(|&v| sign[v as usize] < 0) || t.iter().all(|&v| sign[v as usize] == 0))
         .collect();
@@ -209,10 +275,8 @@ pub(crate) fn stuff(tree: &TriangleTree, lo: P, hi: P, h: f64, eps: f64, progres
                 continue;
             }
             let t = if a == v { cut[e as usize].1 } else { 1.0 - cut[e as usize].1 };
-            let alpha = if lattice.is_long(a, b) { ALPHA_LONG } else { ALPHA_SHORT };
-            if t < alpha {
-                let d = t * h; // comparable across edges: the long/short length ratio is fixed
-                let d = if lattice.is_long(a, b) { d } else { d * 0.75f64.sqrt() };
+            if t < lattice.alpha(a, b) {
+                let d = lattice.warp_distance(a, b, t);
                 if best.is_none_or(|(bd, be)| d < bd || (d == bd && e < be)) {
                     best = Some((d, e));
                 }
@@ -243,7 +307,7 @@ pub(crate) fn stuff(tree: &TriangleTree, lo: P, hi: P, h: f64, eps: f64, progres
         .par_iter()
         .map(|t| {
             let mut out = Vec::new();
-            fill(&lattice, &sign, &cuts, t, &position, tree, &mut out);
+            fill(lattice, &sign, &cuts, t, &position, tree, &mut out);
             out
         })
         .collect();
@@ -281,6 +345,7 @@ pub(crate) fn stuff(tree: &TriangleTree, lo: P, hi: P, h: f64, eps: f64, progres
         nodes,
         cells,
         num_lattice_vertices: nv,
+        num_lattice_tets,
         num_inside_vertices,
         num_cut_points: cuts.edges.len(),
         num_warped,
@@ -396,7 +461,7 @@ fn prism_tets(u: [u32; 3], w: [u32; 3], d: [usize; 3]) -> Option<Vec<[u32; 4]>> 
 
 /// The stencil of lattice tet `t` (see the module docs).
 fn fill(
-    lattice: &Lattice,
+    lattice: &impl Grid,
     sign: &[i8],
     cuts: &Cuts,
     t: &[u32; 4],
@@ -416,7 +481,17 @@ fn fill(
                 let p = position(v);
                 [acc[0] + 0.25 * p[0], acc[1] + 0.25 * p[1], acc[2] + 0.25 * p[2]]
             });
-            if tree.winding_number(c) > 0.5 {
+            // Four vertices warped onto one flat patch of the input make a flat
+            // tet whose centroid is on the input (on the graded lattice, cells
+            // smaller than the input's triangles): not kept.
+            let mut longest: f64 = 0.0;
+            for i in 0..4 {
+                for j in i + 1..4 {
+                    let d = sub(position(t[i]), position(t[j]));
+                    longest = longest.max(dot(d, d).sqrt());
+                }
+            }
+            if tree.winding_number(c) > 0.5 && tree.closest_point_within(c, 1e-3 * longest).is_none() {
                 out.push(*t);
             }
         }
@@ -436,7 +511,7 @@ fn fill(
         (2, 1, 1) => {
             let (a, b, z, p) = (inside[0], inside[1], zero[0], outside[0]);
             let (cap, cbp) = (cut(a, p), cut(b, p));
-            if diagonal_from(lattice, a, b, p) == a {
+            if lattice.diagonal_from(a, b, p) == a {
                 out.push([z, a, b, cbp]);
                 out.push([z, a, cbp, cap]);
             } else {
@@ -449,8 +524,8 @@ fn fill(
             let u = [a, cut(a, p), cut(a, q)];
             let w = [b, cut(b, p), cut(b, q)];
             // Quad 0 = face (a, b, p); quad 1 = the isosurface; quad 2 = face (a, b, q).
-            let d0 = if diagonal_from(lattice, a, b, p) == a { 0 } else { 1 };
-            let d2 = if diagonal_from(lattice, a, b, q) == a { 0 } else { 2 };
+            let d0 = if lattice.diagonal_from(a, b, p) == a { 0 } else { 1 };
+            let d2 = if lattice.diagonal_from(a, b, q) == a { 0 } else { 2 };
             prism(u, w, [Some(d0), None, Some(d2)], position, out);
         }
         (3, 0, 1) => {
@@ -460,7 +535,7 @@ fn fill(
             let mut d = [None; 3];
             for i in 0..3 {
                 let i1 = (i + 1) % 3;
-                d[i] = Some(if diagonal_from(lattice, u[i], u[i1], p) == u[i] { i } else { i1 });
+                d[i] = Some(if lattice.diagonal_from(u[i], u[i1], p) == u[i] { i } else { i1 });
             }
             prism(u, w, d, position, out);
         }

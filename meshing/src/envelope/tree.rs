@@ -310,6 +310,34 @@ impl TriangleTree {
         best.map(|(c, id)| (c, best_d2.sqrt(), id))
     }
 
+    /// Calls `visit(corners)` for every triangle closer than `radius` to `p`, in
+    /// tree order (deterministic).
+    pub(crate) fn for_each_within(&self, p: P, radius: f64, mut visit: impl FnMut(&[P; 3])) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let r2 = radius * radius;
+        let mut stack = vec![0usize];
+        while let Some(i) = stack.pop() {
+            let node = &self.nodes[i];
+            if box_distance2(node, p) > r2 {
+                continue;
+            }
+            if node.count > 0 {
+                let s = node.first_or_right as usize;
+                for t in &self.tris[s..s + node.count as usize] {
+                    let e = sub(closest_on_triangle(t, p), p);
+                    if dot(e, e) <= r2 {
+                        visit(t);
+                    }
+                }
+            } else {
+                stack.push(node.first_or_right as usize);
+                stack.push(i + 1);
+            }
+        }
+    }
+
     /// Every proper crossing of segment `p -> q` with a triangle: `(t, input index)`
     /// sorted by `t`, then index.
     pub fn segment_crossings(&self, p: P, q: P) -> Vec<(f64, u32)> {
