@@ -338,7 +338,7 @@ pub struct ConformingStats {
     pub delaunay_tets: usize,
     /// Quality refinement.
     pub refinement: RefineStats,
-    /// 3-2 flips of slivers, before smoothing (`flip.rs`).
+    /// Edge removal around slivers, before smoothing (`flip.rs`).
     pub flips: FlipStats,
     /// Sliver smoothing.
     pub smoothing: SmoothStats,
@@ -470,9 +470,23 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
     let mut radius_edge_smoothing = SmoothStats::default();
     let mut flips = FlipStats::default();
     if options.sliver_deg > 0.0 {
-        flips = flip::flip_slivers(&nodes, &mut cells, &mut cell_regions, options.sliver_deg);
         // `compact` numbers the used vertices in increasing order.
         let used: std::collections::BTreeSet<u32> = cell_tets.iter().flatten().copied().collect();
+        let index: Vec<u32> = used.iter().copied().collect();
+        let renumber = |v: u32| index.binary_search(&v).ok().map(|i| i as u32);
+        // The subfacets, in the compacted numbering (sorted corners): edge
+        // removal keeps them.
+        let constrained: flip::FaceSet = rec
+            .face_owner
+            .keys()
+            .filter_map(|f| {
+                let [a, b, c] = f.map(renumber);
+                let mut k = [a?, b?, c?];
+                k.sort_unstable();
+                Some(k)
+            })
+            .collect();
+        flips = flip::remove_edges(&nodes, &mut cells, &mut cell_regions, &constrained, options.sliver_deg);
         let all = rec.freedom();
         let freedom: Vec<recover::Freedom> = used.iter().map(|&v| all[v as usize]).collect();
         let max_volume = options.size_mm.map_or(f64::INFINITY, |h| h.powi(3) / (6.0 * 2f64.sqrt()));
