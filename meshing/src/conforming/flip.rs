@@ -193,7 +193,8 @@ impl Work<'_> {
     fn boundary_face(&self, f: [u32; 3]) -> bool {
         let mut k = f;
         k.sort_unstable();
-        self.constrained.contains(&k) || self.around(f[0], f[1]).filter(|&t| self.cells[t as usize].contains(&f[2])).count() < 2
+        self.constrained.contains(&k)
+            || self.around(f[0], f[1]).filter(|&t| self.cells[t as usize].contains(&f[2])).count() < 2
     }
 
     /// Whether cell `t` is a cap: two or more boundary faces.

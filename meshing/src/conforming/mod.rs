@@ -99,13 +99,17 @@
 //!    1e-12 of the diagonal, with a face on the boundary (on coplanar input triangles, where
 //!    the symbolic perturbation of stage 1 makes zero-volume tets legal) are
 //!    removed: the boundary becomes their other faces, the same piece of plane.
-//! 5. **3-2 flips** (`flip.rs`): a sliver with an interior edge around which
-//!    exactly three tets lie is replaced, with the two others, by two tets
-//!    sharing the triangle of the three other corners, when they fill the
-//!    same space (exact `orient3d`) and are better; the boundary does not
-//!    change. Measured (tets under 10 deg): bunny 0.016 % to 0.007 % (38
-//!    flips), armadillo at 8 mm 3.63 % to 3.48 % (3 048 flips; its caps have
-//!    rings of more than three tets).
+//! 5. **Edge removal** (`flip.rs`): around a tet under the sliver bound
+//!    (caps first), an interior edge with a ring of `n` tets (3 to 12, one
+//!    region, no subfacet through it) is replaced with those tets by the
+//!    `2 (n - 2)` tets of the best triangulation of the ring polygon joined
+//!    to its two ends (Shewchuk's edge removal, Klincsek's dynamic
+//!    programme; `n = 3` is the 3-2 flip), when every new tet is positive
+//!    (exact `orient3d`) and the worst is better; the boundary does not
+//!    change and no point moves. Measured (tets under 10 deg, before
+//!    smoothing's effect on the rest): bunny 0.007 % to 0 % (115 removals,
+//!    12 of them on rings of 4; with the 3-2 flip alone 38), fandisk 55
+//!    removals; the armadillo's in BENCHMARKS.md (session of edge removal).
 //! 6. **Smoothing** (`smooth.rs`): Steiner vertices of bad tets (smallest
 //!    dihedral angle, or 180 deg minus the largest, under the sliver bound)
 //!    move to the candidate position that most raises that quality over their
