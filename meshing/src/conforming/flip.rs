@@ -81,6 +81,11 @@ pub struct FlipStats {
     pub caps_before: usize,
     /// See `caps_before`.
     pub caps_after: usize,
+    /// Visits of caps that removed nothing, by the furthest any of its six
+    /// edges got: 0 no closed ring (a boundary edge), 1 a ring over
+    /// [`MAX_RING`], 2 tets of two regions, 3 a constrained face around the
+    /// edge, 4 no triangulation with all tets positive, 5 none better.
+    pub cap_refusals: [usize; 6],
     /// Rounds run.
     pub rounds: usize,
 }
@@ -205,49 +210,59 @@ impl Work<'_> {
 
     /// The removal of the edge `cd` of cell `t`, when it is allowed and better
     /// than `floor` (module docs).
-    fn removal(&self, t: u32, c: u32, d: u32, floor: f64) -> Option<Removal> {
+    /// `Err`: why not, as an index of [`FlipStats::cap_refusals`].
+    fn removal(&self, t: u32, c: u32, d: u32, floor: f64) -> Result<Removal, usize> {
         let tets: Vec<u32> = self.around(c, d).collect();
         let n = tets.len();
-        if !(3..=MAX_RING).contains(&n) || tets.iter().any(|&k| self.regions[k as usize] != self.regions[t as usize]) {
-            return None;
+        if n < 3 {
+            return Err(0);
+        }
+        if n > MAX_RING {
+            return Err(1);
+        }
+        if tets.iter().any(|&k| self.regions[k as usize] != self.regions[t as usize]) {
+            return Err(2);
         }
         // Each tet (c, d, x, y), positively oriented: the ring's step x -> y.
         let mut next: Vec<(u32, u32)> = Vec::with_capacity(n);
         for &k in &tets {
             let cell = self.cells[k as usize];
             let mut o = cell.iter().copied().filter(|&v| v != c && v != d);
-            let (x, y) = (o.next()?, o.next()?);
+            let (Some(x), Some(y)) = (o.next(), o.next()) else { return Err(0) };
             next.push(if even(cell, [c, d, x, y]) { (x, y) } else { (y, x) });
         }
         next.sort_unstable();
         if next.windows(2).any(|w| w[0].0 == w[1].0) {
-            return None;
+            return Err(0);
         }
         let mut ring = vec![next[0].0];
         while ring.len() < n {
             let last = ring[ring.len() - 1];
-            let &(_, y) = next.iter().find(|e| e.0 == last)?;
+            let Some(&(_, y)) = next.iter().find(|e| e.0 == last) else { return Err(0) };
             ring.push(y);
         }
         let last = ring[n - 1];
         if !next.iter().any(|e| e.0 == last && e.1 == ring[0]) {
-            return None;
+            return Err(0);
         }
         let mut seen = ring.clone();
         seen.sort_unstable();
         if seen.windows(2).any(|w| w[0] == w[1]) {
-            return None;
+            return Err(0);
         }
         for &x in &ring {
             let mut k = [c, d, x];
             k.sort_unstable();
             if self.constrained.contains(&k) {
-                return None;
+                return Err(3);
             }
         }
         let old = tets.iter().map(|&k| quality(self.nodes, self.cells[k as usize])).fold(floor, f64::min);
-        let (q, triangles) = best_triangulation(self.nodes, c, d, &ring)?;
-        (q > old).then_some(Removal { tets, c, d, ring, triangles, quality: q })
+        let (q, triangles) = best_triangulation(self.nodes, c, d, &ring).ok_or(4usize)?;
+        if q <= old {
+            return Err(5);
+        }
+        Ok(Removal { tets, c, d, ring, triangles, quality: q })
     }
 
     fn kill(&mut self, k: u32) {
@@ -339,17 +354,23 @@ pub fn remove_edges(
                 continue;
             }
             let mut chosen: Option<Removal> = None;
+            let mut furthest = 0;
             for a in 0..4 {
                 for b in a + 1..4 {
                     let floor = chosen.as_ref().map_or(own, |r| r.quality);
-                    if let Some(r) = w.removal(t, cell[a], cell[b], own) {
-                        if r.quality > floor {
-                            chosen = Some(r);
-                        }
+                    match w.removal(t, cell[a], cell[b], own) {
+                        Ok(r) if r.quality > floor => chosen = Some(r),
+                        Ok(_) => {}
+                        Err(why) => furthest = furthest.max(why),
                     }
                 }
             }
-            let Some(r) = chosen else { continue };
+            let Some(r) = chosen else {
+                if w.cap(t) {
+                    stats.cap_refusals[furthest] += 1;
+                }
+                continue;
+            };
             stats.by_ring_size[r.tets.len()] += 1;
             made += 1;
             for k in w.apply(&r) {
