@@ -82,7 +82,7 @@ pub struct FlipStats {
     /// See `caps_before`.
     pub caps_after: usize,
     /// Visits of caps that removed nothing, by the furthest any of its six
-    /// edges got: 0 no closed ring (a boundary edge), 1 a ring over
+    /// edges got: 0 no closed ring (a boundary edge), 1 a closed ring over
     /// [`MAX_RING`], 2 tets of two regions, 3 a constrained face around the
     /// edge, 4 no triangulation with all tets positive, 5 none better.
     pub cap_refusals: [usize; 6],
@@ -217,12 +217,6 @@ impl Work<'_> {
         if n < 3 {
             return Err(0);
         }
-        if n > MAX_RING {
-            return Err(1);
-        }
-        if tets.iter().any(|&k| self.regions[k as usize] != self.regions[t as usize]) {
-            return Err(2);
-        }
         // Each tet (c, d, x, y), positively oriented: the ring's step x -> y.
         let mut next: Vec<(u32, u32)> = Vec::with_capacity(n);
         for &k in &tets {
@@ -249,6 +243,12 @@ impl Work<'_> {
         seen.sort_unstable();
         if seen.windows(2).any(|w| w[0] == w[1]) {
             return Err(0);
+        }
+        if n > MAX_RING {
+            return Err(1);
+        }
+        if tets.iter().any(|&k| self.regions[k as usize] != self.regions[t as usize]) {
+            return Err(2);
         }
         for &x in &ring {
             let mut k = [c, d, x];
