@@ -232,7 +232,8 @@ impl Work<'_> {
         let mut ring = vec![next[0].0];
         while ring.len() < n {
             let last = ring[ring.len() - 1];
-            let Some(&(_, y)) = next.iter().find(|e| e.0 == last) else { return Err(0) };
+            let Ok(at) = next.binary_search_by_key(&last, |e| e.0) else { return Err(0) };
+            let y = next[at].1;
             ring.push(y);
         }
         let last = ring[n - 1];
