@@ -99,13 +99,17 @@
 //!    1e-12 of the diagonal, with a face on the boundary (on coplanar input triangles, where
 //!    the symbolic perturbation of stage 1 makes zero-volume tets legal) are
 //!    removed: the boundary becomes their other faces, the same piece of plane.
-//! 5. **3-2 flips** (`flip.rs`): a sliver with an interior edge around which
-//!    exactly three tets lie is replaced, with the two others, by two tets
-//!    sharing the triangle of the three other corners, when they fill the
-//!    same space (exact `orient3d`) and are better; the boundary does not
-//!    change. Measured (tets under 10 deg): bunny 0.016 % to 0.007 % (38
-//!    flips), armadillo at 8 mm 3.63 % to 3.48 % (3 048 flips; its caps have
-//!    rings of more than three tets).
+//! 5. **Edge removal** (`flip.rs`): around a tet under the sliver bound
+//!    (caps first), an interior edge with a ring of `n` tets (3 to 12, one
+//!    region, no subfacet through it) is replaced with those tets by the
+//!    `2 (n - 2)` tets of the best triangulation of the ring polygon joined
+//!    to its two ends (Shewchuk's edge removal, Klincsek's dynamic
+//!    programme; `n = 3` is the 3-2 flip), when every new tet is positive
+//!    (exact `orient3d`) and the worst is better; the boundary does not
+//!    change and no point moves. Measured on the final meshes: bunny at
+//!    0.3 mm 6.21..167.84 deg to 10.00..159.99 deg, 0.007 % under 10 deg to
+//!    0 (115 removals, 12 on rings of 4; the 3-2 flip alone made 38); the
+//!    armadillo's caps mostly stay ("What is not done"; BENCHMARKS.md).
 //! 6. **Smoothing** (`smooth.rs`): Steiner vertices of bad tets (smallest
 //!    dihedral angle, or 180 deg minus the largest, under the sliver bound)
 //!    move to the candidate position that most raises that quality over their
@@ -186,12 +190,14 @@
 //! of 15 553 caps): the outside of a conforming Delaunay tetrahedralization
 //! has flat tets over the same hinges, whose circumballs reach under the
 //! surface, so such a point would remove a subfacet (not kept: 3.55 % under
-//! 10 deg instead of 3.63 %). What would remove them is not Delaunay: the
-//! 3-2 flips of stage 5 remove the edge between a cap's two apexes only
-//! when three tets lie around it, which is rare for caps (15 080 caps
-//! before them, 15 135 after); general edge removal
-//! (a ring of n tets into 2n - 4) or cavities of interior points bounded by
-//! the subfacets (constrained Delaunay insertion) are the next step.
+//! 10 deg instead of 3.63 %). What would remove them is not Delaunay, and
+//! edge removal (stage 5) does not either: 15 487 caps under 10 deg before
+//! it, 15 290 after (rings up to 12 tets; the same mesh with rings up to
+//! 24). Of 122 285 visits of a cap that removed nothing, 121 482 stopped at
+//! an edge whose ring of tets was over the bound or open (counted before the
+//! two were told apart: `FlipStats::cap_refusals`), 208 found no positive
+//! triangulation and 593 none better. Cavities of interior points bounded
+//! by the subfacets (constrained Delaunay insertion) are the next step.
 //!
 //! Quality refinement runs on a copy of the state, each boundary recovery it
 //! triggers bounded (20 000 points) and its cap splits bounded (as many as the
@@ -338,7 +344,7 @@ pub struct ConformingStats {
     pub delaunay_tets: usize,
     /// Quality refinement.
     pub refinement: RefineStats,
-    /// 3-2 flips of slivers, before smoothing (`flip.rs`).
+    /// Edge removal around slivers, before smoothing (`flip.rs`).
     pub flips: FlipStats,
     /// Sliver smoothing.
     pub smoothing: SmoothStats,
@@ -470,9 +476,23 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
     let mut radius_edge_smoothing = SmoothStats::default();
     let mut flips = FlipStats::default();
     if options.sliver_deg > 0.0 {
-        flips = flip::flip_slivers(&nodes, &mut cells, &mut cell_regions, options.sliver_deg);
         // `compact` numbers the used vertices in increasing order.
         let used: std::collections::BTreeSet<u32> = cell_tets.iter().flatten().copied().collect();
+        let index: Vec<u32> = used.iter().copied().collect();
+        let renumber = |v: u32| index.binary_search(&v).ok().map(|i| i as u32);
+        // The subfacets, in the compacted numbering (sorted corners): edge
+        // removal keeps them.
+        let constrained: flip::FaceSet = rec
+            .face_owner
+            .keys()
+            .filter_map(|f| {
+                let [a, b, c] = f.map(renumber);
+                let mut k = [a?, b?, c?];
+                k.sort_unstable();
+                Some(k)
+            })
+            .collect();
+        flips = flip::remove_edges(&nodes, &mut cells, &mut cell_regions, &constrained, options.sliver_deg);
         let all = rec.freedom();
         let freedom: Vec<recover::Freedom> = used.iter().map(|&v| all[v as usize]).collect();
         let max_volume = options.size_mm.map_or(f64::INFINITY, |h| h.powi(3) / (6.0 * 2f64.sqrt()));
