@@ -239,3 +239,33 @@ fn fits_a_double_compression_with_a_contact_plate_back() {
         assert!((v / truth - 1.0).abs() < 1e-4, "{key} = {v} vs {truth}");
     }
 }
+
+/// The same double compression with a plastic slider in series
+/// (`plastic_yield_stress_MPa`, a material-point effect, which runs with contact
+/// tools): simulated, then fitted back with E1 and c3 unknown and the slider in
+/// place. Both return to 1e-4, as without the slider.
+#[test]
+fn fits_a_double_compression_with_a_contact_plate_and_a_plastic_slider_back() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cwd = tmp.path();
+    let source = example("paper/double-compression/experiment.toml");
+    let text = std::fs::read_to_string(source).unwrap();
+    std::fs::create_dir_all(cwd.join("truth")).unwrap();
+    let with_slider = format!("{text}\n[effects]\nplastic_yield_stress_MPa = 0.002\nplastic_hardening_MPa = 0.01\n");
+    std::fs::write(cwd.join("truth/experiment.toml"), with_slider).unwrap();
+    let o = press_in(cwd, &cwd.join("truth"), &cwd.join("measured"), &["--axisymmetric", "--size-mm", "2.5"]);
+    assert_success(&o);
+    let bundle = cwd.join("measured/experiment.toml");
+    let text = std::fs::read_to_string(&bundle).unwrap();
+    assert!(text.contains("plastic_yield_stress_MPa = 0.002"), "{text}");
+    assert!(text.contains("E1_MPa = 0.0349\n") && text.contains("c3_MPa_s = 29.719\n"), "{text}");
+    std::fs::write(&bundle, text.replace("E1_MPa = 0.0349\n", "").replace("c3_MPa_s = 29.719\n", "")).unwrap();
+    let o =
+        wagashi_in(cwd, ["fit", "measured", "--axisymmetric", "--size-mm", "2.5", "--procedure", "joint", "-o", "fit"]);
+    assert_success(&o);
+    let fit: serde_json::Value = serde_json::from_slice(&std::fs::read(cwd.join("fit/fit.json")).unwrap()).unwrap();
+    for (key, truth) in [("E1_MPa", 0.0349), ("c3_MPa_s", 29.719)] {
+        let v = fit["sets"]["joint"]["mat1"][key]["value"].as_f64().unwrap_or_else(|| panic!("{fit}"));
+        assert!((v / truth - 1.0).abs() < 1e-4, "{key} = {v} vs {truth}");
+    }
+}

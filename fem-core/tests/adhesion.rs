@@ -223,8 +223,8 @@ fn withdrawal_pulls_and_leaves_a_taller_specimen() {
 }
 
 /// Refused where it does not extend the baseline (a glued plate, tools that are
-/// all glued) and with the material-point effects (constrained plate only), each
-/// naming the key.
+/// all glued) and with machine compliance (constrained plate only), each naming
+/// the key.
 #[test]
 fn adhesion_refusals_name_the_key() {
     let settings = Settings { fixed_dt_s: Some(0.25), ..Settings::default() };
@@ -241,10 +241,10 @@ fn adhesion_refusals_name_the_key() {
     glued_tools.effects = adhesion.clone();
     let err = press::simulate(&glued_tools, &settings, &mut |_| {}).unwrap_err();
     assert!(err.to_string().contains("adhesion_strength_MPa"), "{err}");
-    let mut slider = plane(elastic(), push_pull(0.15, 0.5));
-    slider.effects = adhesion.with(EffectId::PlasticSlider, &[0.01, 0.01]).unwrap();
-    let err = press::simulate(&slider, &settings, &mut |_| {}).unwrap_err();
-    assert!(err.to_string().contains("plastic_yield_stress_MPa"), "{err}");
+    let mut compliant = plane(elastic(), push_pull(0.15, 0.5));
+    compliant.effects = adhesion.with(EffectId::MachineCompliance, &[0.01]).unwrap();
+    let err = press::simulate(&compliant, &settings, &mut |_| {}).unwrap_err();
+    assert!(err.to_string().contains("machine_compliance_mm_per_N"), "{err}");
     let err = Effects::none().with(EffectId::Adhesion, &[-1e-3, 0.1]).unwrap_err();
     assert!(err.to_string().starts_with("adhesion_strength_MPa = -0.001 is outside"), "{err}");
 }

@@ -122,8 +122,11 @@
 //! converged in 100 iterations: [`crate::press::PressError::NotConverged`], and the
 //! step is retried from its old state at a quarter of the step (three times). E4's
 //! flags are frozen during the iteration and re-checked at convergence (at most
-//! three passes). Quasi-static integrator only; refused with contact tools (and
-//! `plate-friction`), `machine-compliance` (its exact step needs a step linear in
+//! three passes). With contact tools (and `plate-friction`, `adhesion`) every
+//! solve of the iteration is a settled contact solve and the iteration stays
+//! modified Newton (no consistent tangent; design in `press::inelastic`, "With
+//! contact tools"). Quasi-static integrator only; refused with
+//! `machine-compliance` (its exact step needs a step linear in
 //! the plate displacement), two material-point effects at once, and a dashpot law on
 //! a chain without `c3` (an elastic region). The slider's tangent is exact down to
 //! `H = 1e-8 g` ([`crate::material::TANGENT_HARDENING`], a floor only so that
@@ -283,8 +286,7 @@
 //! tension already) and not a floor ("top region only"): the constrained
 //! frictionless plate, converted to a frictionless contact tool (a friction one
 //! with `plate-friction`), or the trial's own tools. Refused on a glued plate,
-//! on tools that are all glued or floors, with `machine-compliance` and the
-//! material-point effects (constrained plate only), with sensitivities, and with
+//! on tools that are all glued or floors, with `machine-compliance`, with sensitivities, and with
 //! the dynamic and the seed's integrators (contact needs the quasi-static one).
 //! **Nesting caveat:** the constrained frictionless plate is bilateral until
 //! `release_s`; the converted plate is unilateral. Where a plate withdraws before

@@ -40,6 +40,36 @@
 //! failing cell, or the one at the largest out-of-balance force), and the
 //! stepper retries the step from its old state with a quarter of the step.
 //!
+//! ## With contact tools
+//! The step's `solve(b, u)` then settles the contact ([`super::contact`]: the
+//! exact elimination for flat glued or frictionless tools, the augmented
+//! Lagrangian otherwise) for the linear step with the right-hand side `b`, and
+//! returns the contact forces. The two nonlinearities are combined by nesting:
+//! the material-point iteration is the outer loop, and every one of its solves is
+//! a fully settled contact solve of the linear step with the current inelastic
+//! force, `g K u - F_c(u) = f_body + f_hist + f_in(e_in,k)`. The contact forces
+//! of that solve are its exact reactions, so the free rows balance except for
+//! the change of the inelastic force, and the iteration is the fixed point
+//! `e_in,k+1 = e_in(u_k)` (modified Newton, the chain's linear tangent),
+//! converged when `|f_in(e_in,k+1) - f_in(e_in,k)|` is at most [`TOLERANCE`] of
+//! the step's force scale (which then holds the contact forces' share: a push
+//! from rest has no other load). For `finite-strain` the same fixed point runs
+//! on the extra force `L(u) - N(u)`, the small-strain internal force less the
+//! finite-strain one.
+//!
+//! Why nested, and why no consistent tangent: the contact solves keep their own
+//! factorizations (one per active set, kept while it holds: on a plate one solve
+//! a settle), built from the step's linear matrix; one Newton with both would
+//! refactor the tangent with the contact's eliminations or penalties at every
+//! iteration and make the contact's exact path, its low-rank path for curved
+//! tools and its column cache depend on the material state. The price is linear
+//! convergence: a strong effect that contracts slowly is not switched to full
+//! Newton here; it takes more iterations, and a step that does not converge in
+//! [`MAX_ITERATIONS`] is retried at a quarter of its length by the stepper. The
+//! stepper's reported contact forces are rebalanced to the cells' nodal forces
+//! at the converged state ([`PointStep::out_of_balance`]), so tool and plate
+//! forces are the equilibrium reactions of the final inelastic strains.
+//!
 //! E6 (`finite-strain`) changes the kinematics, not the law: its steps take
 //! [`solve_finite_step`] (the blended Green-Lagrange strain, the internal force
 //! `w B(u)^T S`, the tangent with its geometric part).
@@ -89,6 +119,12 @@ pub(crate) struct PointStep<const S: usize> {
     pub residual: f64,
     /// Numeric factorizations of the consistent tangent.
     pub factorizations: usize,
+    /// With contact tools: the contact forces on the specimen per dof of the last
+    /// solve (that of the returned displacement). `None` without tools.
+    pub contact_forces: Option<Vec<f64>>,
+    /// With contact tools: the out-of-balance force `f_int(u1) - f_body` per dof at
+    /// the returned state, contact forces not subtracted (empty without tools).
+    pub out_of_balance: Vec<f64>,
 }
 
 /// Inputs of the step's iteration that the linear step already computed.
@@ -112,6 +148,9 @@ pub(crate) struct PointInput<'a, const S: usize> {
     pub dt: f64,
     pub t1: f64,
     pub step: usize,
+    /// Whether the step's solve settles contact with tools (module doc, "With
+    /// contact tools"): the iteration is then the fixed point on the nonlinear force.
+    pub contact: bool,
 }
 
 /// The out-of-balance force of the cells' nodal forces against the body force, per
@@ -131,6 +170,81 @@ where
     }
     let norm = system.dof_of_free.iter().map(|&d| residual[d as usize].powi(2)).sum::<f64>().sqrt();
     (residual, norm)
+}
+
+/// The most earlier iterates Anderson's acceleration combines.
+pub(crate) const ANDERSON_DEPTH: usize = 5;
+/// Anderson's history restarts when the residual grows past this multiple of the
+/// least one so far.
+pub(crate) const ANDERSON_RESTART: f64 = 2.0;
+
+/// Anderson's acceleration (type II, Walker & Ni 2011) of the fixed point `x =
+/// G(x)` on the free dofs, `x` the inelastic (or extra) force of the contact
+/// iteration (module doc, "With contact tools"): the next iterate is `G(x_k) -
+/// sum_j gamma_j (dX_j + dF_j)`, `gamma` the least-squares fit of the residual
+/// `f_k = G(x_k) - x_k` by the last [`ANDERSON_DEPTH`] residual differences `dF`
+/// (`dX` those of the iterates). Without history it is the plain fixed point. The
+/// plain iteration contracts at the linear tangent's ratio to the consistent one
+/// (a slider with hardening `H` well below the chain's modulus `E`: `E/(E + H)`,
+/// e.g. 0.875 an iteration, 200 iterations to 1e-12); the contact settles keep
+/// the linear matrix, so no tangent can take over, and the acceleration recovers
+/// a Krylov-like rate from the same solves.
+struct Anderson<'s> {
+    free: &'s [u32],
+    xs: Vec<Vec<f64>>,
+    fs: Vec<Vec<f64>>,
+    best: f64,
+}
+
+impl<'s> Anderson<'s> {
+    fn new(system: &'s ReducedSystem) -> Self {
+        Self { free: &system.dof_of_free, xs: Vec::new(), fs: Vec::new(), best: f64::INFINITY }
+    }
+
+    /// The next iterate from `x` (full dofs), `gx = G(x)` and the norm of `gx - x`.
+    fn next(&mut self, x: &[f64], gx: Vec<f64>, norm: f64) -> Vec<f64> {
+        if norm > ANDERSON_RESTART * self.best {
+            self.xs.clear();
+            self.fs.clear();
+        }
+        self.best = self.best.min(norm);
+        let xk: Vec<f64> = self.free.iter().map(|&d| x[d as usize]).collect();
+        let fk: Vec<f64> = self.free.iter().map(|&d| gx[d as usize] - x[d as usize]).collect();
+        self.xs.push(xk);
+        self.fs.push(fk);
+        if self.xs.len() > ANDERSON_DEPTH + 1 {
+            self.xs.remove(0);
+            self.fs.remove(0);
+        }
+        let m = self.xs.len() - 1;
+        if m == 0 {
+            return gx;
+        }
+        let n = self.free.len();
+        let df = nalgebra::DMatrix::from_fn(n, m, |i, j| self.fs[j + 1][i] - self.fs[j][i]);
+        let f = nalgebra::DVector::from_column_slice(&self.fs[m]);
+        let svd = df.svd(true, true);
+        let cut = 1e-12 * svd.singular_values.max();
+        let Ok(gamma) = svd.solve(&f, cut) else {
+            return gx;
+        };
+        let mut out = gx;
+        for (i, &d) in self.free.iter().enumerate() {
+            let mut c = 0.0;
+            for j in 0..m {
+                let dx = self.xs[j + 1][i] - self.xs[j][i];
+                let dfj = self.fs[j + 1][i] - self.fs[j][i];
+                c += gamma[j] * (dx + dfj);
+            }
+            out[d as usize] -= c;
+        }
+        out
+    }
+}
+
+/// The norm of `v` over the free dofs.
+fn free_norm(system: &ReducedSystem, v: &[f64]) -> f64 {
+    system.dof_of_free.iter().map(|&d| v[d as usize].powi(2)).sum::<f64>().sqrt()
 }
 
 /// The state of the iteration at one displacement.
@@ -363,13 +477,34 @@ where
         // The next iterate when a line search has already evaluated it.
         let mut searched: Option<Evaluation<S>> = None;
         let mut converged = None;
+        // With contact: the last solve's contact forces, the out-of-balance force
+        // at its displacement, the inelastic force there (the next right-hand
+        // side's), and the force scale with the contact forces' share.
+        let mut contact: Option<(Vec<f64>, Vec<f64>)> = None;
+        let mut f_next: Option<Vec<f64>> = None;
+        let mut anderson = Anderson::new(system);
+        let (linear_scale, mut scale) = (scale, scale);
         for iteration in 0..MAX_ITERATIONS {
             let Evaluation { updates, residual, norm } = match searched.take() {
                 Some(x) => x,
                 None => {
                     let b: Vec<f64> = input.base.iter().zip(&f_in).map(|(b, f)| b + f).collect();
-                    solve(&b, u1)?;
-                    evaluate(u1)?
+                    let forces = solve(&b, u1)?;
+                    let evaluation = evaluate(u1)?;
+                    match forces.filter(|_| input.contact) {
+                        None => evaluation,
+                        Some(forces) => {
+                            // The fixed point's residual: the change of the inelastic
+                            // force (the contact forces are the reactions of the solve).
+                            let next = inelastic_force(&|e| evaluation.updates[e].1.inelastic);
+                            let change: Vec<f64> = f_in.iter().zip(&next).map(|(a, b)| a - b).collect();
+                            let norm = free_norm(system, &change);
+                            scale = (linear_scale.powi(2) + free_norm(system, &forces).powi(2)).sqrt();
+                            contact = Some((forces, evaluation.residual));
+                            f_next = Some(next);
+                            Evaluation { updates: evaluation.updates, residual: change, norm }
+                        }
+                    }
                 }
             };
             if norm <= TOLERANCE * scale {
@@ -392,7 +527,7 @@ where
                     norm / scale
                 )));
             }
-            if !tangent_mode && iteration >= 1 && norm > SLOW_CONTRACTION * previous {
+            if !tangent_mode && !input.contact && iteration >= 1 && norm > SLOW_CONTRACTION * previous {
                 tangent_mode = true;
             }
             let contraction = norm / previous;
@@ -433,7 +568,11 @@ where
                     None => tangent_mode = false,
                 }
             }
-            f_in = inelastic_force(&|e| updates[e].1.inelastic);
+            f_in = match f_next.take() {
+                // With contact: the fixed point's next right-hand side, accelerated.
+                Some(next) => anderson.next(&f_in, next, norm),
+                None => inelastic_force(&|e| updates[e].1.inelastic),
+            };
         }
         let (updates, norm) = converged.expect("the loop returns or converges");
         // E4: re-check the direction flags at the converged state.
@@ -453,12 +592,18 @@ where
             }
         }
         let history = if historied { updates.iter().map(|(_, p)| p.history).collect() } else { Vec::new() };
+        let (contact_forces, out_of_balance) = match contact {
+            Some((forces, residual)) => (Some(forces), residual),
+            None => (None, Vec::new()),
+        };
         return Ok(PointStep {
             inelastic: updates.into_iter().map(|(_, p)| p.inelastic).collect(),
             unloading,
             history,
             residual: if scale > 0.0 { norm / scale } else { 0.0 },
             factorizations,
+            contact_forces,
+            out_of_balance,
         });
     }
     unreachable!("the last pass returns")
@@ -490,13 +635,17 @@ where
     let ncell = mesh.num_cells();
     let ndof = model.num_dofs();
     let not_converged = |detail: String| PressError::NotConverged { step: input.step, time_s: input.t1, detail };
-    let scale = input.scale;
+    let mut scale = input.scale;
     let mut factorizations = 0usize;
     // Predictor: the small-strain step.
-    solve(input.base, u1)?;
+    let mut forces_c = solve(input.base, u1)?.filter(|_| input.contact);
     let mut previous = f64::INFINITY;
     let mut tangent_mode = false;
     let mut tangent: Option<crate::solve::Factor<'_>> = None;
+    // With contact: the extra force `L(u) - N(u)` of the last solve's right-hand
+    // side (the small-strain internal force less the finite-strain one).
+    let mut extra = vec![0.0; ndof];
+    let mut anderson = Anderson::new(system);
     for iteration in 0..MAX_ITERATIONS {
         for &d in &system.dof_of_free {
             if !u1[d as usize].is_finite() {
@@ -519,18 +668,51 @@ where
                 green_lagrange_block::<D, N, S>(&g.gradients, h, *hoop, blend, a).transpose() * s * g.weight
             })
         });
-        let (residual, norm) = out_of_balance(model, system, &forces);
+        let (residual, mut norm) = out_of_balance(model, system, &forces);
+        // With contact, the fixed point on the extra force (module doc).
+        let next_extra = forces_c.as_ref().map(|contact| {
+            let linear: Vec<[SVector<f64, D>; N]> = map_collect(ncell, |e| {
+                let r = mesh.cell_regions[e] as usize;
+                let small = cell_strain::<D, N, S>(&model.geometry[e].gradients, &model.cell_displacements(e, u1));
+                let s = model.region_c1[r] * ((small - input.inelastic0[e]) * input.g[r] - input.q[e]);
+                std::array::from_fn(|a| nodal_force::<D, N, S>(&model.geometry[e], &s, a))
+            });
+            let mut next = vec![0.0; ndof];
+            assemble_vector::<D, N>(&model.topology, &linear, &mut next);
+            let mut nonlinear = vec![0.0; ndof];
+            assemble_vector::<D, N>(&model.topology, &forces, &mut nonlinear);
+            next.iter_mut().zip(&nonlinear).for_each(|(l, n)| *l -= n);
+            let change: Vec<f64> = extra.iter().zip(&next).map(|(a, b)| a - b).collect();
+            norm = free_norm(system, &change);
+            scale = (input.scale.powi(2) + free_norm(system, contact).powi(2)).sqrt();
+            next
+        });
         if norm <= TOLERANCE * scale {
+            let (contact_forces, out_of_balance) = match forces_c {
+                Some(f) => (Some(f), residual),
+                None => (None, Vec::new()),
+            };
             return Ok(PointStep {
                 inelastic: input.inelastic0.to_vec(),
                 unloading: Vec::new(),
                 history: Vec::new(),
                 residual: if scale > 0.0 { norm / scale } else { 0.0 },
                 factorizations,
+                contact_forces,
+                out_of_balance,
             });
         }
         if iteration + 1 == MAX_ITERATIONS {
             break;
+        }
+        if let Some(next) = next_extra {
+            // Contact: the modified Newton step with the contact settled, on the
+            // total displacement (the contact works on positions, not corrections).
+            let next = anderson.next(&extra, next, norm);
+            let b: Vec<f64> = input.base.iter().zip(&next).map(|(b, x)| b + x).collect();
+            forces_c = solve(&b, u1)?;
+            extra = next;
+            continue;
         }
         if !tangent_mode && iteration >= 1 && norm > SLOW_CONTRACTION * previous {
             tangent_mode = true;

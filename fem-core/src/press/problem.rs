@@ -434,8 +434,11 @@ where
     /// `protocol.gravity` (which is the factor 1 already); `plate-friction` only on
     /// a frictionless constrained plate (the baseline it extends); `adhesion` on a
     /// frictionless constrained plate or on contact tools of which one presses and is
-    /// not glued; `machine-compliance` and the material-point effects only on the
-    /// constrained plate (not with contact tools, plate friction or adhesion).
+    /// not glued; `machine-compliance` only on the constrained plate (not with
+    /// contact tools, plate friction or adhesion) and not next to a material-point
+    /// effect or a material's Mullins-type damage. The material-point effects and
+    /// the damage run with contact tools too (`super::inelastic`, "With contact
+    /// tools").
     pub(crate) fn validate_effects(&self) -> Result<(), PressError> {
         let e = &self.effects;
         e.validate()?;
@@ -495,13 +498,6 @@ where
             let refuse = |detail: String| {
                 Err(PressError::BadSettings(format!("material of region `{name}`: the Mullins-type damage {detail}")))
             };
-            if contact {
-                return refuse(
-                    "runs on the constrained plate only; with contact tools (or plate friction, adhesion) it is \
-                     not implemented yet"
-                        .into(),
-                );
-            }
             if e.is_active(EffectId::MachineCompliance) {
                 return refuse("cannot be combined with machine compliance yet".into());
             }
@@ -512,13 +508,6 @@ where
             }
         }
         if let Some((effect, _)) = e.material_point() {
-            if contact {
-                return conflict(
-                    effect,
-                    "material-point effects run on the constrained plate only; with contact tools (or plate \
-                     friction, adhesion) they are not implemented yet",
-                );
-            }
             if e.is_active(EffectId::MachineCompliance) {
                 return conflict(
                     effect,

@@ -26,7 +26,9 @@
 //! inelastic strain in series with the chain, the chain's strain and histories
 //! are those of `e - e_in`, and the step is solved by the iteration of
 //! `super::inelastic` (modified Newton on the same factorization, full Newton when
-//! it contracts slowly). Without such an effect none of it runs.
+//! it contracts slowly). Without such an effect none of it runs. With contact
+//! tools each of its solves is a settled contact solve (the contact iteration
+//! nested inside the material-point one; `super::inelastic`, "With contact tools").
 //!
 //! Step control: the local error of the displacement is estimated against an
 //! extrapolation of the previous steps (quadratic for BDF2 steps, linear for BDF1
@@ -867,7 +869,7 @@ where
     let base: Vec<f64> = (0..ndof).map(|d| rhs[d] - coupling[d]).collect();
     // The material-point path: the same step with an inelastic strain per cell,
     // solved by the iteration of `super::inelastic`.
-    let point = match model.point.as_ref() {
+    let mut point = match model.point.as_ref() {
         None => None,
         Some(_) => {
             let q: Vec<SVector<f64, S>> = map_collect(mesh.num_cells(), history_part);
@@ -890,11 +892,15 @@ where
                 dt,
                 t1,
                 step: step_index,
+                contact: !model.problem.tools.is_empty(),
             };
             Some(inelastic::solve_step(model, &input, system, solve, &mut u1)?)
         }
     };
-    let external = if point.is_some() { None } else { solve(&base, &mut u1)? };
+    let external = match point.as_mut() {
+        Some(p) => p.contact_forces.take(),
+        None => solve(&base, &mut u1)?,
+    };
     for &d in &system.dof_of_free {
         let d = d as usize;
         if !u1[d].is_finite() {
@@ -909,8 +915,8 @@ where
     }
     // Contact forces are external forces on the free rows.
     let with_contact = external.is_some();
-    if let Some(f) = external {
-        rhs.iter_mut().zip(&f).for_each(|(r, f)| *r += f);
+    if let Some(f) = external.as_ref() {
+        rhs.iter_mut().zip(f).for_each(|(r, f)| *r += f);
     }
     // Residual of the free rows.
     let mut y = vec![0.0; ndof];
@@ -929,10 +935,17 @@ where
         None if bb > 0.0 => (rr / bb).sqrt(),
         None => 0.0,
     };
+    // On the material-point path the free rows' balance is that of the cells'
+    // nodal forces (`f_int(u1) - f_body`, from the iteration) against the contact
+    // forces; `rhs` holds those already.
     let imbalance = with_contact.then(|| {
         let mut r = vec![0.0; ndof];
         for &d in &system.dof_of_free {
-            r[d as usize] = y[d as usize] - rhs[d as usize];
+            let d = d as usize;
+            r[d] = match (point.as_ref(), external.as_ref()) {
+                (Some(p), Some(f)) => p.out_of_balance[d] - f[d],
+                _ => y[d] - rhs[d],
+            };
         }
         r
     });

@@ -24,8 +24,8 @@
 //! strain so far. They are fixed values, not among the model's parameters
 //! (nothing identifies them; `wagashi fit` and the diagnosis difference such
 //! trials, since the damage runs without forward sensitivities), and `wagashi press`
-//! runs them on the quasi-static integrator with the constrained
-//! plate (not with contact tools, machine compliance or a material-point effect).
+//! runs them on the quasi-static integrator, with the constrained plate or with
+//! contact tools (not with machine compliance or a material-point effect).
 
 use std::collections::BTreeMap;
 use std::path::Path;

@@ -71,9 +71,10 @@
 //! ```
 //!
 //! The last eight are the material-point effects (`fem_core::effects`): at most
-//! one of them per trial, on the constrained plate (not with contact tools,
-//! `plate_friction`, `adhesion_strength_MPa` or `machine_compliance_mm_per_N`); the dashpot ones need a
-//! chain with `c3` (not `elastic`).
+//! one of them per trial, on the constrained plate or with contact tools (also
+//! with `plate_friction` and `adhesion_strength_MPa`), not with
+//! `machine_compliance_mm_per_N`; the dashpot ones need a chain with `c3` (not
+//! `elastic`).
 //!
 //! Unit suffixes read as the format's (`_N`, `_mm`, `_MPa`) with `_per_` for a
 //! quotient (`_N_per_s` is N/s, `_mm_per_N` mm/N, `_per_h` 1/h), since `_MPa_s`

@@ -1,0 +1,277 @@
+//! The material-point effects and the Mullins-type damage with contact tools:
+//! a flat plate tool (glued, or frictionless on a frictionless-plate trial)
+//! reproduces the constrained plate's run with the same effect, in plane stress,
+//! axisymmetric and 3D (the tool run chooses its steps, the constrained run
+//! replays them, so the two differ by the contact treatment only); an effect at
+//! its null with tools is the baseline tool run; a flat punch pressed into a
+//! sweet with a plastic slider leaves a dent after it lifts off, none without.
+
+use fem_core::effects::{EffectId, Effects};
+use fem_core::material::{Material, MullinsDamage, Rheology};
+use fem_core::mesh;
+use fem_core::press::{
+    self, AnyPress, Attachment, AxisymmetricPress, PlanePress, PressProblem, PressResult, Protocol, Settings,
+    SolidPress, Tool, ToolContact, ToolShape,
+};
+
+const W: f64 = 20.0;
+const H: f64 = 15.0;
+const T: f64 = 10.0;
+
+/// The same problem with the protocol's plate replaced by a plate tool.
+fn with_plate_tool(problem: &AnyPress, contact: ToolContact) -> AnyPress {
+    fn swap<const D: usize, const N: usize, const S: usize>(
+        p: &PressProblem<D, N, S>,
+        contact: ToolContact,
+    ) -> PressProblem<D, N, S>
+    where
+        fem_core::element::Simplex<D, N>: fem_core::element::ReferenceSimplex<D, N>,
+    {
+        let (lo, hi) = p.mesh.bounding_box();
+        let lo3 = std::array::from_fn(|k| if k < D { lo[k] } else { 0.0 });
+        let hi3 = std::array::from_fn(|k| if k < D { hi[k] } else { 0.0 });
+        let tool = Tool::plate_above("plate", lo3, hi3, &p.protocol.waypoints, contact, p.protocol.release_s);
+        let mut q = p.clone();
+        q.tools = vec![tool];
+        q
+    }
+    match problem {
+        AnyPress::Plane(p) => AnyPress::Plane(swap(p, contact)),
+        AnyPress::Solid(p) => AnyPress::Solid(swap(p, contact)),
+        AnyPress::Axisymmetric(p) => AnyPress::Axisymmetric(swap(p, contact)),
+    }
+}
+
+fn set_effects(p: &mut AnyPress, effects: &Effects) {
+    match p {
+        AnyPress::Plane(p) => p.effects = effects.clone(),
+        AnyPress::Solid(p) => p.effects = effects.clone(),
+        AnyPress::Axisymmetric(p) => p.effects = effects.clone(),
+    }
+}
+
+/// The block in plane stress, axisymmetric and 3D.
+fn problems(m: &Material, protocol: &Protocol) -> Vec<(&'static str, AnyPress)> {
+    vec![
+        (
+            "plane",
+            AnyPress::Plane(
+                PlanePress::new_2d(mesh::rectangle(W, H, 2.5, "m").unwrap(), T, vec![m.clone()], protocol.clone())
+                    .unwrap(),
+            ),
+        ),
+        (
+            "axisymmetric",
+            AnyPress::Axisymmetric(
+                AxisymmetricPress::new_axisymmetric(
+                    mesh::axisymmetric_section(W / 2.0, H, 2.5, "m").unwrap(),
+                    vec![m.clone()],
+                    protocol.clone(),
+                )
+                .unwrap(),
+            ),
+        ),
+        (
+            "solid",
+            AnyPress::Solid(
+                SolidPress::new_3d(mesh::block([W, H, T], 5.0, "m").unwrap(), vec![m.clone()], protocol.clone())
+                    .unwrap(),
+            ),
+        ),
+    ]
+}
+
+/// Compares the tool run with the constrained plate's replay of its steps: the
+/// bottom force over the trial to [`FORCE_TOL`] of the peak, the final shapes to
+/// [`FORCE_TOL`] times the stroke, and the tool's force at its step ends against
+/// the plate's while it holds to [`TOOL_TOL`] of the peak.
+fn compare(m: &Material, protocol: &Protocol, effects: &Effects, contact: ToolContact) {
+    let tol = FORCE_TOL;
+    let hold_until = protocol.release_s.min(protocol.end_s);
+    for (name, mut reference) in problems(m, protocol) {
+        set_effects(&mut reference, effects);
+        let tool_problem = with_plate_tool(&reference, contact);
+        let got = press::simulate_any(&tool_problem, &Settings::default(), &mut |_| {})
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let replay = Settings { step_ends_s: Some(got.steps.iter().map(|s| s.t_s).collect()), ..Settings::default() };
+        let expected = press::simulate_any(&reference, &replay, &mut |_| {}).unwrap();
+        let peak = expected.peak_force();
+        let mut worst: f64 = 0.0;
+        for i in 0..=400 {
+            let t = protocol.end_s * i as f64 / 400.0;
+            worst = worst.max((expected.bottom_force_at(t) - got.bottom_force_at(t)).abs() / peak);
+        }
+        let mut worst_tool: f64 = 0.0;
+        for s in got.tools[0].samples.iter().filter(|s| s.t_s <= hold_until) {
+            worst_tool = worst_tool.max((s.force_n[1] - expected.plate_force_at(s.t_s)).abs() / peak);
+        }
+        let (a, b) = (expected.snapshot_at(protocol.end_s).unwrap(), got.snapshot_at(protocol.end_s).unwrap());
+        let du = a.displacement.iter().zip(&b.displacement).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+        let stroke = protocol.waypoints.iter().map(|w| w[1].abs()).fold(0.0, f64::max);
+        eprintln!(
+            "{name} {contact:?}: bottom force {worst:.2e}, tool force {worst_tool:.2e} of the peak {peak:.4e} N, \
+             final shape {du:.2e} mm ({} steps)",
+            got.steps.len()
+        );
+        assert!(worst <= tol, "{name}: bottom force differs by {worst:.3e} of the peak");
+        assert!(worst_tool <= TOOL_TOL, "{name}: tool force differs by {worst_tool:.3e} of the peak");
+        assert!(du <= tol * stroke, "{name}: final shapes differ by {du:.3e} mm");
+    }
+}
+
+/// Ramp 1.5 mm in 10 s, hold to 30 s, release, recover to 60 s.
+fn ramp_hold_release(plate: Attachment, support: Attachment) -> Protocol {
+    let mut p = Protocol::ramp_hold_release(0.15, 10.0, 30.0, 60.0);
+    p.plate = plate;
+    p.support = support;
+    p
+}
+
+/// Press, back up most of the way, press deeper, all held (glued), release at 40 s.
+fn press_release_press() -> Protocol {
+    let mut p = Protocol::ramp_hold_release(0.15, 10.0, 40.0, 50.0);
+    p.waypoints = vec![[0.0, 0.0], [10.0, 1.5], [20.0, 0.3], [32.0, 2.0]];
+    p.plate = Attachment::Glued;
+    p.support = Attachment::Glued;
+    p
+}
+
+/// The plate comparisons' tolerance on the bottom force and the shape: the exact
+/// elimination path holds the plate's dofs as the constrained plate does, so the
+/// runs differ by rounding and by the iterations' tolerance (1e-12 of each step's
+/// force scale); measured at most 8.4e-12 of the peak.
+const FORCE_TOL: f64 = 1e-10;
+/// The same for the tool's force against the constrained plate's (the tool's
+/// contact reactions rebalanced to the cells' nodal forces, against the plate's
+/// reaction functional): measured 8.5e-11 for the effects and 4.7e-8 for the
+/// damage's press-release-press (axisymmetric); the contact tests' bound is 1e-6.
+const TOOL_TOL: f64 = 1e-7;
+
+#[test]
+fn glued_plate_tool_with_a_plastic_slider_reproduces_the_glued_plate() {
+    let effects = Effects::none().with(EffectId::PlasticSlider, &[0.002, 0.005]).unwrap();
+    let protocol = ramp_hold_release(Attachment::Glued, Attachment::Glued);
+    compare(&Material::seed_mat1_force(), &protocol, &effects, ToolContact::Glued);
+}
+
+#[test]
+fn frictionless_plate_tool_with_stress_thinning_reproduces_the_frictionless_plate() {
+    let effects = Effects::none().with(EffectId::StressThinning, &[400.0, 1.0]).unwrap();
+    let protocol = ramp_hold_release(Attachment::Frictionless, Attachment::Frictionless);
+    compare(&Material::seed_mat1_force(), &protocol, &effects, ToolContact::Frictionless);
+}
+
+#[test]
+fn glued_plate_tool_with_mullins_damage_reproduces_the_glued_plate_on_press_release_press() {
+    let m = Material::seed_mat1_force().with_damage(MullinsDamage::new(0.4, 0.05).unwrap()).unwrap();
+    compare(&m, &press_release_press(), &Effects::none(), ToolContact::Glued);
+}
+
+#[test]
+fn glued_plate_tool_with_finite_strain_reproduces_the_glued_plate() {
+    let effects = Effects::none().with(EffectId::FiniteStrain, &[1.0]).unwrap();
+    let protocol = ramp_hold_release(Attachment::Glued, Attachment::Glued);
+    compare(&Material::seed_mat1_force(), &protocol, &effects, ToolContact::Glued);
+}
+
+/// A rigid frictionless flat punch (radius 5 mm, a curved-edge tool on the
+/// augmented-Lagrangian path) pressed 1 mm into an axisymmetric sweet (radius
+/// 10, height 10 mm) on a frictionless floor in 5 s, lifted 1 mm above the top by
+/// 10 s, then left to recover to 40 s.
+fn punch_problem(material: Material, effects: Effects) -> AxisymmetricPress {
+    let body = 10.0;
+    let radius = 10.0;
+    let mesh = mesh::indentation_section(body, body, 0.5, 3.0, 1.3, "sweet").unwrap();
+    let mut protocol = Protocol::ramp_hold_release(0.2, 5.0, 40.0, 40.0);
+    protocol.waypoints = vec![[0.0, 0.0], [5.0, 1.0], [10.0, -1.0]];
+    protocol.support = Attachment::Frictionless;
+    protocol.plate = Attachment::Frictionless;
+    let mut problem = AxisymmetricPress::new_axisymmetric(mesh, vec![material], protocol.clone()).unwrap();
+    problem.tools = vec![Tool::moving_down(
+        "punch",
+        ToolShape::Punch { radius: 0.5 * body, half_height: 0.5 * radius },
+        [0.0, body + 0.5 * radius, 0.0],
+        &protocol.waypoints,
+        ToolContact::Frictionless,
+        f64::INFINITY,
+    )];
+    problem.effects = effects;
+    problem
+}
+
+fn punch_settings() -> Settings {
+    Settings { fixed_dt_s: Some(0.25), max_dt_s: Some(0.25), ..Settings::default() }
+}
+
+/// The dent at the axis after recovery: the initial height less the top node's
+/// height on the axis at the end [mm].
+fn dent(problem: &AxisymmetricPress, r: &PressResult) -> f64 {
+    let snap = r.snapshot_at(problem.protocol.end_s).unwrap();
+    let (_, hi) = problem.mesh.bounding_box();
+    let top = (0..problem.mesh.num_nodes())
+        .find(|&i| problem.mesh.nodes[i][0] == 0.0 && problem.mesh.nodes[i][1] == hi[1])
+        .expect("a node on the axis at the top");
+    -snap.displacement[top * 2 + 1]
+}
+
+fn elastic_sweet() -> Material {
+    Material::new(Rheology::Elastic { e_mpa: 0.05 }, 0.3).unwrap()
+}
+
+/// With a plastic slider the punch leaves a dent after it lifts off (the
+/// yielded cells under it keep their inelastic strain; 0.070 mm in 0.25 s
+/// steps); without, the elastic sweet springs back to its shape exactly.
+#[test]
+fn punch_with_a_plastic_slider_leaves_a_dent() {
+    let clock = std::time::Instant::now();
+    let plain = punch_problem(elastic_sweet(), Effects::none());
+    let r0 = press::simulate(&plain, &punch_settings(), &mut |_| {}).unwrap();
+    eprintln!("elastic {} steps {:?}", r0.steps.len(), clock.elapsed());
+    let slider = Effects::none().with(EffectId::PlasticSlider, &[0.005, 0.05]).unwrap();
+    let dented = punch_problem(elastic_sweet(), slider);
+    let r1 = press::simulate(&dented, &punch_settings(), &mut |_| {}).unwrap();
+    eprintln!("slider {} steps {:?}", r1.steps.len(), clock.elapsed());
+    let (d0, d1) = (dent(&plain, &r0), dent(&dented, &r1));
+    // Lifted off: no force at the end.
+    let last = r1.tools[0].samples.last().unwrap();
+    assert!(last.area_mm2 == 0.0 && last.force_n[1] == 0.0, "{last:?}");
+    // The same loading force up to the yield: the first steps agree.
+    let f = |r: &PressResult, k: usize| r.tools[0].samples[k].force_n[1];
+    eprintln!("dent: elastic {d0:.3e} mm, slider {d1:.3e} mm; first-step force {} vs {}", f(&r0, 1), f(&r1, 1));
+    assert!(d0.abs() <= 1e-9, "elastic sweet keeps a dent of {d0} mm");
+    assert!(d1 > 0.01, "slider: dent {d1} mm");
+    // Yielding softens the push: a lower peak force.
+    let peak = |r: &PressResult| r.tools[0].samples.iter().map(|s| s.force_n[1]).fold(0.0, f64::max);
+    assert!(peak(&r1) < 0.95 * peak(&r0), "peaks {} vs {}", peak(&r1), peak(&r0));
+}
+
+/// An effect at its null with contact tools, its material-point path forced on,
+/// is the baseline tool run (the inelastic strain stays zero: the fixed point
+/// converges in its first iteration to the linear solve).
+#[test]
+fn null_effects_with_tools_are_the_baseline() {
+    let plain = punch_problem(Material::seed_mat1_force(), Effects::none());
+    let base = press::simulate(&plain, &punch_settings(), &mut |_| {}).unwrap();
+    let peak = base.peak_force();
+    let nulls: Vec<(&str, Effects, Option<MullinsDamage>)> = vec![
+        ("plastic-slider", Effects::none().with(EffectId::PlasticSlider, &[f64::INFINITY, 0.01]).unwrap(), None),
+        ("stress-thinning", Effects::none().with(EffectId::StressThinning, &[0.0, 1.0]).unwrap(), None),
+        ("mullins", Effects::none(), Some(MullinsDamage::new(0.0, 0.05).unwrap())),
+    ];
+    for (name, mut effects, damage) in nulls {
+        effects.force_material_point_path(true);
+        let mut material = Material::seed_mat1_force();
+        material.damage = damage;
+        let p = punch_problem(material, effects);
+        let r = press::simulate(&p, &punch_settings(), &mut |_| {}).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(r.steps.len(), base.steps.len(), "{name}");
+        let worst = base.tools[0]
+            .samples
+            .iter()
+            .zip(&r.tools[0].samples)
+            .map(|(a, b)| (a.force_n[1] - b.force_n[1]).abs())
+            .fold(0.0, f64::max);
+        eprintln!("{name}: null differs from the baseline by {:.2e} of the peak", worst / peak);
+        assert!(worst <= 1e-12 * peak, "{name}: {worst:.3e} N of {peak:.3e} N");
+    }
+}
