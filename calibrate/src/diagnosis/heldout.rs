@@ -482,7 +482,8 @@ mod tests {
     #[test]
     fn block_se_matches_the_noise_variance() {
         let (segments, n) = design();
-        let holds: Vec<&Segment> = segments.iter().filter(|s| s.cell == (Phase::Hold, ObsChannel::Force, Region::All)).collect();
+        let holds: Vec<&Segment> =
+            segments.iter().filter(|s| s.cell == (Phase::Hold, ObsChannel::Force, Region::All)).collect();
         for case in 0..3 {
             let (mut ties, mut ratio) = (0, 0.0);
             for seed in 0..200u64 {
