@@ -297,6 +297,7 @@ pub fn diagnosis_json(d: &Diagnosis) -> Value {
             "sentence": d.verdict.sentence,
             "separating_experiment": d.verdict.separating_experiment,
             "remaining_cells": d.verdict.remaining_cells,
+            "tie_test": d.verdict.tie_test.as_ref().map(tie_test_json),
         },
         "where": cells,
         "candidates": candidates,
@@ -662,6 +663,12 @@ fn num(x: f64) -> Value {
     }
 }
 
+/// The tie rule's numbers (`calibrate::diagnosis::TieTest`).
+fn tie_test_json(t: &calibrate::diagnosis::TieTest) -> Value {
+    json!({"runner_up": t.runner_up.id(), "margin": num(t.margin), "se": num(t.se), "se_blocks": num(t.se_blocks),
+           "se_segments": num(t.se_segments), "cosine": num(t.cosine)})
+}
+
 /// `blind.json` (see [`run_blind`]).
 pub fn blind_json(
     args: &DiagnoseArgs,
@@ -697,6 +704,7 @@ pub fn blind_json(
                 "top1": o.top1,
                 "closure_hat": o.closure_hat,
                 "closure_true": o.closure_true,
+                "tie_test": o.tie_test.as_ref().map(tie_test_json),
                 "seconds": {"generate": o.generate_s, "diagnose": o.diagnose_s, "score": o.score_s},
             })
         })
@@ -725,6 +733,7 @@ pub fn blind_json(
             "size_mm": options.size_mm,
             "starts": options.starts,
             "bootstrap": options.bootstrap,
+            "tie_bootstrap": format!("{:?}", options.tie_bootstrap).to_lowercase(),
             "marker_sigma_mm": options.marker_sigma_mm,
             "effects": options.effects.as_ref().map(|v| v.iter().map(|e| e.id()).collect::<Vec<_>>()),
         },

@@ -971,6 +971,8 @@ pub struct Outcome {
     pub closure_hat: Option<f64>,
     /// The true closure (correct in-library attributions).
     pub closure_true: Option<f64>,
+    /// The verdict's tie rule, when two candidates were eligible.
+    pub tie_test: Option<super::TieTest>,
     /// Seconds spent generating (strength calibration and truth runs).
     pub generate_s: f64,
     /// Seconds spent diagnosing.
@@ -1031,6 +1033,7 @@ pub fn run_case(
         top1,
         closure_hat,
         closure_true,
+        tie_test: diagnosis.verdict.tie_test.clone(),
         generate_s: (t1 - t0).as_secs_f64(),
         diagnose_s: (t2 - t1).as_secs_f64(),
         score_s: (t3 - t2).as_secs_f64(),

@@ -90,10 +90,17 @@
 //! LR is significant. Then: no eligible candidate gives `unexplained`; else
 //! the best `C_j` is named, as `tie` (with the runner-up and the experiment
 //! that separates them, diagnosis-details.md §4.3 and §5.7) when
-//! `C_1 - C_2 < 2 SE` (paired bootstrap over segments, calibration and
-//! held-out) or when the two refits change the residuals in nearly the same
-//! way (cosine > 0.9), and as `partial: <id>` when a cell stays flagged after
-//! its refit. No gap: `none`. (Tried on the development seeds in session 13
+//! `C_1 - C_2 < 2 SE` or when the two refits change the residuals in nearly
+//! the same way (cosine > 0.9), and as `partial: <id>` when a cell stays
+//! flagged after its refit. No gap: `none`. The SE is that of a paired block
+//! bootstrap (diagnosis-details.md §5.4, "over trials and blocks"): blocks of
+//! `round(n^(1/3))` whitened samples redrawn inside every segment, stratified
+//! by trial and segment, around the segment's smooth trend, on the calibration
+//! and the held-out residuals ([`heldout::block_se`], whose module docs say
+//! why). Up to session 15 whole segments were redrawn
+//! ([`TieBootstrap::Segments`], still an option): when the lead sits in one
+//! separating trial, that SE is about the lead itself, so such a lead was
+//! always a tie. [`Verdict::tie_test`] reports the margin and both SEs. (Tried on the development seeds in session 13
 //! and not kept: ranking by `LR - 2d`, the calibration SE alone and a cosine
 //! of 0.95; on seed 101 it turned one correct attribution into a tie and
 //! resolved none.)
@@ -125,7 +132,7 @@ use rayon::prelude::*;
 use wagashi_io::{Bundle, MaterialSpec};
 
 pub use cells::Cell;
-pub use heldout::HeldOut;
+pub use heldout::{HeldOut, TieBootstrap};
 pub use model::{Candidate, Model, ObsChannel, Phase, Region};
 
 use crate::lsq::{EvalError, FitError, Options};
@@ -187,6 +194,9 @@ pub struct DiagnosisOptions {
     /// some adaptive step sequences (the slider right after a release; see
     /// `crate::seed_gap`).
     pub fixed_dt_s: Option<f64>,
+    /// How the tie rule's SE of `C_1 - C_2` is resampled (module docs,
+    /// "Verdict"; default: blocks inside segments).
+    pub tie_bootstrap: TieBootstrap,
 }
 
 impl Default for DiagnosisOptions {
@@ -205,6 +215,7 @@ impl Default for DiagnosisOptions {
             sample_scale_sd: 0.1,
             mesh_correction: true,
             fixed_dt_s: None,
+            tie_bootstrap: TieBootstrap::Blocks,
         }
     }
 }
@@ -330,6 +341,25 @@ pub struct Verdict {
     pub separating_experiment: Option<String>,
     /// For `partial`: the cells still flagged.
     pub remaining_cells: Vec<String>,
+    /// The tie rule's numbers, when two candidates were eligible.
+    pub tie_test: Option<TieTest>,
+}
+
+/// The tie rule between the two best eligible candidates (module docs, "Verdict").
+#[derive(Debug, Clone, PartialEq)]
+pub struct TieTest {
+    /// The runner-up.
+    pub runner_up: EffectId,
+    /// `C_1 - C_2`.
+    pub margin: f64,
+    /// The standard error of the margin the rule used ([`DiagnosisOptions::tie_bootstrap`]).
+    pub se: f64,
+    /// The block bootstrap's SE (calibration and held-out, [`heldout::block_se`]).
+    pub se_blocks: f64,
+    /// The whole-segment bootstrap's SE ([`heldout::segment_se`]), for comparison.
+    pub se_segments: f64,
+    /// The cosine of the two refits' residual changes.
+    pub cosine: f64,
 }
 
 /// Measured and simulated force of one calibration trial, before and after the named effect.
@@ -859,14 +889,6 @@ fn evaluate(
     Ok(Evaluated { report, residuals: r1, heldout })
 }
 
-/// The standard error of `sum (b^2 - a^2)` over `segments` by the paired bootstrap.
-fn paired_se(segments: &[cells::Segment], a: &[f64], b: &[f64], samples: &[Vec<usize>]) -> f64 {
-    let per: Vec<f64> = segments.iter().map(|s| s.energy(b) - s.energy(a)).collect();
-    let sums: Vec<f64> = samples.iter().map(|s| s.iter().map(|&i| per[i]).sum()).collect();
-    let mean = sums.iter().sum::<f64>() / sums.len().max(1) as f64;
-    (sums.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (sums.len().max(2) - 1) as f64).sqrt()
-}
-
 fn decide(
     where_cells: &[Cell],
     evaluated: &[Evaluated],
@@ -887,6 +909,7 @@ fn decide(
                 .into(),
             separating_experiment: None,
             remaining_cells: Vec::new(),
+            tie_test: None,
         };
     }
     let mut eligible: Vec<&Evaluated> = evaluated.iter().filter(|e| e.report.eligible).collect();
@@ -903,21 +926,37 @@ fn decide(
             ),
             separating_experiment: None,
             remaining_cells: flagged,
+            tie_test: None,
         };
     };
     let id = best.report.effect;
+    let mut tie_test = None;
     if let Some(second) = eligible.get(1) {
         let samples = heldout::resamples(segments.len(), options.bootstrap, options.seed ^ 0x71e);
-        let mut se2 = paired_se(segments, &best.residuals, &second.residuals, &samples).powi(2);
+        let mut seg2 = heldout::segment_se(segments, &best.residuals, &second.residuals, &samples).powi(2);
+        let mut block2 = heldout::block_se(segments, &best.residuals, &second.residuals).powi(2);
         if let (Some(_), Some(h1), Some(h2)) = (h0, &best.heldout, &second.heldout) {
             let s2 = heldout::resamples(ho_segments.len(), options.bootstrap, options.seed ^ 0x71e);
-            se2 += paired_se(ho_segments, h1, h2, &s2).powi(2);
+            seg2 += heldout::segment_se(ho_segments, h1, h2, &s2).powi(2);
+            block2 += heldout::block_se(ho_segments, h1, h2).powi(2);
         }
+        let se2 = match options.tie_bootstrap {
+            TieBootstrap::Blocks => block2,
+            TieBootstrap::Segments => seg2,
+        };
         let d1: Vec<f64> = r0.iter().zip(&best.residuals).map(|(a, b)| a - b).collect();
         let d2: Vec<f64> = r0.iter().zip(&second.residuals).map(|(a, b)| a - b).collect();
         let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
         let cos = stats::dot(&d1, &d2) / (norm(&d1) * norm(&d2)).max(1e-300);
         let margin = best.report.combined - second.report.combined;
+        tie_test = Some(TieTest {
+            runner_up: second.report.effect,
+            margin,
+            se: se2.sqrt(),
+            se_blocks: block2.sqrt(),
+            se_segments: seg2.sqrt(),
+            cosine: cos,
+        });
         if margin < 2.0 * se2.sqrt() || cos > 0.9 {
             let other = second.report.effect;
             let experiment = separating_experiment(id, other);
@@ -935,6 +974,7 @@ fn decide(
                 ),
                 separating_experiment: Some(experiment),
                 remaining_cells: best.report.remaining_flagged.clone(),
+                tie_test: tie_test.clone(),
             };
         }
     }
@@ -949,6 +989,7 @@ fn decide(
             ),
             separating_experiment: None,
             remaining_cells: best.report.remaining_flagged.clone(),
+            tie_test: tie_test.clone(),
         };
     }
     let closure = best
@@ -968,6 +1009,7 @@ fn decide(
         sentence: format!("The gap is caused by {id} ({}): LR = {:.1}{closure}.", id.description(), best.report.lr),
         separating_experiment: None,
         remaining_cells: Vec::new(),
+        tie_test,
     }
 }
 
