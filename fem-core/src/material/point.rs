@@ -154,6 +154,21 @@ impl InelasticLaw {
         }
     }
 
+    /// Whether the inelastic strain follows a flow rule integrated over the step
+    /// (E1 to E4: the slider's return map, the dashpot corrections' backward Euler),
+    /// so that its value at a step end carries a time-discretisation error that the
+    /// stepper's error control must see. The strain-driven laws (stiffening, damage)
+    /// and finite strain are exact functions of the step end's strain: no.
+    pub fn flows(&self) -> bool {
+        matches!(
+            self,
+            InelasticLaw::Slider { .. }
+                | InelasticLaw::Bingham { .. }
+                | InelasticLaw::Thinning { .. }
+                | InelasticLaw::Dual { .. }
+        )
+    }
+
     /// Whether the law carries a scalar history per cell (the damage's largest strain).
     pub fn needs_history(&self) -> bool {
         matches!(self, InelasticLaw::Damage { .. })

@@ -147,6 +147,16 @@ pub struct Settings {
     /// Local error tolerance of the adaptive step control, relative to the largest
     /// plate displacement; default 1e-3.
     pub rtol: f64,
+    /// Local error tolerance of the adaptive step control on the inelastic flow
+    /// (the material-point effects E1 to E4: slider, Bingham, thinning, dual
+    /// viscosity), relative to the plate's largest nominal strain (its largest
+    /// displacement over the specimen's height): the volume-weighted RMS over the
+    /// cells of the inelastic strain's estimated local error, in the energy norm,
+    /// must stay below `flow_rtol` times that strain. Default `None`: a tenth of
+    /// `rtol` (the flow is integrated to first order; why a tenth, and the
+    /// measurements: `press::stepper`, "Step control"). Without such an effect it
+    /// has no use.
+    pub flow_rtol: Option<f64>,
     /// A fixed step [s] instead of adaptive steps (steps still land on kinks).
     pub fixed_dt_s: Option<f64>,
     /// Upper bound on the step [s]; default: a twentieth of the trial.
@@ -167,6 +177,7 @@ impl Default for Settings {
         Self {
             integrator: Integrator::QuasiStatic,
             rtol: 1e-3,
+            flow_rtol: None,
             fixed_dt_s: None,
             max_dt_s: None,
             seed_psi: 2000.0,
