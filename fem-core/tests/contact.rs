@@ -14,6 +14,9 @@ use fem_core::press::{
     ToolContact, ToolShape,
 };
 
+mod common;
+use common::with_plate_tool;
+
 const W: f64 = 20.0;
 const H: f64 = 15.0;
 const T: f64 = 10.0;
@@ -23,30 +26,6 @@ fn protocol(plate: Attachment, support: Attachment) -> Protocol {
     p.plate = plate;
     p.support = support;
     p
-}
-
-/// The same problem with the protocol's plate replaced by a plate tool.
-fn with_plate_tool(problem: &AnyPress, contact: ToolContact) -> AnyPress {
-    fn swap<const D: usize, const N: usize, const S: usize>(
-        p: &press::PressProblem<D, N, S>,
-        contact: ToolContact,
-    ) -> press::PressProblem<D, N, S>
-    where
-        fem_core::element::Simplex<D, N>: fem_core::element::ReferenceSimplex<D, N>,
-    {
-        let (lo, hi) = p.mesh.bounding_box();
-        let lo3 = std::array::from_fn(|k| if k < D { lo[k] } else { 0.0 });
-        let hi3 = std::array::from_fn(|k| if k < D { hi[k] } else { 0.0 });
-        let tool = Tool::plate_above("plate", lo3, hi3, &p.protocol.waypoints, contact, p.protocol.release_s);
-        let mut q = p.clone();
-        q.tools = vec![tool];
-        q
-    }
-    match problem {
-        AnyPress::Plane(p) => AnyPress::Plane(swap(p, contact)),
-        AnyPress::Solid(p) => AnyPress::Solid(swap(p, contact)),
-        AnyPress::Axisymmetric(p) => AnyPress::Axisymmetric(swap(p, contact)),
-    }
 }
 
 fn problems(plate: Attachment, support: Attachment) -> Vec<(&'static str, AnyPress)> {
