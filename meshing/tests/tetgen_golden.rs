@@ -138,13 +138,14 @@ const MODELS: [Model; 6] = [
     // 127 x 151 x 115 mm, input edges 1.33 mm median): the counts are set by
     // the surface, not by h (TetGen: 956 704 tets at 4 mm, 891 693 at 8 mm),
     // so 8 mm, the cheaper. Count, orientation, volume and Hausdorff hold
-    // (measured: 482 205 tets, volume error 4e-14, Hausdorff 1e-13); the
-    // quality gates miss by far (0.00..178.44 deg against TetGen's
-    // 1.82..174.72, 3.48 % under 10 deg against 1.03 %, p99.9 radius-edge 3e4
-    // against 4.32): 90 % of the tets under 10 deg are flat caps over the
-    // scan's bent input edges, which conforming Delaunay refinement cannot
-    // remove (module docs of `meshing::conforming`, "What is not done").
-    // Ours takes about 3 min of CPU on it (176 s user; 366 s wall in this
+    // (measured with edge removal, session 16: 481 431 tets; session 15:
+    // volume error 4e-14, Hausdorff 1e-13); the quality gates miss by far
+    // (0.00..176.25 deg against TetGen's 1.82..174.72, 3.44 % under 10 deg
+    // against 1.03 %, p99.9 radius-edge 3e4 against 4.32): most of the tets
+    // under 10 deg are flat caps over the scan's bent input edges, which
+    // conforming Delaunay refinement and edge removal (rings up to 12 tets)
+    // do not remove (module docs of `meshing::conforming`, "What is not done").
+    // Ours takes about 3 min of CPU on it (178 s user in session 16; 366 s wall in this
     // test at load 8 to 12), TetGen 19 s: over the 2 min a model may take in
     // CI, so only TetGen's figures are checked here (`gates: None`); with
     // `gates: Some(&[Gate::Count])` the test runs ours and asserts count,
