@@ -2,7 +2,7 @@
 //!
 //! The pipeline, each step in its crate:
 //!
-//! 1. read the surface (`wagashi_io::surface::read_surface`: OBJ, STL, glTF/GLB;
+//! 1. read the surface (`wagashi_io::surface::read_surface`: OBJ, STL, glTF/GLB, OFF;
 //!    `--units`, `--scale`);
 //! 2. repair it (`meshing::repair`: weld, drop degenerate and duplicate faces,
 //!    orient consistently and outward), which the envelope's inside test needs
@@ -67,8 +67,8 @@ pub enum Mode {
 /// `wagashi mesh SURFACE -o OUT --size-mm H`.
 #[derive(Debug, Args)]
 #[command(
-    about = "Tetrahedralize a triangle surface (OBJ, STL, glTF) into a mesh with a quality report",
-    long_about = "Tetrahedralize the triangle surface in SURFACE (OBJ, STL binary or ASCII, glTF or GLB) \
+    about = "Tetrahedralize a triangle surface (OBJ, STL, glTF, OFF) into a mesh with a quality report",
+    long_about = "Tetrahedralize the triangle surface in SURFACE (OBJ, STL binary or ASCII, glTF or GLB, OFF) \
 into tetrahedra of about --size-mm, and write them to OUT: .vtu (ParaView), .msh (Gmsh 4.1 ASCII) or \
 .node (TetGen's .node, .ele and .face). Objects, groups, solids or meshes of the file become regions \
 (a shell inside another is its own region); --layers-mm cuts the shape into layers along y instead. \
@@ -76,7 +76,7 @@ A quality table is printed; --report writes it as JSON.",
     after_help = MESH_AFTER_HELP
 )]
 pub struct MeshArgs {
-    /// The surface file: .obj, .stl, .gltf or .glb.
+    /// The surface file: .obj, .stl, .gltf, .glb or .off.
     #[arg(value_name = "SURFACE")]
     pub surface: PathBuf,
 

@@ -260,7 +260,9 @@ mod surface {
             ("unended.stl", b"solid x\n", ":1: file ends inside a solid: 'endsolid' missing"),
             ("nan.stl", b"solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 nan 0\n", ":4: coordinates [0.0, NaN, 0.0] are not all finite"),
             ("no-solid.stl", b"facet normal 0 0 1\n", ": not STL: 19 bytes, neither 'solid ...' text nor an 84-byte binary header"),
-            ("mystery.dat", b"hello", ": unknown surface format: expected .obj, .stl, .gltf or .glb"),
+            ("short.off", b"OFF\n3 1 0\n0 0 0\n", ":3: the file ends after 1 of its 3 vertices"),
+            ("range.off", b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 -1\n", ":6: vertex index -1 out of range (3 vertices)"),
+            ("mystery.dat", b"hello", ": unknown surface format: expected .obj, .stl, .gltf, .glb or .off"),
         ];
         for (name, content, want) in cases {
             let (_, tail) = refusal(name, content);
@@ -317,5 +319,45 @@ mod surface {
         let teapot = read(&data("meshes/npm_teapot.obj"));
         let r = validate(&teapot, &ValidateOptions::default()).unwrap();
         assert_eq!(r.defects.len(), 3, "{r}");
+    }
+
+    /// CGAL's fandisk (`libcgal-demo`, OFF in its data.tar.gz; `.ci/run`
+    /// installs it): read by extension and by content, closed and outward, with
+    /// the counts its header states. Outside CI a missing package skips the test.
+    #[test]
+    fn cgal_off_meshes_read_by_extension_and_content() {
+        let archive = Path::new("/usr/share/doc/libcgal-dev/data.tar.gz");
+        if !archive.exists() {
+            assert!(std::env::var_os("CI").is_none(), "libcgal-demo is not installed ({})", archive.display());
+            eprintln!("skipped: {} not installed", archive.display());
+            return;
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let status = std::process::Command::new("tar")
+            .args(["-xzf", archive.to_str().unwrap(), "-C", dir.path().to_str().unwrap(), "data/meshes/fandisk.off"])
+            .status()
+            .unwrap();
+        assert!(status.success());
+        let off = dir.path().join("data/meshes/fandisk.off");
+        let header: Vec<usize> = std::fs::read_to_string(&off)
+            .unwrap()
+            .lines()
+            .map(|l| l.trim())
+            .find(|l| !l.is_empty() && !l.starts_with("OFF") && !l.starts_with('#'))
+            .unwrap()
+            .split_whitespace()
+            .map(|t| t.parse().unwrap())
+            .collect();
+        let by_extension = read_surface(&off, &SurfaceOptions::default()).unwrap();
+        assert_eq!((by_extension.format, by_extension.unit), (SurfaceFormat::Off, LengthUnit::Mm));
+        assert_eq!(by_extension.surface.num_vertices(), header[0]);
+        assert_eq!(by_extension.surface.num_triangles(), 12_946);
+        assert!(by_extension.surface.require_closed_manifold().is_ok());
+        assert!(by_extension.surface.signed_volume(None) > 0.0);
+        let renamed = dir.path().join("fandisk.mesh");
+        std::fs::copy(&off, &renamed).unwrap();
+        let by_content = read_surface(&renamed, &SurfaceOptions::default()).unwrap();
+        assert_eq!(by_content.format, SurfaceFormat::Off);
+        assert_eq!(by_content.surface.triangles, by_extension.surface.triangles);
     }
 }

@@ -10,7 +10,7 @@ use thiserror::Error;
 /// directly: `teapot.obj:12`, `scan.stl: triangle 7`, `cake.glb: mesh "icing" primitive 0`.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Location {
-    /// A 1-based line (OBJ, ASCII STL).
+    /// A 1-based line (OBJ, ASCII STL, OFF).
     Line(usize),
     /// A 0-based triangle record (binary STL).
     Triangle(usize),
@@ -46,7 +46,7 @@ pub enum SurfaceError {
         source: std::io::Error,
     },
     /// Neither the extension nor the content tells the format.
-    #[error("{}: unknown surface format: expected .obj, .stl, .gltf or .glb", path.display())]
+    #[error("{}: unknown surface format: expected .obj, .stl, .gltf, .glb or .off", path.display())]
     UnknownFormat {
         /// The file.
         path: PathBuf,

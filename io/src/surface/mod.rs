@@ -1,17 +1,18 @@
-//! Triangle surfaces from OBJ, STL and glTF files (`wagashi mesh SURFACE`).
+//! Triangle surfaces from OBJ, STL, glTF and OFF files (`wagashi mesh SURFACE`).
 //!
 //! [`read_surface`] reads a file into an [`ImportedSurface`]: a
 //! [`meshing::Surface`] in mm with named regions, the format and unit it was
 //! read in, and warnings about what was left out. Each format's rules are in its
 //! module: [`obj`] (objects and groups become regions, polygons become fans),
 //! [`stl`] (binary or ASCII, told by content; solids become regions), [`gltf`]
-//! (node transforms applied, meshes become regions).
+//! (node transforms applied, meshes become regions), [`off`] (ASCII OFF, one
+//! region; polygons become fans).
 //!
 //! # Units
 //!
 //! The engine's unit is mm. A file's coordinates are taken in
-//! [`SurfaceOptions::units`], by default the format's: mm for OBJ and STL (they
-//! have none), m for glTF (its specification's). They are multiplied by the
+//! [`SurfaceOptions::units`], by default the format's: mm for OBJ, STL and OFF
+//! (they have none), m for glTF (its specification's). They are multiplied by the
 //! unit's mm and by [`SurfaceOptions::scale`]. The CLI's `--units` and `--scale`
 //! set these.
 //!
@@ -64,6 +65,7 @@
 mod error;
 pub mod gltf;
 pub mod obj;
+pub mod off;
 mod options;
 mod read;
 pub mod stl;

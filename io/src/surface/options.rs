@@ -74,16 +74,18 @@ pub enum SurfaceFormat {
     Stl,
     /// glTF 2.0, JSON (`.gltf`) or binary (`.glb`).
     Gltf,
+    /// OFF, ASCII (Geomview's Object File Format; CGAL's sample meshes).
+    Off,
 }
 
 impl SurfaceFormat {
     /// The length unit a file of this format is read in unless told otherwise:
-    /// metres for glTF (its specification's unit), millimetres for OBJ and STL
-    /// (which have none; mm is what CAD and scanners mostly write).
+    /// metres for glTF (its specification's unit), millimetres for OBJ, STL and
+    /// OFF (which have none; mm is what CAD and scanners mostly write).
     pub fn default_unit(self) -> LengthUnit {
         match self {
             SurfaceFormat::Gltf => LengthUnit::M,
-            SurfaceFormat::Obj | SurfaceFormat::Stl => LengthUnit::Mm,
+            SurfaceFormat::Obj | SurfaceFormat::Stl | SurfaceFormat::Off => LengthUnit::Mm,
         }
     }
 }

@@ -26,11 +26,11 @@ pub struct ImportedSurface {
     pub warnings: Vec<String>,
 }
 
-/// Reads the surface in `path` (OBJ, STL binary or ASCII, glTF or GLB) into mm.
+/// Reads the surface in `path` (OBJ, STL binary or ASCII, glTF or GLB, OFF) into mm.
 ///
 /// The format is [`SurfaceOptions::format`], else told by the extension
-/// (`.obj`, `.stl`, `.gltf`, `.glb`, any case), else by the content (GLB's magic,
-/// binary STL's size, ASCII STL's `solid`). Coordinates are multiplied by the
+/// (`.obj`, `.stl`, `.gltf`, `.glb`, `.off`, any case), else by the content (GLB's
+/// magic, binary STL's size, ASCII STL's `solid`, OFF's keyword). Coordinates are multiplied by the
 /// unit's mm (the format's default unit unless [`SurfaceOptions::units`] says)
 /// and by [`SurfaceOptions::scale`]. The file is never modified.
 pub fn read_surface(path: impl AsRef<Path>, options: &SurfaceOptions) -> Result<ImportedSurface, SurfaceError> {
@@ -47,6 +47,7 @@ pub fn read_surface(path: impl AsRef<Path>, options: &SurfaceOptions) -> Result<
         SurfaceFormat::Obj => super::obj::parse(path, &bytes)?,
         SurfaceFormat::Stl => super::stl::parse(path, &bytes)?,
         SurfaceFormat::Gltf => super::gltf::parse(path, &bytes)?,
+        SurfaceFormat::Off => super::off::parse(path, &bytes)?,
     };
     if raw.surface.triangles.is_empty() {
         return Err(SurfaceError::Empty { path: path.to_path_buf() });
@@ -72,12 +73,15 @@ fn detect(path: &Path, bytes: &[u8]) -> Result<SurfaceFormat, SurfaceError> {
         Some("obj") => return Ok(SurfaceFormat::Obj),
         Some("stl") => return Ok(SurfaceFormat::Stl),
         Some("gltf" | "glb") => return Ok(SurfaceFormat::Gltf),
+        Some("off") => return Ok(SurfaceFormat::Off),
         _ => {}
     }
     if bytes.starts_with(b"glTF") {
         Ok(SurfaceFormat::Gltf)
     } else if super::stl::is_binary(bytes) || super::stl::is_ascii(bytes) {
         Ok(SurfaceFormat::Stl)
+    } else if super::off::is_off(bytes) {
+        Ok(SurfaceFormat::Off)
     } else {
         Err(SurfaceError::UnknownFormat { path: path.to_path_buf() })
     }
