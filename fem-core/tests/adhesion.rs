@@ -223,8 +223,7 @@ fn withdrawal_pulls_and_leaves_a_taller_specimen() {
 }
 
 /// Refused where it does not extend the baseline (a glued plate, tools that are
-/// all glued) and with machine compliance (constrained plate only), each naming
-/// the key.
+/// all glued), each naming the key; with machine compliance it runs.
 #[test]
 fn adhesion_refusals_name_the_key() {
     let settings = Settings { fixed_dt_s: Some(0.25), ..Settings::default() };
@@ -241,10 +240,11 @@ fn adhesion_refusals_name_the_key() {
     glued_tools.effects = adhesion.clone();
     let err = press::simulate(&glued_tools, &settings, &mut |_| {}).unwrap_err();
     assert!(err.to_string().contains("adhesion_strength_MPa"), "{err}");
+    // With machine compliance it runs (`tests/compliance.rs`): the plate tool rides on the crosshead.
     let mut compliant = plane(elastic(), push_pull(0.15, 0.5));
     compliant.effects = adhesion.with(EffectId::MachineCompliance, &[0.01]).unwrap();
-    let err = press::simulate(&compliant, &settings, &mut |_| {}).unwrap_err();
-    assert!(err.to_string().contains("machine_compliance_mm_per_N"), "{err}");
+    let r = press::simulate(&compliant, &settings, &mut |_| {});
+    assert!(r.as_ref().is_ok_and(|r| r.peak_force() > 0.0), "{:?}", r.err());
     let err = Effects::none().with(EffectId::Adhesion, &[-1e-3, 0.1]).unwrap_err();
     assert!(err.to_string().starts_with("adhesion_strength_MPa = -0.001 is outside"), "{err}");
 }

@@ -31,7 +31,7 @@
 //! |---|---|---|---|
 //! | `force-offset` | observation | `force_offset_N` b0, `force_drift_N_per_s` b1 | the reported bottom force becomes `F + b0 + b1 t` at every time, contact or not (step records and [`crate::press::PressResult::bottom_force_at`]); the plate force is the engine's own, untouched |
 //! | `gravity` | body force | `gravity` factor f in [0, 1] | body force `-f rho g e_y` (lumped, `g` = 9810 mm/s^2) from t = 0 on the specimen as placed; the bottom force is the floor's reaction and so includes `f W` (what a sensor under the specimen reads, untared); the plate force does not (a top load cell does not see the weight, except for the pull a glued plate needs to hold a sagging top) |
-//! | `machine-compliance` | load path | `machine_compliance_mm_per_N` 1/k_m | the plate's displacement is `d = d_cmd - F/k_m` with `F` the plate force at the step's end, found exactly per step (below) |
+//! | `machine-compliance` | load path | `machine_compliance_mm_per_N` 1/k_m | the plate's displacement is `d = d_cmd - F/k_m` with `F` the plate force at the step's end, found exactly per step (below); with contact tools the tools that move (not floors) are held back together by `F/k_m` along the push axis, `F` the sum of their forces along it |
 //! | `ageing` | trial covariate | `ageing_E_rate_per_h` gamma_E, `ageing_c_rate_per_h` gamma_c; covariate `age_h` tau | `E_i -> E_i exp(gamma_E tau)`, `c_i -> c_i exp(gamma_c tau)` in every material before the run |
 //! | `plate-friction` | contact | `plate_friction` mu | the frictionless constrained plate (and a frictionless floor) become rigid contact tools with Coulomb friction mu ([`crate::press::Tool::plate_above`], [`crate::press::Tool::floor_below`]); a glued floor stays glued |
 //! | `adhesion` | contact | `adhesion_strength_MPa` sigma_a (null 0), `adhesion_opening_mm` delta_c (nuisance) | a rigid-linear cohesive zone in the normal law of the pressing tools that are not glued (not the floor): a node that touched holds the tool in tension down to `-sigma_a A`, softening linearly to zero at the opening `delta_c` (below); a frictionless constrained plate becomes a frictionless contact tool ([`crate::press::Tool::plate_above`]) |
@@ -51,9 +51,16 @@
 //! `d = d_cmd - c F(d_cmd) / (1 + c k)`, and takes the step at that `d` (a third
 //! solve, so every state variable is the exact step's, not a combination). The
 //! relation then holds at every step end to rounding; inside a step the plate
-//! moves linearly, as every prescribed displacement does. Quasi-static
-//! integrator and constrained plate only (refused with contact tools and with the
-//! dynamic or the seed's scheme).
+//! moves linearly, as every prescribed displacement does. With contact tools
+//! (and `plate-friction`, `adhesion`, whose plate is a contact tool), and next to
+//! a material-point effect or the Mullins damage, the step is not affine in `d`:
+//! a safeguarded scalar iteration (Illinois on a bracket, `press::stepper`,
+//! "Machine compliance") takes the step to the root of `delta - c F(delta)`,
+//! within 1e-11 of the displacement scale; the crosshead's tools are the moving
+//! tools that are not floors, lifted together along +y, and `F` the sum of the y
+//! forces on them. Quasi-static integrator only (refused with the dynamic or the
+//! seed's scheme, and with sensitivities); with tools, refused when none of them
+//! moves (floors and fixed tools only).
 //!
 //! **Sensitivities.** `force-offset` and `gravity` do not depend on the material
 //! parameters, so the forward sensitivities stay exact with them held at any
@@ -125,10 +132,10 @@
 //! three passes). With contact tools (and `plate-friction`, `adhesion`) every
 //! solve of the iteration is a settled contact solve and the iteration stays
 //! modified Newton (no consistent tangent; design in `press::inelastic`, "With
-//! contact tools"). Quasi-static integrator only; refused with
-//! `machine-compliance` (its exact step needs a step linear in
-//! the plate displacement), two material-point effects at once, and a dashpot law on
-//! a chain without `c3` (an elastic region). The slider's tangent is exact down to
+//! contact tools"). Quasi-static integrator only; with `machine-compliance` the
+//! deflection's scalar iteration wraps the step (above). Refused with two
+//! material-point effects at once, and a dashpot law on a chain without `c3` (an
+//! elastic region). The slider's tangent is exact down to
 //! `H = 1e-8 g` ([`crate::material::TANGENT_HARDENING`], a floor only so that
 //! `H = 0` does not make it singular; the earlier floor of 1 % of `g` stalled the
 //! steps after an instant release, where `g ~ B2/dt`). Perfect plasticity (`H = 0`) in
@@ -291,7 +298,7 @@
 //! tension already) and not a floor ("top region only"): the constrained
 //! frictionless plate, converted to a frictionless contact tool (a friction one
 //! with `plate-friction`), or the trial's own tools. Refused on a glued plate,
-//! on tools that are all glued or floors, with `machine-compliance`, with sensitivities, and with
+//! on tools that are all glued or floors, with sensitivities, and with
 //! the dynamic and the seed's integrators (contact needs the quasi-static one).
 //! **Nesting caveat:** the constrained frictionless plate is bilateral until
 //! `release_s`; the converted plate is unilateral. Where a plate withdraws before

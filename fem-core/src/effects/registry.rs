@@ -324,7 +324,7 @@ const MACHINE_COMPLIANCE: &[ParamSpec] = &[ParamSpec {
     stress_scale: StressScale::Fixed,
     plausible: [1e-4, 0.1],
     nuisance: false,
-    description: "compliance of the frame and load cell in series with the plate",
+    description: "compliance of the frame and load cell in series with the plate (or the moving tools)",
 }];
 
 const GRAVITY: &[ParamSpec] = &[ParamSpec {

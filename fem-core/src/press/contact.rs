@@ -308,6 +308,11 @@ pub(crate) struct ContactModel<'t> {
     /// Per candidate node, with adhesion: its boundary facets' outward unit normals
     /// and the node's consistent share of each facet's area [mm^2] (`int N_a dA`).
     facets: Vec<Vec<([f64; 3], f64)>>,
+    /// Per canonical tool: whether it rides on the crosshead, behind the machine
+    /// compliance (a tool that is not a floor and whose keyframes move it; see
+    /// `super::stepper`, "Machine compliance"). Its pose is lifted by
+    /// [`StepInput::lift`].
+    pub crosshead: Vec<bool>,
 }
 
 /// The adhesion of one pair: the node's strength `sigma_a A` [N] (`A` its facets'
@@ -378,6 +383,10 @@ pub(crate) struct StepInput<'a> {
     pub factor_key: u64,
     /// The unpenalized step matrix is `scale` times the one `factor_key` names.
     pub scale: f64,
+    /// The machine compliance's deflection at `t0` and at `t1` [mm]: the tools on
+    /// the crosshead ([`ContactModel::crosshead`]) sit this far above (+y) their
+    /// keyframes' pose. Zero without the `machine-compliance` effect.
+    pub lift: [f64; 2],
 }
 
 /// The outcome of a converged contact step.
@@ -509,7 +518,9 @@ impl<'t> ContactModel<'t> {
         } else {
             Vec::new()
         };
+        let crosshead = tools.iter().map(|t| on_crosshead(t.tool)).collect();
         Ok(Self {
+            crosshead,
             adhesion,
             adheres,
             facets,
@@ -542,6 +553,28 @@ impl<'t> ContactModel<'t> {
                 nodes: Vec::new(),
             })
             .collect()
+    }
+
+    /// The lift of tool `c` (canonical) at the step's start and end [mm]: the
+    /// machine's deflection on the crosshead tools, zero on the others.
+    fn lift(&self, c: usize, input: &StepInput<'_>) -> [f64; 2] {
+        if self.crosshead[c] {
+            input.lift
+        } else {
+            [0.0; 2]
+        }
+    }
+
+    /// The force the machine measures at a step end [N]: the sum over the
+    /// crosshead tools of the y components of the forces on them (compression
+    /// positive), as `samples` lists them (listed order).
+    pub fn crosshead_force(&self, samples: &[ToolSample]) -> f64 {
+        (0..self.tools.len()).filter(|&c| self.crosshead[c]).map(|c| samples[self.order[c]].force_n[1]).sum()
+    }
+
+    /// Whether a crosshead tool holds at `t1` (the deflection acts then).
+    pub fn crosshead_engaged(&self, t1: f64) -> bool {
+        (0..self.tools.len()).any(|c| self.crosshead[c] && self.engaged(c, t1))
     }
 
     /// Whether the tool `c` (canonical) holds at `t1`.
@@ -599,7 +632,7 @@ impl<'t> ContactModel<'t> {
             }
             for (j, p) in pairs.iter_mut().enumerate() {
                 if let Some(a) = p.anchor {
-                    let carried = self.tools[c].carry(a, t0, t1);
+                    let carried = self.tools[c].carry(a, t0, t1, self.lift(c, input));
                     if p.status == Status::Stuck && !moved[j] {
                         moved[j] = true;
                         let i = self.nodes[j] as usize;
@@ -630,7 +663,8 @@ impl<'t> ContactModel<'t> {
                 }
                 moved[j] = true;
                 let i = self.nodes[j];
-                let prox = self.tools[c].proximity(self.position(input, &u, i), t1, self.planar);
+                let prox =
+                    self.tools[c].proximity(self.position(input, &u, i), t1, self.lift(c, input)[1], self.planar);
                 for k in 0..d {
                     if !self.held[j][k] {
                         u[i as usize * d + k] -= prox.gap * prox.normal[k];
@@ -809,7 +843,7 @@ impl<'t> ContactModel<'t> {
                     }
                     let pair = &mut state.pairs[c][j];
                     let x = self.position(input, &u, i);
-                    let prox = placed.proximity(x, t1, self.planar);
+                    let prox = placed.proximity(x, t1, self.lift(c, input)[1], self.planar);
                     let rest = &input.rest[i as usize];
                     let dof = |k: usize| i as usize * d + k;
                     let status = if placed.tool.contact == ToolContact::Glued {
@@ -1017,7 +1051,7 @@ impl<'t> ContactModel<'t> {
                     continue;
                 }
                 let x = self.position(input, u, i);
-                let prox = placed.proximity(x, t1, self.planar);
+                let prox = placed.proximity(x, t1, self.lift(c, input)[1], self.planar);
                 let k = penalty[j];
                 let n = prox.normal;
                 let band = if band { OPEN_BAND * self.size[j] } else { 0.0 };
@@ -1201,7 +1235,7 @@ impl<'t> ContactModel<'t> {
                     let p = &state.pairs[c][j];
                     matches!(p.status, Status::Normal | Status::Stuck) && {
                         let x = self.position(input, u, i);
-                        let prox = placed.proximity(x, t1, self.planar);
+                        let prox = placed.proximity(x, t1, self.lift(c, input)[1], self.planar);
                         // A bonded pair pulls past its strength beyond the rounding
                         // band within which it keeps its status (see `law`).
                         let limit =
@@ -1226,7 +1260,7 @@ impl<'t> ContactModel<'t> {
                     continue;
                 }
                 let x = self.position(input, u, i);
-                let prox = placed.proximity(x, t1, self.planar);
+                let prox = placed.proximity(x, t1, self.lift(c, input)[1], self.planar);
                 let cohesion = self.cohesion(c, j, prox.normal);
                 let pair = &mut state.pairs[c][j];
                 let (_, force) = law(placed.tool.contact, pair, &prox, x, k[j], OPEN_BAND * self.size[j], cohesion);
@@ -1257,7 +1291,7 @@ impl<'t> ContactModel<'t> {
             for (j, &i) in self.nodes.iter().enumerate() {
                 let pair = &state.pairs[c][j];
                 let x = self.position(input, u, i);
-                let prox = placed.proximity(x, t1, self.planar);
+                let prox = placed.proximity(x, t1, self.lift(c, input)[1], self.planar);
                 let mut e = match pair.status {
                     Status::Open | Status::Cohesive => (-prox.gap).max(0.0),
                     _ => prox.gap.abs(),
@@ -1340,7 +1374,7 @@ impl<'t> ContactModel<'t> {
                     continue;
                 }
                 let x = self.position(input, &u, i);
-                let prox = placed.proximity(x, t1, self.planar);
+                let prox = placed.proximity(x, t1, self.lift(c, input)[1], self.planar);
                 if pair.status != Status::Cohesive {
                     if let ToolContact::Friction(_) = placed.tool.contact {
                         // The tangential multiplier is not part of the friction law (the
@@ -1395,6 +1429,12 @@ impl<'t> ContactModel<'t> {
         }
         Settled { state, u, forces, samples }
     }
+}
+
+/// Whether `tool` rides on the machine's crosshead, behind its compliance: a
+/// tool that is not a floor and that its keyframes move.
+pub(crate) fn on_crosshead(tool: &super::Tool) -> bool {
+    !tool.floor && tool.travel() > 0.0
 }
 
 /// The contact law of one pair at the position `x`: status, the force on the node

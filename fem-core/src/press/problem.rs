@@ -445,11 +445,11 @@ where
     /// `protocol.gravity` (which is the factor 1 already); `plate-friction` only on
     /// a frictionless constrained plate (the baseline it extends); `adhesion` on a
     /// frictionless constrained plate or on contact tools of which one presses and is
-    /// not glued; `machine-compliance` only on the constrained plate (not with
-    /// contact tools, plate friction or adhesion) and not next to a material-point
-    /// effect or a material's Mullins-type damage. The material-point effects and
-    /// the damage run with contact tools too (`super::inelastic`, "With contact
-    /// tools").
+    /// not glued; `machine-compliance` with contact tools only when one of them
+    /// moves and is not a floor (the crosshead's tools, `super::stepper`, "Machine
+    /// compliance"). The material-point effects and the damage run with contact
+    /// tools too (`super::inelastic`, "With contact tools"), and next to
+    /// `machine-compliance`.
     pub(crate) fn validate_effects(&self) -> Result<(), PressError> {
         let e = &self.effects;
         e.validate()?;
@@ -492,12 +492,13 @@ where
                 );
             }
         }
-        let contact = !self.tools.is_empty() || e.is_active(EffectId::PlateFriction) || e.is_active(EffectId::Adhesion);
-        if e.is_active(EffectId::MachineCompliance) && contact {
+        if e.is_active(EffectId::MachineCompliance)
+            && !self.tools.is_empty()
+            && !self.tools.iter().any(super::contact::on_crosshead)
+        {
             return conflict(
                 EffectId::MachineCompliance,
-                "acts on the constrained plate only; with contact tools (or plate friction, adhesion) it is not \
-                 implemented yet",
+                "acts on the tools that move (the crosshead's); this trial's tools are all floors or fixed",
             );
         }
         if let Some((_, name)) = self
@@ -509,23 +510,13 @@ where
             let refuse = |detail: String| {
                 Err(PressError::BadSettings(format!("material of region `{name}`: the Mullins-type damage {detail}")))
             };
-            if e.is_active(EffectId::MachineCompliance) {
-                return refuse("cannot be combined with machine compliance yet".into());
-            }
             if let Some((effect, _)) = e.material_point() {
                 return refuse(format!(
                     "cannot be combined with the material-point effect `{effect}` (one inelastic law per run)"
                 ));
             }
         }
-        if let Some((effect, _)) = e.material_point() {
-            if e.is_active(EffectId::MachineCompliance) {
-                return conflict(
-                    effect,
-                    "material-point effects cannot be combined with machine compliance yet (its exact step \
-                     needs a step linear in the plate displacement)",
-                );
-            }
+        if e.material_point().is_some() {
             for m in &self.materials {
                 e.inelastic_law(&m.rheology)?;
             }

@@ -30,6 +30,35 @@
 //! tools each of its solves is a settled contact solve (the contact iteration
 //! nested inside the material-point one; `super::inelastic`, "With contact tools").
 //!
+//! Machine compliance (the `machine-compliance` effect, `c = 1/k_m` [mm/N]): the
+//! machine's frame and load cell are a spring in series with what presses, along
+//! the push axis y. The crosshead follows the protocol (or the tools' keyframes);
+//! what presses lags it by the deflection `delta = c F`, `F` the force the
+//! machine measures at the step's end.
+//! - *Constrained plate:* the plate's displacement is `d_cmd - delta` and `F` the
+//!   plate force. On the linear path the step is affine in `delta` and solved in
+//!   closed form (`compliant_step`, [`crate::effects`]).
+//! - *Contact tools:* the crosshead carries every tool that is not a floor and
+//!   whose keyframes move it (`contact::on_crosshead`); all of them are lifted
+//!   together by `delta` along +y from their keyframes' pose (a rotation is kept),
+//!   and `F` is the sum of the y components of the forces on them, compression
+//!   positive (a fixed tool that is not a floor is not on the crosshead: its
+//!   force is reported in the plate force but not measured by the spring). The
+//!   contact state's anchors move with the lifted tools. Once every crosshead
+//!   tool has let go, `delta = 0`.
+//! - *Steps not affine in `delta`* (contact; the material-point path and the
+//!   Mullins damage, on the plate or with tools): a scalar iteration around the
+//!   step's own solve ([`deflected_step`]): `r(delta) = delta - c F(delta)` is
+//!   increasing (the force does not grow as the tools back off), the last step's
+//!   deflection and `c F` of it bracket its root, and Illinois closes the bracket
+//!   to `1e-11` of the displacement scale. Each evaluation is a whole step from
+//!   the old state (a settled contact solve, a converged material-point
+//!   iteration), so the accepted step's state is that of the step at the root.
+//!
+//! The reported plate (tool) force is `F`, and the relation `delta = c F` holds at
+//! every step end to the iteration's tolerance. Without the effect (or at its
+//! null) none of it runs and the steps are the baseline's bit for bit.
+//!
 //! Step control: the local error of the displacement is estimated against an
 //! extrapolation of the previous steps (quadratic for BDF2 steps, linear for BDF1
 //! ones), relative to `rtol` times the largest plate displacement; steps land on every
@@ -87,7 +116,7 @@ use std::time::Instant;
 use crate::parallel::map_collect;
 use nalgebra::{SMatrix, SVector};
 
-use super::contact::{ContactModel, StepInput, ToolSample, ToolTrack};
+use super::contact::{ContactModel, Settled, StepInput, ToolSample, ToolTrack};
 use super::inelastic::{self, PointInput};
 use super::model::{Constraints, Model};
 use super::result::{ForceSegment, RegionTerms};
@@ -228,6 +257,10 @@ where
         ));
     }
     let mut point_retries = 0usize;
+    // The machine's deflection at the state's time [mm] (0 without compliance),
+    // and the tolerance of its scalar iteration ([`deflected_step`]).
+    let mut deflection = 0.0;
+    let deflection_tol = DEFLECTION_RTOL * model.displacement_scale;
     let ndof = model.num_dofs();
     let ncell = problem.mesh.num_cells();
 
@@ -396,152 +429,176 @@ where
                 (constraints.plate_attached, step_key).hash(&mut hasher);
                 hasher.finish()
             };
-            let input = StepInput {
-                t0: state.t,
-                t1,
-                step: step_index + 1,
-                rest: &rest,
-                diagonal: &diagonal,
-                u0: &state.u,
-                factor_key,
-                scale: single_scale,
-            };
-            let mut settled = None;
             let refactored = Cell::new(false);
             let factorizations = Cell::new(0usize);
             let solves = Cell::new(0usize);
-            let outcome = {
-                let mut solve = |b: &[f64], u: &mut Vec<f64>| -> Result<Option<Vec<f64>>, PressError> {
-                    let mut inner = |hash: u64, penalty: &dyn Fn() -> Vec<f64>, extra: &[f64], cols: Option<usize>| {
-                        let key = (false, hash, step_key);
-                        let mut contact_factor = contact_factor.borrow_mut();
-                        if contact_factor.as_ref().map(|(k, _)| *k) != Some(key) {
-                            *contact_factor = None;
-                            let p: Vec<f64> = penalty().into_iter().map(|v| v / single_scale).collect();
-                            let mut terms: Vec<(f64, &[f64])> = model
-                                .groups
+            // The step with the crosshead tools lifted by `lift` [mm] at its end
+            // (machine compliance; 0 without), its contact forces rebalanced.
+            let take = |lift: f64| -> Result<(StepOutcome<S>, Settled), PressError> {
+                let input = StepInput {
+                    t0: state.t,
+                    t1,
+                    step: step_index + 1,
+                    rest: &rest,
+                    diagonal: &diagonal,
+                    u0: &state.u,
+                    factor_key,
+                    scale: single_scale,
+                    lift: [deflection, lift],
+                };
+                let mut settled = None;
+                let outcome = {
+                    let mut solve = |b: &[f64], u: &mut Vec<f64>| -> Result<Option<Vec<f64>>, PressError> {
+                        let mut inner =
+                            |hash: u64, penalty: &dyn Fn() -> Vec<f64>, extra: &[f64], cols: Option<usize>| {
+                                let key = (false, hash, step_key);
+                                let mut contact_factor = contact_factor.borrow_mut();
+                                if contact_factor.as_ref().map(|(k, _)| *k) != Some(key) {
+                                    *contact_factor = None;
+                                    let p: Vec<f64> = penalty().into_iter().map(|v| v / single_scale).collect();
+                                    let mut terms: Vec<(f64, &[f64])> = model
+                                        .groups
+                                        .iter()
+                                        .map(|g| {
+                                            let c = if single_group { 1.0 } else { step_factor(&g.kernel, h, bdf) };
+                                            (c, g.stiffness.as_slice())
+                                        })
+                                        .collect();
+                                    terms.push((1.0, p.as_slice()));
+                                    let factor = system
+                                        .factor(&terms, None)
+                                        .map_err(|e| model.singular(step_index + 1, t1, e))?;
+                                    factorizations.set(factorizations.get() + 1);
+                                    refactored.set(true);
+                                    *contact_factor = Some((key, factor));
+                                }
+                                let factor = &contact_factor.as_ref().expect("set above").1;
+                                solves.set(solves.get() + cols.unwrap_or(1));
+                                if let Some(ncols) = cols {
+                                    // Columns of the unpenalized matrix's inverse (contact's low-rank path).
+                                    let (nf, nd) = (system.dof_of_free.len(), u.len());
+                                    let mut x = vec![0.0; nf * ncols];
+                                    for c in 0..ncols {
+                                        for (i, &d) in system.dof_of_free.iter().enumerate() {
+                                            x[c * nf + i] = extra[c * nd + d as usize];
+                                        }
+                                    }
+                                    factor.solve_columns_in_place(&mut x, ncols);
+                                    let mut out = vec![0.0; nd * ncols];
+                                    for c in 0..ncols {
+                                        for (i, &d) in system.dof_of_free.iter().enumerate() {
+                                            out[c * nd + d as usize] = x[c * nf + i] / single_scale;
+                                        }
+                                    }
+                                    return Ok(out);
+                                }
+                                let mut x: Vec<f64> =
+                                    system.dof_of_free.iter().map(|&d| b[d as usize] + extra[d as usize]).collect();
+                                factor.solve_in_place(&mut x);
+                                let mut next = u.clone();
+                                for (i, &d) in system.dof_of_free.iter().enumerate() {
+                                    next[d as usize] = x[i] / single_scale;
+                                }
+                                Ok(next)
+                            };
+                        // The exact path: the held dofs cut off the matrix (same pattern,
+                        // same symbolic factorization), their coupling moved to the
+                        // right-hand side, their reactions `A u - b` from their rows.
+                        let coefficients: Vec<f64> =
+                            model.groups.iter().map(|g| step_factor(&g.kernel, h, bdf)).collect();
+                        let entry = |p: usize| -> f64 {
+                            model.groups.iter().zip(&coefficients).map(|(g, c)| c * g.stiffness[p]).sum::<f64>()
+                        };
+                        let mut eliminate = |hash: u64, held: &[(usize, f64)]| {
+                            let pattern = &model.pattern;
+                            let mut cut = vec![false; u.len()];
+                            held.iter().for_each(|&(dof, _)| cut[dof] = true);
+                            let key = (true, hash, step_key);
+                            let mut contact_factor = contact_factor.borrow_mut();
+                            if contact_factor.as_ref().map(|(k, _)| *k) != Some(key) {
+                                *contact_factor = None;
+                                let terms: Vec<(f64, &[f64])> = model
+                                    .groups
+                                    .iter()
+                                    .zip(&coefficients)
+                                    .map(|(g, &c)| (if single_group { 1.0 } else { c }, g.stiffness.as_slice()))
+                                    .collect();
+                                let factor = system
+                                    .factor_decoupled(&terms, &cut)
+                                    .map_err(|e| model.singular(step_index + 1, t1, e))?;
+                                factorizations.set(factorizations.get() + 1);
+                                refactored.set(true);
+                                *contact_factor = Some((key, factor));
+                            }
+                            let factor = &contact_factor.as_ref().expect("set above").1;
+                            solves.set(solves.get() + 1);
+                            let mut next = u.clone();
+                            let mut rhs = b.to_vec();
+                            for &(dof, v) in held {
+                                next[dof] = v;
+                                // The matrix is symmetric: column `dof` is row `dof`.
+                                for p in pattern.row_ptr[dof]..pattern.row_ptr[dof + 1] {
+                                    rhs[pattern.col_idx[p] as usize] -= entry(p) * v;
+                                }
+                            }
+                            let mut x: Vec<f64> = system
+                                .dof_of_free
                                 .iter()
-                                .map(|g| {
-                                    let c = if single_group { 1.0 } else { step_factor(&g.kernel, h, bdf) };
-                                    (c, g.stiffness.as_slice())
+                                .map(|&d| if cut[d as usize] { 0.0 } else { rhs[d as usize] })
+                                .collect();
+                            factor.solve_in_place(&mut x);
+                            for (i, &d) in system.dof_of_free.iter().enumerate() {
+                                if !cut[d as usize] {
+                                    next[d as usize] = x[i] / single_scale;
+                                }
+                            }
+                            // `b` holds the held dofs' coupling already: sum the free columns.
+                            let reactions = held
+                                .iter()
+                                .map(|&(dof, _)| {
+                                    (pattern.row_ptr[dof]..pattern.row_ptr[dof + 1])
+                                        .filter(|&p| system.free_of_dof[pattern.col_idx[p] as usize] != u32::MAX)
+                                        .map(|p| entry(p) * next[pattern.col_idx[p] as usize])
+                                        .sum::<f64>()
+                                        - b[dof]
                                 })
                                 .collect();
-                            terms.push((1.0, p.as_slice()));
-                            let factor =
-                                system.factor(&terms, None).map_err(|e| model.singular(step_index + 1, t1, e))?;
-                            factorizations.set(factorizations.get() + 1);
-                            refactored.set(true);
-                            *contact_factor = Some((key, factor));
+                            Ok((next, reactions))
+                        };
+                        let state0 = contact_state.as_ref().expect("contact runs have a state");
+                        // Start from the last step's displacement (the held dofs at their new values).
+                        let mut start = u.clone();
+                        for &d in &system.dof_of_free {
+                            start[d as usize] = state.u[d as usize];
                         }
-                        let factor = &contact_factor.as_ref().expect("set above").1;
-                        solves.set(solves.get() + cols.unwrap_or(1));
-                        if let Some(ncols) = cols {
-                            // Columns of the unpenalized matrix's inverse (contact's low-rank path).
-                            let (nf, nd) = (system.dof_of_free.len(), u.len());
-                            let mut x = vec![0.0; nf * ncols];
-                            for c in 0..ncols {
-                                for (i, &d) in system.dof_of_free.iter().enumerate() {
-                                    x[c * nf + i] = extra[c * nd + d as usize];
-                                }
-                            }
-                            factor.solve_columns_in_place(&mut x, ncols);
-                            let mut out = vec![0.0; nd * ncols];
-                            for c in 0..ncols {
-                                for (i, &d) in system.dof_of_free.iter().enumerate() {
-                                    out[c * nd + d as usize] = x[c * nf + i] / single_scale;
-                                }
-                            }
-                            return Ok(out);
-                        }
-                        let mut x: Vec<f64> =
-                            system.dof_of_free.iter().map(|&d| b[d as usize] + extra[d as usize]).collect();
-                        factor.solve_in_place(&mut x);
-                        let mut next = u.clone();
-                        for (i, &d) in system.dof_of_free.iter().enumerate() {
-                            next[d as usize] = x[i] / single_scale;
-                        }
-                        Ok(next)
+                        let s = cm.settle(&input, state0, start, &mut inner, &mut eliminate, model.pattern.nnz())?;
+                        *u = s.u.clone();
+                        let forces = s.forces.clone();
+                        settled = Some(s);
+                        Ok(Some(forces))
                     };
-                    // The exact path: the held dofs cut off the matrix (same pattern,
-                    // same symbolic factorization), their coupling moved to the
-                    // right-hand side, their reactions `A u - b` from their rows.
-                    let coefficients: Vec<f64> = model.groups.iter().map(|g| step_factor(&g.kernel, h, bdf)).collect();
-                    let entry = |p: usize| -> f64 {
-                        model.groups.iter().zip(&coefficients).map(|(g, c)| c * g.stiffness[p]).sum::<f64>()
+                    step(&model, &state, h, bdf, t1, constraints, system, &mut solve, ga, dynamic, step_index + 1, None)
+                }?;
+                let mut settled = settled.expect("a contact step solves at least once");
+                if let Some(r) = outcome.imbalance.as_ref() {
+                    cm.rebalance(&mut settled, r);
+                }
+                Ok((outcome, settled))
+            };
+            let taken = match compliance {
+                Some(c) if cm.crosshead_engaged(t1) => {
+                    let mut measured = |lift: f64| {
+                        let (o, s) = take(lift)?;
+                        let force = cm.crosshead_force(&s.samples);
+                        Ok(((o, s), force))
                     };
-                    let mut eliminate = |hash: u64, held: &[(usize, f64)]| {
-                        let pattern = &model.pattern;
-                        let mut cut = vec![false; u.len()];
-                        held.iter().for_each(|&(dof, _)| cut[dof] = true);
-                        let key = (true, hash, step_key);
-                        let mut contact_factor = contact_factor.borrow_mut();
-                        if contact_factor.as_ref().map(|(k, _)| *k) != Some(key) {
-                            *contact_factor = None;
-                            let terms: Vec<(f64, &[f64])> = model
-                                .groups
-                                .iter()
-                                .zip(&coefficients)
-                                .map(|(g, &c)| (if single_group { 1.0 } else { c }, g.stiffness.as_slice()))
-                                .collect();
-                            let factor = system
-                                .factor_decoupled(&terms, &cut)
-                                .map_err(|e| model.singular(step_index + 1, t1, e))?;
-                            factorizations.set(factorizations.get() + 1);
-                            refactored.set(true);
-                            *contact_factor = Some((key, factor));
-                        }
-                        let factor = &contact_factor.as_ref().expect("set above").1;
-                        solves.set(solves.get() + 1);
-                        let mut next = u.clone();
-                        let mut rhs = b.to_vec();
-                        for &(dof, v) in held {
-                            next[dof] = v;
-                            // The matrix is symmetric: column `dof` is row `dof`.
-                            for p in pattern.row_ptr[dof]..pattern.row_ptr[dof + 1] {
-                                rhs[pattern.col_idx[p] as usize] -= entry(p) * v;
-                            }
-                        }
-                        let mut x: Vec<f64> = system
-                            .dof_of_free
-                            .iter()
-                            .map(|&d| if cut[d as usize] { 0.0 } else { rhs[d as usize] })
-                            .collect();
-                        factor.solve_in_place(&mut x);
-                        for (i, &d) in system.dof_of_free.iter().enumerate() {
-                            if !cut[d as usize] {
-                                next[d as usize] = x[i] / single_scale;
-                            }
-                        }
-                        // `b` holds the held dofs' coupling already: sum the free columns.
-                        let reactions = held
-                            .iter()
-                            .map(|&(dof, _)| {
-                                (pattern.row_ptr[dof]..pattern.row_ptr[dof + 1])
-                                    .filter(|&p| system.free_of_dof[pattern.col_idx[p] as usize] != u32::MAX)
-                                    .map(|p| entry(p) * next[pattern.col_idx[p] as usize])
-                                    .sum::<f64>()
-                                    - b[dof]
-                            })
-                            .collect();
-                        Ok((next, reactions))
-                    };
-                    let state0 = contact_state.as_ref().expect("contact runs have a state");
-                    // Start from the last step's displacement (the held dofs at their new values).
-                    let mut start = u.clone();
-                    for &d in &system.dof_of_free {
-                        start[d as usize] = state.u[d as usize];
-                    }
-                    let s = cm.settle(&input, state0, start, &mut inner, &mut eliminate, model.pattern.nnz())?;
-                    *u = s.u.clone();
-                    let forces = s.forces.clone();
-                    settled = Some(s);
-                    Ok(Some(forces))
-                };
-                step(&model, &state, h, bdf, t1, constraints, system, &mut solve, ga, dynamic, step_index + 1, None)
+                    deflected_step(&mut measured, deflection, c, deflection_tol, step_index + 1, t1)
+                }
+                _ => take(0.0).map(|x| (x, 0.0)),
             };
             num_factorizations += factorizations.get();
             contact_solves += solves.get();
-            outcome.map(|o| (o, refactored.get(), settled))
+            taken.map(|((o, s), lift)| (o, refactored.get(), Some(s), lift))
         } else {
             // Numeric factor for this constraint set and step size.
             let key =
@@ -577,15 +634,26 @@ where
             let mut take = |plate_d: Option<f64>| {
                 step(&model, &state, h, bdf, t1, constraints, system, &mut solve, ga, dynamic, step_index + 1, plate_d)
             };
+            let d_cmd = protocol.displacement(t1);
             match compliance {
-                Some(c) if constraints.plate_attached => {
-                    compliant_step(&mut take, protocol.displacement(t1), model.displacement_scale, c)
+                // The linear step: exact in closed form.
+                Some(c) if constraints.plate_attached && model.point.is_none() => {
+                    compliant_step(&mut take, d_cmd, model.displacement_scale, c)
                 }
-                _ => take(None),
+                // The material-point path: the scalar iteration on the deflection.
+                Some(c) if constraints.plate_attached => {
+                    let mut measured = |lift: f64| {
+                        let o = take(Some(d_cmd - lift))?;
+                        let force = o.segment.eval_end()[1];
+                        Ok((o, force))
+                    };
+                    deflected_step(&mut measured, deflection, c, deflection_tol, step_index + 1, t1)
+                }
+                _ => take(None).map(|o| (o, 0.0)),
             }
-            .map(|o| (o, refactored, None))
+            .map(|(o, lift)| (o, refactored, None, lift))
         };
-        let (mut outcome, refactored, mut settled) = match stepped {
+        let (mut outcome, refactored, settled, lift) = match stepped {
             Ok(x) => x,
             Err(PressError::ContactNotSettled { .. }) if contact_retries < 3 && settings.step_ends_s.is_none() => {
                 // Retry at a quarter of the step before giving up.
@@ -604,9 +672,6 @@ where
         contact_retries = 0;
         point_retries = 0;
         num_factorizations += outcome.factorizations;
-        if let (Some(settled), Some(cm), Some(r)) = (settled.as_mut(), contact.as_ref(), outcome.imbalance.as_ref()) {
-            cm.rebalance(settled, r);
-        }
         if let Some(settled) = settled.as_ref() {
             let plate: f64 = settled
                 .samples
@@ -705,6 +770,7 @@ where
 
         // Accept.
         step_index += 1;
+        deflection = lift;
         let [bottom_force_n, plate_force_n] = outcome.segment.eval_end();
         steps.push(StepRecord {
             t_s: t1,
@@ -1175,16 +1241,130 @@ where
 /// `d_cmd - delta`, one factorization) give `F(d) = F(d_cmd) + k (d - d_cmd)`, the
 /// relation gives `d = d_cmd - c F(d_cmd) / (1 + c k)` in closed form, and a third
 /// step takes it there (every state variable that of the exact step).
+/// Returns the step and the machine's deflection `d_cmd - d` [mm].
 fn compliant_step<const S: usize>(
     take: &mut dyn FnMut(Option<f64>) -> Result<StepOutcome<S>, PressError>,
     d_cmd: f64,
     delta: f64,
     c: f64,
-) -> Result<StepOutcome<S>, PressError> {
+) -> Result<(StepOutcome<S>, f64), PressError> {
     let f_cmd = take(Some(d_cmd))?.segment.eval_end()[1];
     let f_probe = take(Some(d_cmd - delta))?.segment.eval_end()[1];
     let k = (f_cmd - f_probe) / delta;
-    take(Some(d_cmd - c * f_cmd / (1.0 + c * k)))
+    let deflection = c * f_cmd / (1.0 + c * k);
+    take(Some(d_cmd - deflection)).map(|o| (o, deflection))
+}
+
+/// The tolerance of the deflection's scalar iteration on its residual `delta - c
+/// F`, relative to the displacement scale: the force's error is then at most the
+/// residual times `min(k, 1/c)` (`k` the step's stiffness against the
+/// deflection), at most this fraction of the peak force on the plate, and far
+/// less on a soft machine.
+const DEFLECTION_RTOL: f64 = 1e-11;
+/// Evaluations of the deflection's scalar iteration before a step counts as not
+/// converged (a step affine in the deflection takes three; the bracket halves at
+/// least every third evaluation).
+const DEFLECTION_ITERATIONS: usize = 150;
+
+/// A step behind a series spring of compliance `c` [mm/N] whose step is not
+/// affine in the deflection (the material-point path; contact tools): the
+/// deflection `delta` [mm] that solves `r(delta) = delta - c F(delta) = 0`, `F`
+/// the force the machine measures at the step's end with the tools (or the
+/// plate) held back by `delta`. `take(delta)` takes the step and returns it
+/// with that force.
+///
+/// The force does not grow as the tools back off (`F' <= 0`), so `r' >= 1`: one
+/// root, and `delta_0` (the last step's deflection) and `delta_1 = c F(delta_0)`
+/// bracket it (`r(delta_1) = c (F(delta_0) - F(delta_1))` has the sign opposite to
+/// `r(delta_0) = delta_0 - delta_1`). Illinois (regula falsi halving the weight of
+/// a side kept twice) then closes the bracket superlinearly: an affine step takes
+/// three evaluations (the bracket, then the root), as the closed form does. `F`
+/// has kinks where the contact set changes: a tool that just touches (the
+/// first step of a push, whose viscous force is steep) leaves `r` piecewise
+/// affine with slopes `1 + c k` and `1`, on which regula falsi creeps; so the
+/// bracket is bisected whenever two evaluations have not halved it.
+/// Converged at `|r| <= tol`, or when the bracket cannot shrink further in
+/// floating point (the end with the smaller residual). A force that grows as the
+/// tools back off (no sign change), or no convergence in
+/// [`DEFLECTION_ITERATIONS`] evaluations, is [`PressError::NotConverged`] (the
+/// step is then retried shorter). Every state variable is that of the step
+/// taken at the returned deflection.
+fn deflected_step<T>(
+    take: &mut dyn FnMut(f64) -> Result<(T, f64), PressError>,
+    guess: f64,
+    c: f64,
+    tol: f64,
+    step: usize,
+    t1: f64,
+) -> Result<(T, f64), PressError> {
+    let not_converged =
+        |detail: String| PressError::NotConverged { step, time_s: t1, detail: format!("machine compliance: {detail}") };
+    let (outcome, force) = take(guess)?;
+    let r = guess - c * force;
+    if r.abs() <= tol {
+        return Ok((outcome, guess));
+    }
+    // (deflection, residual, weighted residual, outcome) at the bracket's ends.
+    let mut a = (guess, r, r, outcome);
+    let next = c * force;
+    let (outcome, force) = take(next)?;
+    let r = next - c * force;
+    if r.abs() <= tol {
+        return Ok((outcome, next));
+    }
+    if r.signum() == a.1.signum() {
+        return Err(not_converged(format!(
+            "the measured force grows as the tools back off (deflection {:.6e} mm: residual {:.3e} mm; {next:.6e} mm: \
+             {r:.3e} mm)",
+            a.0, a.1
+        )));
+    }
+    let mut b = (next, r, r, outcome);
+    // The side replaced last: -1 for `a`, 1 for `b`.
+    let mut side = 0;
+    // The bracket's width when it last halved, and the evaluations since.
+    let (mut halved_at, mut since) = ((b.0 - a.0).abs(), 0);
+    for _ in 2..DEFLECTION_ITERATIONS {
+        let x = if since >= 2 {
+            since = 0;
+            0.5 * (a.0 + b.0)
+        } else {
+            (a.0 * b.2 - b.0 * a.2) / (b.2 - a.2)
+        };
+        let (outcome, force) = take(x)?;
+        let r = x - c * force;
+        if r.abs() <= tol {
+            return Ok((outcome, x));
+        }
+        if r.signum() == a.1.signum() {
+            a = (x, r, r, outcome);
+            if side == -1 {
+                b.2 *= 0.5;
+            }
+            side = -1;
+        } else {
+            b = (x, r, r, outcome);
+            if side == 1 {
+                a.2 *= 0.5;
+            }
+            side = 1;
+        }
+        let width = (b.0 - a.0).abs();
+        if width <= 0.5 * halved_at {
+            (halved_at, since) = (width, 0);
+        } else {
+            since += 1;
+        }
+        if width <= 4.0 * f64::EPSILON * a.0.abs().max(b.0.abs()) {
+            let best = if a.1.abs() <= b.1.abs() { a } else { b };
+            return Ok((best.3, best.0));
+        }
+    }
+    Err(not_converged(format!(
+        "the deflection did not settle in {DEFLECTION_ITERATIONS} steps (bracket [{:.6e}, {:.6e}] mm, residuals {:.3e}, \
+         {:.3e} mm)",
+        a.0, b.0, a.1, b.1
+    )))
 }
 
 /// Records marker positions at their requested times inside `(t0, t1]` (or at 0).

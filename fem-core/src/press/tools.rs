@@ -317,15 +317,20 @@ impl<'t> PlacedTool<'t> {
         Ok(Self { tool, shape, scale })
     }
 
-    fn pose(&self, t: f64) -> Pose {
-        let (tr, rv) = self.tool.pose_at(t);
+    /// The pose at time `t`, lifted by `lift` [mm] along +y (the machine
+    /// compliance's deflection; `0`: the keyframes' pose exactly).
+    fn pose(&self, t: f64, lift: f64) -> Pose {
+        let (mut tr, rv) = self.tool.pose_at(t);
+        if lift != 0.0 {
+            tr[1] += lift;
+        }
         pose(&Keyframe { t_s: t, translation_mm: tr, rotation_rad: rv })
     }
 
-    /// The closest point of the tool at time `t` to `x`; in 2D (`planar`) the
-    /// normal's z part is dropped.
-    pub fn proximity(&self, x: [f64; 3], t: f64, planar: bool) -> Proximity {
-        let pose = self.pose(t);
+    /// The closest point of the tool at time `t`, lifted by `lift` [mm] along +y,
+    /// to `x`; in 2D (`planar`) the normal's z part is dropped.
+    pub fn proximity(&self, x: [f64; 3], t: f64, lift: f64, planar: bool) -> Proximity {
+        let pose = self.pose(t, lift);
         let q = Vector::new(x[0], x[1], x[2]);
         let proj = self.shape.project_point(&pose, q, false);
         let d = q - proj.point;
@@ -361,10 +366,11 @@ impl<'t> PlacedTool<'t> {
         Proximity { gap: sign * dist, normal, point: [proj.point.x, proj.point.y, proj.point.z] }
     }
 
-    /// A world point carried by the tool from time `t0` to `t1` (a material point of the tool).
-    pub fn carry(&self, x: [f64; 3], t0: f64, t1: f64) -> [f64; 3] {
-        let local = self.pose(t0).inverse_transform_point(Vector::new(x[0], x[1], x[2]));
-        let w = self.pose(t1).transform_point(local);
+    /// A world point carried by the tool from time `t0` (lifted by `lift[0]`) to
+    /// `t1` (lifted by `lift[1]`): a material point of the tool.
+    pub fn carry(&self, x: [f64; 3], t0: f64, t1: f64, lift: [f64; 2]) -> [f64; 3] {
+        let local = self.pose(t0, lift[0]).inverse_transform_point(Vector::new(x[0], x[1], x[2]));
+        let w = self.pose(t1, lift[1]).transform_point(local);
         [w.x, w.y, w.z]
     }
 }
@@ -379,14 +385,19 @@ mod tests {
             Tool::plate_above("p", [0.0; 3], [10.0, 5.0, 10.0], &[[0.0, 0.0], [1.0, 1.0]], ToolContact::Glued, 2.0);
         tool.validate().unwrap();
         let placed = PlacedTool::new(&tool).unwrap();
-        let p = placed.proximity([3.0, 5.0, 4.0], 0.0, false);
+        let p = placed.proximity([3.0, 5.0, 4.0], 0.0, 0.0, false);
         assert!(p.gap.abs() < 1e-12);
         assert!((p.normal[1] + 1.0).abs() < 1e-12, "{:?}", p.normal);
-        let p = placed.proximity([3.0, 5.0, 4.0], 0.5, false);
+        let p = placed.proximity([3.0, 5.0, 4.0], 0.5, 0.0, false);
         assert!((p.gap + 0.5).abs() < 1e-12, "{}", p.gap);
         assert!((p.normal[1] + 1.0).abs() < 1e-12);
-        let c = placed.carry([3.0, 5.0, 4.0], 0.0, 1.0);
+        let c = placed.carry([3.0, 5.0, 4.0], 0.0, 1.0, [0.0; 2]);
         assert!((c[1] - 4.0).abs() < 1e-12);
+        // Lifted by 0.2 mm (a machine's deflection): the gap and the carried point move up with it.
+        let p = placed.proximity([3.0, 5.0, 4.0], 0.5, 0.2, false);
+        assert!((p.gap + 0.3).abs() < 1e-12, "{}", p.gap);
+        let c = placed.carry([3.0, 5.0, 4.0], 0.0, 1.0, [0.1, 0.3]);
+        assert!((c[1] - 4.2).abs() < 1e-12, "{c:?}");
     }
 
     #[test]
@@ -400,12 +411,12 @@ mod tests {
             f64::INFINITY,
         );
         let placed = PlacedTool::new(&tool).unwrap();
-        let p = placed.proximity([0.0, 0.5, 0.0], 0.0, false);
+        let p = placed.proximity([0.0, 0.5, 0.0], 0.0, 0.0, false);
         assert!((p.gap - 0.5).abs() < 1e-12);
         assert!((p.normal[1] + 1.0).abs() < 1e-12);
-        let p = placed.proximity([0.0, 0.5, 0.0], 1.0, false);
+        let p = placed.proximity([0.0, 0.5, 0.0], 1.0, 0.0, false);
         assert!((p.gap + 0.5).abs() < 1e-12);
-        let p = placed.proximity([1.0, 1.0, 0.0], 0.0, true);
+        let p = placed.proximity([1.0, 1.0, 0.0], 0.0, 0.0, true);
         let expect = (1.0f64 + 4.0).sqrt() - 2.0;
         assert!((p.gap - expect).abs() < 1e-12);
     }

@@ -25,7 +25,7 @@
 //! (nothing identifies them; `wagashi fit` and the diagnosis difference such
 //! trials, since the damage runs without forward sensitivities), and `wagashi press`
 //! runs them on the quasi-static integrator, with the constrained plate or with
-//! contact tools (not with machine compliance or a material-point effect).
+//! contact tools, also with machine compliance (not with a material-point effect).
 
 use std::collections::BTreeMap;
 use std::path::Path;

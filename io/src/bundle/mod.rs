@@ -53,7 +53,7 @@
 //! force_offset_N = 0.02               # force-offset b0 [N]: reported force F + b0 + b1 t
 //! force_drift_N_per_s = 1e-4          # force-offset b1 [N/s]
 //! gravity = 1.0                       # gravity factor in [0, 1] (density as below)
-//! machine_compliance_mm_per_N = 0.01  # 1/k_m [mm/N]: the plate moves d_cmd - F/k_m
+//! machine_compliance_mm_per_N = 0.01  # 1/k_m [mm/N]: the plate moves d_cmd - F/k_m (see below)
 //! ageing_E_rate_per_h = 0.01          # ageing gamma_E [1/h]: E_i -> E_i exp(gamma_E age_h)
 //! ageing_c_rate_per_h = -0.02         # ageing gamma_c [1/h]: c_i -> c_i exp(gamma_c age_h)
 //! age_h = 5.0                         # trial covariate: hours since preparation (needed by ageing)
@@ -72,9 +72,17 @@
 //!
 //! The last eight are the material-point effects (`fem_core::effects`): at most
 //! one of them per trial, on the constrained plate or with contact tools (also
-//! with `plate_friction` and `adhesion_strength_MPa`), not with
-//! `machine_compliance_mm_per_N`; the dashpot ones need a chain with `c3` (not
+//! with `plate_friction`, `adhesion_strength_MPa` and
+//! `machine_compliance_mm_per_N`); the dashpot ones need a chain with `c3` (not
 //! `elastic`).
+//!
+//! `machine_compliance_mm_per_N` is a spring in series with what presses, along
+//! the push axis y. With contact tools (the trial's tool, `[[protocol.tools]]`, or
+//! the plate that `plate_friction` and `adhesion_strength_MPa` make a contact
+//! tool) it acts on the crosshead's tools, every tool that moves and is not a
+//! floor: they are held back together by `F/k_m` along y, `F` the sum of the y
+//! components of the forces on them (the load cell's reading). It needs at least
+//! one such tool.
 //!
 //! Unit suffixes read as the format's (`_N`, `_mm`, `_MPa`) with `_per_` for a
 //! quotient (`_N_per_s` is N/s, `_mm_per_N` mm/N, `_per_h` 1/h), since `_MPa_s`
@@ -103,7 +111,7 @@
 //! `age_h`; `gravity` together with `[protocol] gravity = true` (the factor 1
 //! already); `plate_friction` on a plate that is not frictionless or on a trial
 //! with contact tools (give the tool's `friction` there); `machine_compliance_mm_per_N`
-//! with contact tools, plate friction or adhesion; `adhesion_strength_MPa` on a
+//! with contact tools that are all floors or fixed; `adhesion_strength_MPa` on a
 //! glued plate or on tools that are all glued.
 //!
 //! `plate_friction = mu` makes the trial the one with `tool_contact = "friction"`,
