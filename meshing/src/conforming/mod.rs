@@ -224,6 +224,7 @@ mod perturb;
 mod recover;
 mod refine;
 mod smooth;
+mod star;
 
 use std::collections::{BTreeMap, HashMap};
 use std::time::Instant;
@@ -237,6 +238,7 @@ pub use flip::FlipStats;
 pub use perturb::insphere;
 pub use refine::RefineStats;
 pub use smooth::SmoothStats;
+pub use star::StarStats;
 
 /// Passes of sliver smoothing.
 pub const SMOOTHING_PASSES: usize = 8;
@@ -346,6 +348,8 @@ pub struct ConformingStats {
     pub refinement: RefineStats,
     /// Edge removal around slivers, before smoothing (`flip.rs`).
     pub flips: FlipStats,
+    /// Star insertion around slivers and caps, after edge removal (`star.rs`).
+    pub stars: StarStats,
     /// Sliver smoothing.
     pub smoothing: SmoothStats,
     /// Smoothing for the radius-edge ratio, after sliver smoothing.
@@ -475,6 +479,7 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
     let mut smoothing = SmoothStats::default();
     let mut radius_edge_smoothing = SmoothStats::default();
     let mut flips = FlipStats::default();
+    let mut stars = StarStats::default();
     if options.sliver_deg > 0.0 {
         // `compact` numbers the used vertices in increasing order.
         let used: std::collections::BTreeSet<u32> = cell_tets.iter().flatten().copied().collect();
@@ -493,9 +498,17 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
             })
             .collect();
         flips = flip::remove_edges(&nodes, &mut cells, &mut cell_regions, &constrained, options.sliver_deg);
-        let all = rec.freedom();
-        let freedom: Vec<recover::Freedom> = used.iter().map(|&v| all[v as usize]).collect();
         let max_volume = options.size_mm.map_or(f64::INFINITY, |h| h.powi(3) / (6.0 * 2f64.sqrt()));
+        stars =
+            star::insert_stars(&mut nodes, &mut cells, &mut cell_regions, &constrained, options.sliver_deg, max_volume);
+        let all = rec.freedom();
+        // The points star insertion added are interior: free.
+        let freedom: Vec<recover::Freedom> = used
+            .iter()
+            .map(|&v| all[v as usize])
+            .chain(std::iter::repeat(recover::Freedom::Free))
+            .take(nodes.len())
+            .collect();
         smoothing = smooth::smooth(&mut nodes, &cells, &freedom, options.sliver_deg, max_volume, SMOOTHING_PASSES);
         if options.radius_edge.is_finite() {
             radius_edge_smoothing = smooth::smooth_radius_edge(
@@ -533,6 +546,7 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
         delaunay_tets,
         refinement,
         flips,
+        stars,
         smoothing,
         radius_edge_smoothing,
         time_s: start.elapsed().as_secs_f64(),
