@@ -110,7 +110,20 @@
 //!    0.3 mm 6.21..167.84 deg to 10.00..159.99 deg, 0.007 % under 10 deg to
 //!    0 (115 removals, 12 on rings of 4; the 3-2 flip alone made 38); the
 //!    armadillo's caps mostly stay ("What is not done"; BENCHMARKS.md).
-//! 6. **Smoothing** (`smooth.rs`): Steiner vertices of bad tets (smallest
+//! 6. **Star insertion** (`star.rs`): for a tet still under the sliver bound
+//!    (caps first), a new interior point replaces a cavity of tets with its
+//!    star: the cavity grows from the tet into the neighbours whose
+//!    circumball contains the point, never across a subfacet nor into another
+//!    region, and is then grown or shrunk until the point sees every face of
+//!    its boundary strictly from inside (exact `orient3d`), so the star's tets
+//!    are positive and fill the cavity exactly; the boundary, the interfaces
+//!    and every existing point stay as they were. Candidates: the apexes of
+//!    regular tets over the tet's boundary faces (three heights), their mean
+//!    for a cap, its circumcentre; the best star is taken when its worst tet
+//!    beats the cavity's and no tet exceeds the volume bound. This is the
+//!    constrained insertion the Delaunay stages cannot make on a bent scan
+//!    ("What is not done").
+//! 7. **Smoothing** (`smooth.rs`): Steiner vertices of bad tets (smallest
 //!    dihedral angle, or 180 deg minus the largest, under the sliver bound)
 //!    move to the candidate position that most raises that quality over their
 //!    star, never inverting a tet (exact `orient3d`) nor exceeding the volume

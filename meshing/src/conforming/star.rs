@@ -7,15 +7,17 @@
 //! interior point `p` replaces a *cavity* of tets by the *star* of `p`: the
 //! tets joining `p` to the cavity's boundary faces. The cavity
 //!
-//! 1. starts as `t` and grows, breadth first, into the neighbours whose
-//!    circumball contains `p` (exact `insphere`), as Bowyer–Watson would,
-//!    but never across a constrained face (a subfacet: boundary or region
-//!    interface, given by the caller; a face with one tet counts too), nor
-//!    into a tet of another region, up to half of [`MAX_CAVITY`] tets;
+//! 1. starts as `t` and, in one of the two cavities tried for each point,
+//!    grows, breadth first, into the neighbours whose circumball contains
+//!    `p` (exact `insphere`), as Bowyer–Watson would, up to half of
+//!    [`MAX_CAVITY`] tets (the other cavity skips this step: the smallest
+//!    one the next step finds);
 //! 2. is then made *star-shaped* from `p`: while one of its boundary faces
 //!    does not have `p` strictly on its inner side (exact [`orient3d`]), the
-//!    cavity grows across that face when it may (it is not constrained and
-//!    the tet beyond was not dropped), else the tet inside it is dropped
+//!    cavity grows across that face when it may (it is not constrained, a
+//!    subfacet: boundary or region interface, given by the caller, or a face
+//!    with one tet; the tet beyond is of the same region and was not
+//!    dropped), else the tet inside it is dropped
 //!    (and never taken back); dropping `t` itself, or growing past
 //!    [`MAX_CAVITY`] tets, refuses `p`.
 //!
@@ -46,7 +48,11 @@
 //! and `t`'s circumcentre when its circumradius is at most twice its longest
 //! edge. The candidate whose star has the best worst tet wins, and the
 //! insertion is made only when that worst tet is better than the cavity's
-//! worst and no new tet exceeds the volume bound. Bad tets are visited caps
+//! worst, the star has fewer tets under the sliver bound than the cavity,
+//! and no new tet exceeds the volume bound. Without the second condition the
+//! stars traded each cap for several slivers (tets from the point to surface
+//! faces seen at a grazing angle): the armadillo at 8 mm went from 3.44 % of
+//! tets under 10 deg to 7.11 %. Bad tets are visited caps
 //! first, then by increasing quality, then by index, in rounds (at most
 //! [`STAR_ROUNDS`]) while a round inserts something; new bad tets join the
 //! queue. Sequential, every choice in a fixed order: the result depends on
@@ -123,6 +129,8 @@ struct Insertion {
     faces: Vec<[u32; 3]>,
     quality: f64,
     old: f64,
+    bad_new: usize,
+    bad_old: usize,
 }
 
 impl Work<'_> {
@@ -202,7 +210,7 @@ impl Work<'_> {
 
     /// The insertion of `p` for the bad cell `t` (module docs), when `p`'s
     /// star is valid and within the volume bound.
-    fn insertion(&self, t: u32, p: Point, max_volume: f64) -> Option<Insertion> {
+    fn insertion(&self, t: u32, p: Point, max_volume: f64, circumballs: bool, sliver_deg: f64) -> Option<Insertion> {
         let region = self.regions[t as usize];
         let mut member: FxHashSet<u32> = FxHashSet::default();
         let mut dropped: FxHashSet<u32> = FxHashSet::default();
@@ -220,7 +228,8 @@ impl Work<'_> {
                     continue;
                 }
                 let q = self.cells[u as usize].map(|v| self.point(v));
-                if order.len() < MAX_CAVITY / 2
+                if circumballs
+                    && order.len() < MAX_CAVITY / 2
                     && orient3d(q[0], q[1], q[2], q[3]) == 1
                     && insphere(q[0], q[1], q[2], q[3], p) == 1
                 {
@@ -294,16 +303,21 @@ impl Work<'_> {
             return None;
         }
         let mut worst = f64::INFINITY;
+        let mut bad_new = 0;
         for f in &boundary {
             let q = [self.point(f[0]), self.point(f[1]), self.point(f[2]), p];
             if volume(q) > max_volume {
                 return None;
             }
             let (lo, hi) = dihedral_range_deg(&q);
-            worst = worst.min(angle_quality(lo, hi));
+            let a = angle_quality(lo, hi);
+            worst = worst.min(a);
+            bad_new += usize::from(a < sliver_deg);
         }
-        let old = cavity.iter().map(|&k| quality(&self.nodes, self.cells[k as usize])).fold(f64::INFINITY, f64::min);
-        Some(Insertion { p, cavity, faces: boundary, quality: worst, old })
+        let old_q: Vec<f64> = cavity.iter().map(|&k| quality(&self.nodes, self.cells[k as usize])).collect();
+        let old = old_q.iter().copied().fold(f64::INFINITY, f64::min);
+        let bad_old = old_q.iter().filter(|&&q| q < sliver_deg).count();
+        Some(Insertion { p, cavity, faces: boundary, quality: worst, old, bad_new, bad_old })
     }
 
     fn kill(&mut self, k: u32) {
@@ -406,9 +420,14 @@ pub fn insert_stars(
             }
             let mut chosen: Option<Insertion> = None;
             for p in w.candidates(t) {
-                let Some(s) = w.insertion(t, p, max_volume) else { continue };
-                if s.quality > s.old && chosen.as_ref().is_none_or(|c| s.quality > c.quality) {
-                    chosen = Some(s);
+                for circumballs in [false, true] {
+                    let Some(s) = w.insertion(t, p, max_volume, circumballs, sliver_deg) else { continue };
+                    if s.quality > s.old
+                        && s.bad_new < s.bad_old
+                        && chosen.as_ref().is_none_or(|c| s.quality > c.quality)
+                    {
+                        chosen = Some(s);
+                    }
                 }
             }
             let Some(s) = chosen else {
@@ -574,9 +593,9 @@ mod tests {
                 constrained,
             }
         };
-        let open = work(&free).insertion(0, p, f64::INFINITY).expect("star of p without the subfacet");
+        let open = work(&free).insertion(0, p, f64::INFINITY, true, 10.0).expect("star of p without the subfacet");
         assert_eq!(open.cavity.len(), 5);
-        assert!(work(&split).insertion(0, p, f64::INFINITY).is_none());
+        assert!(work(&split).insertion(0, p, f64::INFINITY, true, 10.0).is_none());
         let (mut nodes, mut cells) = (nodes.clone(), cells.clone());
         let before: f64 = cells.iter().map(|&t| volume_of(&nodes, t)).sum();
         let mut regions = vec![0u16; cells.len()];
