@@ -209,8 +209,15 @@
 //! 24). Of 122 285 visits of a cap that removed nothing, 121 482 stopped at
 //! an edge whose ring of tets was over the bound or open (counted before the
 //! two were told apart: `FlipStats::cap_refusals`), 208 found no positive
-//! triangulation and 593 none better. Cavities of interior points bounded
-//! by the subfacets (constrained Delaunay insertion) are the next step.
+//! triangulation and 593 none better. Star insertion (stage 6: cavities
+//! of interior points bounded by the subfacets) removes few of them (session
+//! 17, BENCHMARKS.md): accepted whenever the star's worst tet beat the
+//! cavity's, it cut the caps under 10 deg from 15 290 to 4 998 but each star
+//! joined its point to neighbouring surface faces at grazing angles, and the
+//! fraction under 10 deg rose from 3.44 % to 7.11 %; accepted only with fewer
+//! slivers than the cavity (kept), 290 insertions (68 for caps) leave 15 199
+//! caps and 3.40 %. Candidates placed for the cavity's whole surface patch
+//! rather than the cap's two faces are the next thing to try.
 //!
 //! Quality refinement runs on a copy of the state, each boundary recovery it
 //! triggers bounded (20 000 points) and its cap splits bounded (as many as the
