@@ -147,9 +147,9 @@ const MODELS: [Model; 6] = [
     // refinement, edge removal (rings up to 12 tets) and star insertion
     // (15 199 of 15 290 caps left) do not remove (module docs of
     // `meshing::conforming`, "What is not done").
-    // Ours takes about 3 min of CPU on it (178 s user in session 16, 5 to 5.5
-    // min read with `ps` with star insertion at load 12, session 17; 366 s wall in this test at load 8
-    // to 12 in session 16), TetGen 19 s: over the 2 min a model may take in
+    // Ours takes 3 to 5.5 min of CPU on it (178 s user in session 16; 5 to
+    // 5.5 min read with `ps` with star insertion at load 12, session 17; 366
+    // s wall in this test at load 8 to 12, session 16), TetGen 19 s: over the 2 min a model may take in
     // CI, so only TetGen's figures are checked here (`gates: None`); with
     // `gates: Some(&[Gate::Count])` the test runs ours and asserts count,
     // orientation, volume and Hausdorff (passed, session 15).
