@@ -116,7 +116,7 @@ fn main() {
                 let r = report(&m.mesh, &s, t);
                 println!(
                     "h {h:?} q {q} sliver {sliver}: {} tets, dihedral {:.2}..{:.2}, <10deg {:.3} %, r-e max {:.2} p99.9 {:.3}, \
-                     vol err {:.1e}, Hausdorff {:.1e}, {t:.2} s\n  {:?}\n  {:?}",
+                     vol err {:.1e}, Hausdorff {:.1e}, {t:.2} s\n  {:?}\n  {:?}\n  {:?}",
                     r.num_cells,
                     r.min_dihedral_deg,
                     r.max_dihedral_deg,
@@ -126,7 +126,8 @@ fn main() {
                     r.volume_error,
                     r.hausdorff_relative,
                     m.stats.refinement,
-                    m.stats.flips
+                    m.stats.flips,
+                    m.stats.stars
                 );
             }
             Err(e) => println!("h {h:?}: {e}"),

@@ -110,7 +110,20 @@
 //!    0.3 mm 6.21..167.84 deg to 10.00..159.99 deg, 0.007 % under 10 deg to
 //!    0 (115 removals, 12 on rings of 4; the 3-2 flip alone made 38); the
 //!    armadillo's caps mostly stay ("What is not done"; BENCHMARKS.md).
-//! 6. **Smoothing** (`smooth.rs`): Steiner vertices of bad tets (smallest
+//! 6. **Star insertion** (`star.rs`): for a tet still under the sliver bound
+//!    (caps first), a new interior point replaces a cavity of tets with its
+//!    star: the cavity grows from the tet into the neighbours whose
+//!    circumball contains the point, never across a subfacet nor into another
+//!    region, and is then grown or shrunk until the point sees every face of
+//!    its boundary strictly from inside (exact `orient3d`), so the star's tets
+//!    are positive and fill the cavity exactly; the boundary, the interfaces
+//!    and every existing point stay as they were. Candidates: the apexes of
+//!    regular tets over the tet's boundary faces (three heights), their mean
+//!    for a cap, its circumcentre; the best star is taken when its worst tet
+//!    beats the cavity's and no tet exceeds the volume bound. This is the
+//!    constrained insertion the Delaunay stages cannot make on a bent scan
+//!    ("What is not done").
+//! 7. **Smoothing** (`smooth.rs`): Steiner vertices of bad tets (smallest
 //!    dihedral angle, or 180 deg minus the largest, under the sliver bound)
 //!    move to the candidate position that most raises that quality over their
 //!    star, never inverting a tet (exact `orient3d`) nor exceeding the volume
@@ -196,8 +209,15 @@
 //! 24). Of 122 285 visits of a cap that removed nothing, 121 482 stopped at
 //! an edge whose ring of tets was over the bound or open (counted before the
 //! two were told apart: `FlipStats::cap_refusals`), 208 found no positive
-//! triangulation and 593 none better. Cavities of interior points bounded
-//! by the subfacets (constrained Delaunay insertion) are the next step.
+//! triangulation and 593 none better. Star insertion (stage 6: cavities
+//! of interior points bounded by the subfacets) removes few of them (session
+//! 17, BENCHMARKS.md): accepted whenever the star's worst tet beat the
+//! cavity's, it cut the caps under 10 deg from 15 290 to 4 998 but each star
+//! joined its point to neighbouring surface faces at grazing angles, and the
+//! fraction under 10 deg rose from 3.44 % to 7.11 %; accepted only with fewer
+//! slivers than the cavity (kept), 290 insertions (68 for caps) leave 15 199
+//! caps and 3.40 %. Candidates placed for the cavity's whole surface patch
+//! rather than the cap's two faces are the next thing to try.
 //!
 //! Quality refinement runs on a copy of the state, each boundary recovery it
 //! triggers bounded (20 000 points) and its cap splits bounded (as many as the
@@ -224,6 +244,7 @@ mod perturb;
 mod recover;
 mod refine;
 mod smooth;
+mod star;
 
 use std::collections::{BTreeMap, HashMap};
 use std::time::Instant;
@@ -237,6 +258,7 @@ pub use flip::FlipStats;
 pub use perturb::insphere;
 pub use refine::RefineStats;
 pub use smooth::SmoothStats;
+pub use star::StarStats;
 
 /// Passes of sliver smoothing.
 pub const SMOOTHING_PASSES: usize = 8;
@@ -346,6 +368,8 @@ pub struct ConformingStats {
     pub refinement: RefineStats,
     /// Edge removal around slivers, before smoothing (`flip.rs`).
     pub flips: FlipStats,
+    /// Star insertion around slivers and caps, after edge removal (`star.rs`).
+    pub stars: StarStats,
     /// Sliver smoothing.
     pub smoothing: SmoothStats,
     /// Smoothing for the radius-edge ratio, after sliver smoothing.
@@ -475,6 +499,7 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
     let mut smoothing = SmoothStats::default();
     let mut radius_edge_smoothing = SmoothStats::default();
     let mut flips = FlipStats::default();
+    let mut stars = StarStats::default();
     if options.sliver_deg > 0.0 {
         // `compact` numbers the used vertices in increasing order.
         let used: std::collections::BTreeSet<u32> = cell_tets.iter().flatten().copied().collect();
@@ -493,9 +518,17 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
             })
             .collect();
         flips = flip::remove_edges(&nodes, &mut cells, &mut cell_regions, &constrained, options.sliver_deg);
-        let all = rec.freedom();
-        let freedom: Vec<recover::Freedom> = used.iter().map(|&v| all[v as usize]).collect();
         let max_volume = options.size_mm.map_or(f64::INFINITY, |h| h.powi(3) / (6.0 * 2f64.sqrt()));
+        stars =
+            star::insert_stars(&mut nodes, &mut cells, &mut cell_regions, &constrained, options.sliver_deg, max_volume);
+        let all = rec.freedom();
+        // The points star insertion added are interior: free.
+        let freedom: Vec<recover::Freedom> = used
+            .iter()
+            .map(|&v| all[v as usize])
+            .chain(std::iter::repeat(recover::Freedom::Free))
+            .take(nodes.len())
+            .collect();
         smoothing = smooth::smooth(&mut nodes, &cells, &freedom, options.sliver_deg, max_volume, SMOOTHING_PASSES);
         if options.radius_edge.is_finite() {
             radius_edge_smoothing = smooth::smooth_radius_edge(
@@ -533,6 +566,7 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
         delaunay_tets,
         refinement,
         flips,
+        stars,
         smoothing,
         radius_edge_smoothing,
         time_s: start.elapsed().as_secs_f64(),

@@ -1,4 +1,4 @@
-//! Sliver removal by smoothing (stage 6), after refinement.
+//! Sliver removal by smoothing (stage 7), after refinement, edge removal and star insertion.
 //!
 //! Steiner points move; input vertices do not. How far a Steiner point may
 //! move depends on where it lies (`Recovery::freedom`): one inside a region
