@@ -621,12 +621,11 @@ impl<'t> ContactModel<'t> {
         // retreating tool opens a gap of its whole increment in the first pass:
         // every pair opens, the first solve springs the body back clear of the
         // tool, and the iteration restarts from there. With adhesion every bonded
-        // pair would start the step torn off; without, a punch or sphere lifting
-        // off an elastic sweet did not settle (session 17; tests/contact.rs,
-        // `sphere_lifts_off_an_elastic_sweet`) and the slider's unloading took
-        // thousands of steps and left a dent that drifted with the step
-        // (`tests/material_point_contact.rs`). A pair that truly separates opens
-        // in the iteration as before.
+        // pair would start the step torn off; without, a sphere lifting off an
+        // elastic sweet did not settle (session 17; tests/contact.rs,
+        // `sphere_lifts_off_an_elastic_sweet`) and a punch's unloading with a
+        // slider took thousands of adaptive steps (`tests/material_point_contact.rs`).
+        // A pair that truly separates opens in the iteration as before.
         for (c, pairs) in state.pairs.iter().enumerate() {
             if !self.engaged(c, t1) || self.tools[c].tool.contact == ToolContact::Glued {
                 continue;
