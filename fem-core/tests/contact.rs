@@ -559,3 +559,78 @@ fn flat_plate_tool_is_exact_with_one_solve_per_step() {
         }
     }
 }
+
+/// Regression (session 16: "contact did not settle" at the first unloading step):
+/// a frictionless sphere (R = 5 mm) pressed 1 mm into a purely elastic
+/// axisymmetric sweet (radius and height 10 mm) in 5 s, lifted to 1 mm above
+/// the top by 10 s, left to 40 s; fixed 0.25 s steps and adaptive ones. The
+/// cause: at a step's start the retreating tool opened every pair (its whole
+/// increment as gap), so the first solve sprang the body back flat and the
+/// iteration restarted from far off; pairs in contact now start each step on
+/// their tool. Checked: the elastic body is path-independent, so unloading
+/// retraces loading (the force at depths where a loading step ended, 3 on fixed
+/// steps: measured 3.4e-10 of the peak, asserted 1e-6); the sphere touches with
+/// a positive force while deeper than 0.01 mm and not at all once above the top
+/// (lift-off at depth 0, t = 7.5 s); the floor carries the sphere's load
+/// (measured 6e-15 and 7.5e-15 of the peak, asserted 1e-6); the shape recovers
+/// (largest displacement at the end, measured 0, asserted 1e-9 mm). Before:
+/// fixed steps failed at t = 5.0039 s, adaptive ones took 27,051 steps and failed
+/// at t = 6.87 s; now 161 and 109 steps.
+#[test]
+fn sphere_lifts_off_an_elastic_sweet() {
+    let body = 10.0;
+    let radius = 5.0;
+    let mesh = mesh::indentation_section(body, body, 0.5, 3.0, 1.3, "sweet").unwrap();
+    let mut protocol = Protocol::ramp_hold_release(0.2, 5.0, 40.0, 40.0);
+    protocol.waypoints = vec![[0.0, 0.0], [5.0, 1.0], [10.0, -1.0]];
+    protocol.support = Attachment::Frictionless;
+    protocol.plate = Attachment::Frictionless;
+    let mut problem = AxisymmetricPress::new_axisymmetric(mesh, vec![elastic(0.05, 0.3)], protocol.clone()).unwrap();
+    problem.tools = vec![Tool::moving_down(
+        "sphere",
+        ToolShape::Sphere { radius },
+        [0.0, body + radius, 0.0],
+        &protocol.waypoints,
+        ToolContact::Frictionless,
+        f64::INFINITY,
+    )];
+    let fixed = Settings { fixed_dt_s: Some(0.25), max_dt_s: Some(0.25), ..Settings::default() };
+    for (name, settings) in [("fixed", fixed), ("adaptive", Settings::default())] {
+        let r = press::simulate(&problem, &settings, &mut |_| {}).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let samples = &r.tools[0].samples;
+        let peak = samples.iter().map(|s| s.force_n[1]).fold(0.0, f64::max);
+        let depth = |t: f64| interpolate(&protocol.waypoints, t);
+        // The loading branch's force at the same depth, where a loading step ended there.
+        let loading_at =
+            |d: f64| samples.iter().find(|s| s.t_s > 0.0 && s.t_s <= 5.0 + 1e-9 && (depth(s.t_s) - d).abs() <= 1e-9);
+        let (mut retrace, mut compared): (f64, usize) = (0.0, 0);
+        let mut floor: f64 = 0.0;
+        for s in samples.iter().filter(|s| s.t_s > 0.0) {
+            floor = floor.max((r.bottom_force_at(s.t_s) - s.force_n[1]).abs() / peak);
+            if let Some(l) = loading_at(depth(s.t_s)).filter(|_| s.t_s > 5.0 + 1e-9 && depth(s.t_s) > 1e-9) {
+                retrace = retrace.max((s.force_n[1] - l.force_n[1]).abs() / peak);
+                compared += 1;
+            }
+            if depth(s.t_s) > 1e-2 {
+                assert!(s.area_mm2 > 0.0 && s.force_n[1] > 0.0, "{name}: lifted off early at {} s: {s:?}", s.t_s);
+            }
+            if depth(s.t_s) < -1e-9 {
+                assert!(s.area_mm2 == 0.0 && s.force_n[1] == 0.0, "{name}: still touching at {} s: {s:?}", s.t_s);
+            }
+        }
+        let end = r.snapshot_at(protocol.end_s).unwrap();
+        let shape = end.displacement.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        eprintln!(
+            "{name}: {} steps, peak {peak:.4e} N, unloading retraces loading to {retrace:.2e} of the peak at \
+             {compared} depths, floor {floor:.2e} of the peak, final displacement {shape:.2e} mm",
+            r.steps.len()
+        );
+        if name == "fixed" {
+            // Fixed steps meet the loading depths until a contact retry shifts the grid.
+            assert!(compared >= 3, "{name}: {compared} unloading depths on the loading grid");
+        }
+        assert!(retrace <= 1e-6, "{name}: unloading differs from loading by {retrace:.3e} of the peak");
+        assert!(floor <= 1e-6, "{name}: floor and sphere differ by {floor:.3e} of the peak");
+        assert!(shape <= 1e-9, "{name}: the elastic sweet keeps {shape:.3e} mm");
+    }
+}
