@@ -605,6 +605,9 @@ where
         point_retries = 0;
         num_factorizations += outcome.factorizations;
         if let (Some(settled), Some(cm), Some(r)) = (settled.as_mut(), contact.as_ref(), outcome.imbalance.as_ref()) {
+            if outcome.contact_scale != 1.0 {
+                settled.scale_forces(outcome.contact_scale);
+            }
             cm.rebalance(settled, r);
         }
         if let Some(settled) = settled.as_ref() {
@@ -858,6 +861,9 @@ struct StepOutcome<const S: usize> {
     imbalance: Option<Vec<f64>>,
     /// Factorizations the step made itself (the material-point path's tangents).
     factorizations: usize,
+    /// The factor the last contact solve's forces are to be multiplied by (the
+    /// material-point iteration's scaled operator; 1 otherwise).
+    contact_scale: f64,
 }
 
 impl ForceSegment {
@@ -1143,9 +1149,9 @@ where
         stress.push(s1);
     }
     let strain_prev = s0.strain.clone();
-    let (inelastic, unloading, damage_history, factorizations) = match point {
-        Some(p) => (p.inelastic, p.unloading, p.history, p.factorizations),
-        None => (Vec::new(), Vec::new(), Vec::new(), 0),
+    let (inelastic, unloading, damage_history, factorizations, contact_scale) = match point {
+        Some(p) => (p.inelastic, p.unloading, p.history, p.factorizations, p.operator),
+        None => (Vec::new(), Vec::new(), Vec::new(), 0, 1.0),
     };
     Ok(StepOutcome {
         state: State {
@@ -1166,6 +1172,7 @@ where
         residual,
         imbalance,
         factorizations,
+        contact_scale,
     })
 }
 
