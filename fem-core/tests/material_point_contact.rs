@@ -29,6 +29,14 @@ fn set_effects(p: &mut AnyPress, effects: &Effects) {
     }
 }
 
+fn set_protocol(p: &mut AnyPress, protocol: &Protocol) {
+    match p {
+        AnyPress::Plane(p) => p.protocol = protocol.clone(),
+        AnyPress::Solid(p) => p.protocol = protocol.clone(),
+        AnyPress::Axisymmetric(p) => p.protocol = protocol.clone(),
+    }
+}
+
 /// The block in plane stress, axisymmetric and 3D.
 fn problems(m: &Material, protocol: &Protocol) -> Vec<(&'static str, AnyPress)> {
     vec![
@@ -255,6 +263,14 @@ fn null_effects_with_tools_are_the_baseline() {
     }
 }
 
+/// The bottom force's tolerance of the press-release-press comparison: each
+/// step's iteration stops at 1e-12 of its force scale, which holds the inelastic
+/// force's share, about `a |e|_C / 2` = 12 times the chain's force at 50 %
+/// compression (the plate runs above stay at 1.8e-11 of the peak); over the ~700
+/// steps of the first stroke, with the step retries at the turnaround, the two
+/// runs drift apart by up to 2.1e-10 of the peak (measured, axisymmetric).
+const STIFF_BOTTOM_TOL: f64 = 1e-9;
+
 /// Strong strain stiffening: `a` at its upper bound 50.
 fn strong_stiffening() -> Effects {
     Effects::none().with(EffectId::StrainStiffening, &[50.0]).unwrap()
@@ -267,8 +283,10 @@ fn strong_stiffening() -> Effects {
 /// tangents"); with the chain's own matrix it overshot and diverged. A
 /// frictionless plate tool on a frictionless floor reproduces the frictionless
 /// plate's run, and a glued tool the glued plate's, to [`FORCE_TOL`] (bottom
-/// force, shape) and [`TOOL_TOL`] (tool force). Measured: see the doc of
-/// `STIFFENING_MEASURED` below.
+/// force, shape) and [`TOOL_TOL`] (tool force). Measured (session 17),
+/// frictionless: bottom force 1.8e-11 of the peak, tool force 3.8e-11 to 6.2e-11,
+/// shape 9.7e-12 mm (570 steps); glued: bottom force 8e-13 to 3.6e-12, tool force
+/// 1.3e-11 to 9.3e-11, shape 6.9e-13 mm (66 steps); plane, axisymmetric, solid.
 #[test]
 fn plate_tools_with_strong_strain_stiffening_reproduce_the_plates_at_half_compression() {
     for (attachment, contact) in
@@ -287,8 +305,11 @@ fn plate_tools_with_strong_strain_stiffening_reproduce_the_plates_at_half_compre
 /// plate rises, so the tool lifts off during the back-up and touches again in the
 /// second press. The run reaches its end; while the tool first holds (every step
 /// end up to its first lift-off) its force and the bottom force match the
-/// constrained frictionless plate's replay of the same steps to [`TOOL_TOL`] and
-/// [`FORCE_TOL`] of the peak.
+/// constrained frictionless plate's replay of the same steps (to the lift-off) to
+/// [`TOOL_TOL`] and [`STIFF_BOTTOM_TOL`] of the peak. Measured (session 17):
+/// lift-off at 14.13 s (plane), 14.18 s (axisymmetric), contact again at 23.27
+/// s, second peaks 0.98 of the first; tool force 1.3e-10 / 9.8e-11, bottom force
+/// 3.1e-11 / 2.1e-10 of the peak (plane / axisymmetric; 783 and 735 steps).
 #[test]
 fn strong_stiffening_with_a_plate_tool_runs_press_release_press() {
     let mut protocol = Protocol::ramp_hold_release(0.75, 10.0, 30.0, 40.0);
@@ -307,8 +328,15 @@ fn strong_stiffening_with_a_plate_tool_runs_press_release_press() {
         let t_lift = samples[lift].t_s;
         let again = samples[lift..].iter().find(|s| s.area_mm2 > 0.0 && s.t_s < protocol.release_s);
         let peak2 = samples.iter().filter(|s| s.t_s > t_lift).map(|s| s.force_n[1].abs()).fold(0.0, f64::max);
-        let replay = Settings { step_ends_s: Some(got.steps.iter().map(|s| s.t_s).collect()), ..Settings::default() };
-        let expected = press::simulate_any(&reference, &replay, &mut |_| {}).unwrap();
+        // The constrained plate replays the steps up to the lift-off (it would pull
+        // the specimen back with the plate after that).
+        let ends: Vec<f64> = got.steps.iter().map(|s| s.t_s).filter(|&t| t <= t_lift).collect();
+        let mut first = protocol.clone();
+        first.waypoints = vec![[0.0, 0.0], [10.0, 7.5], [t_lift, 7.5 * (20.0 - t_lift) / 10.0]];
+        (first.release_s, first.end_s) = (t_lift, t_lift);
+        set_protocol(&mut reference, &first);
+        let replay = Settings { step_ends_s: Some(ends), ..Settings::default() };
+        let expected = press::simulate_any(&reference, &replay, &mut |_| {}).unwrap_or_else(|e| panic!("{name}: {e}"));
         let peak = expected.peak_force();
         let (mut worst_tool, mut worst_bottom): (f64, f64) = (0.0, 0.0);
         for s in samples[..lift].iter() {
@@ -327,6 +355,6 @@ fn strong_stiffening_with_a_plate_tool_runs_press_release_press() {
         assert!(again.is_some() && peak2 > 0.5 * peak, "{name}: second press peak {peak2} N of {peak} N");
         assert!(lift >= 5, "{name}: {lift} samples in contact");
         assert!(worst_tool <= TOOL_TOL, "{name}: tool force differs by {worst_tool:.3e} of the peak");
-        assert!(worst_bottom <= FORCE_TOL, "{name}: bottom force differs by {worst_bottom:.3e} of the peak");
+        assert!(worst_bottom <= STIFF_BOTTOM_TOL, "{name}: bottom force differs by {worst_bottom:.3e} of the peak");
     }
 }

@@ -599,6 +599,15 @@ where
                 dt = h / 4.0;
                 continue;
             }
+            Err(PressError::Inverted { .. })
+                if point_retries < 3 && settings.step_ends_s.is_none() && model.point.is_some() =>
+            {
+                // On the material-point path a step too long for a strong effect may end on
+                // an inverted cell (strong stiffening as a tool lifts off); retried as above.
+                point_retries += 1;
+                dt = h / 4.0;
+                continue;
+            }
             Err(e) => return Err(e),
         };
         contact_retries = 0;
