@@ -400,6 +400,26 @@ pub(crate) struct Settled {
     pub samples: Vec<ToolSample>,
 }
 
+impl Settled {
+    /// Multiplies every contact force and multiplier by `factor`: the settle of a
+    /// right-hand side divided by `factor` (the material-point iteration's scaled
+    /// operator, [`super::inelastic`], "Stiffer tangents"; glued and frictionless
+    /// tools only, whose solve is homogeneous in the forces) reports its forces at
+    /// the true scale.
+    pub fn scale_forces(&mut self, factor: f64) {
+        self.forces.iter_mut().for_each(|f| *f *= factor);
+        for sample in &mut self.samples {
+            sample.force_n.iter_mut().for_each(|f| *f *= factor);
+            sample.normal_n *= factor;
+            sample.tangential_n *= factor;
+        }
+        for pair in self.state.pairs.iter_mut().flatten() {
+            pair.lambda_n *= factor;
+            pair.lambda_t.iter_mut().for_each(|f| *f *= factor);
+        }
+    }
+}
+
 impl<'t> ContactModel<'t> {
     pub fn new<const D: usize, const N: usize, const S: usize>(
         problem: &'t PressProblem<D, N, S>,

@@ -64,11 +64,52 @@
 //! iteration and make the contact's exact path, its low-rank path for curved
 //! tools and its column cache depend on the material state. The price is linear
 //! convergence: a strong effect that contracts slowly is not switched to full
-//! Newton here; it takes more iterations, and a step that does not converge in
+//! Newton here (a tangent much stiffer than the chain's scales the operator
+//! instead: "Stiffer tangents" below); it takes more iterations, and a step that does not converge in
 //! [`MAX_ITERATIONS`] is retried at a quarter of its length by the stepper. The
 //! stepper's reported contact forces are rebalanced to the cells' nodal forces
 //! at the converged state ([`PointStep::out_of_balance`]), so tool and plate
 //! forces are the equilibrium reactions of the final inelastic strains.
+//!
+//! ## Stiffer tangents (the scaled operator)
+//! The fixed point above is Richardson's iteration preconditioned by the chain's
+//! linear matrix `A`: it contracts while every cell's tangent `T` (relative to
+//! the chain, `d tau1 / d tau_trial`) has its eigenvalues in `(0, 2)`. The
+//! softening laws (slider, Bingham, thinning, the damage, E4 with `psi < 0`) stay
+//! below 1 there. Strain stiffening does not: at `a = 50` and 50 % compression
+//! `1 + a |e|_C` is about 26, each iteration overshot about 25-fold, and the run
+//! ended with a non-finite displacement (the real fungi-steak double compression,
+//! VALIDATION.md). So, with contact tools, the iteration runs on the scaled
+//! operator `c A`:
+//!
+//! ```text
+//! c A u_k+1 - F_c = base + x_k,    x_k+1 = f_in(u_k+1) + (c - 1) A u_free,k+1
+//! ```
+//!
+//! whose fixed point is the step's equilibrium `A u - F_c = base + f_in(u)` (the
+//! residual `x_k - x_k+1` is exactly the free rows' out-of-balance force, so the
+//! tolerance is the same). A scalar factor costs no factorization: the contact
+//! solve of `c A` is that of `A` with the right-hand side over `c` and the
+//! contact forces times `c` (the same minimization under the same constraints;
+//! the augmented Lagrangian's penalties then act `c` times softer, which changes
+//! its iterations, not its answer). `c = (1 + t_max) / 2`, `t_max` the largest
+//! eigenvalue of the cells' tangents ([`tangent_bound`], at most 5.8 % above it),
+//! the Richardson optimum for eigenvalues in `[1, t_max]`: every eigenvalue of
+//! `(c A)^-1 K_T` then lies in `(0, 2)` (the constrained subspace's too, by the
+//! Rayleigh quotient) and Anderson's acceleration works on a contraction. Only
+//! with glued and frictionless tools and no adhesion: friction's stick
+//! increments and the cohesive zone carry forces from the step's start and
+//! absolute strengths, so their solve is not homogeneous in the forces; with them
+//! `c` stays 1 (and a strong stiffening may still diverge, as a typed error).
+//! `c` starts at 1, is set from the tangents of each solve's state when
+//! `t_max` exceeds [`OPERATOR_SWITCH`] and retargeted (with a fresh Anderson
+//! history and a plain step) when the target moves by more than
+//! [`OPERATOR_RETARGET`]; while `t_max` stays at most [`OPERATOR_SWITCH`] (every
+//! law but stiffening with `a > 0` and E4 with `psi > 0`) `c` stays 1 and the
+//! iteration does exactly what it did before. A fixed point that still diverges
+//! (its residual past [`DIVERGED_GROWTH`] times its least) or a non-finite
+//! displacement ends the step with [`PressError::NotConverged`] naming the step,
+//! the time and an element, and the stepper retries it shorter.
 //!
 //! E6 (`finite-strain`) changes the kinematics, not the law: its steps take
 //! [`solve_finite_step`] (the blended Green-Lagrange strain, the internal force
@@ -125,6 +166,10 @@ pub(crate) struct PointStep<const S: usize> {
     /// With contact tools: the out-of-balance force `f_int(u1) - f_body` per dof at
     /// the returned state, contact forces not subtracted (empty without tools).
     pub out_of_balance: Vec<f64>,
+    /// With contact tools: the operator's factor `c` of the last solve (module doc,
+    /// "Stiffer tangents"); `contact_forces` are already multiplied by it, the
+    /// contact module's record of that solve is not. 1 otherwise.
+    pub operator: f64,
 }
 
 /// Inputs of the step's iteration that the linear step already computed.
@@ -240,6 +285,47 @@ impl<'s> Anderson<'s> {
         }
         out
     }
+}
+
+/// The operator's switch: with contact tools the fixed point keeps the chain's
+/// linear matrix while every cell's tangent is at most this multiple of the
+/// chain's (module doc, "Stiffer tangents"); past it the operator is scaled.
+pub(crate) const OPERATOR_SWITCH: f64 = 1.5;
+/// The scaled operator's factor is retargeted when the cells' stiffest tangent
+/// calls for a factor more than this ratio away from the current one.
+pub(crate) const OPERATOR_RETARGET: f64 = 1.25;
+/// With contact tools the fixed point is stopped as diverged when its residual
+/// grows past this multiple of the least one so far (an error naming the
+/// element, before the displacements overflow).
+pub(crate) const DIVERGED_GROWTH: f64 = 1e8;
+
+/// An upper bound of the largest eigenvalue of a cell's tangent `T` (`C1 T` is
+/// symmetric and `C1` positive definite, so `T` is similar to a symmetric matrix
+/// and its eigenvalues are real): `trace(T^32)^(1/32)`, which lies between the
+/// largest eigenvalue in size and `S^(1/32)` times it (at most 5.8 % above for
+/// `S = 6`). Repeated squaring with a renormalization at each square; the
+/// Frobenius norm (a looser bound) if the trace is not positive and finite.
+pub(crate) fn tangent_bound<const S: usize>(t: &SMatrix<f64, S, S>) -> f64 {
+    let size = t.norm();
+    if !(size > 0.0 && size.is_finite()) {
+        return size;
+    }
+    let mut p = t / size;
+    let mut log = 0.0;
+    for _ in 0..5 {
+        p = p * p;
+        let f = p.norm();
+        if !(f > 0.0 && f.is_finite()) {
+            return size;
+        }
+        p /= f;
+        log = 2.0 * log + f.ln();
+    }
+    let trace = p.trace();
+    if !(trace > 0.0 && trace.is_finite()) {
+        return size;
+    }
+    (size * ((log + trace.ln()) / 32.0).exp()).min(size)
 }
 
 /// The norm of `v` over the free dofs.
@@ -400,6 +486,15 @@ where
     let mut unloading: Vec<bool> = if directional { input.unloading0.to_vec() } else { Vec::new() };
     let not_converged = |detail: String| PressError::NotConverged { step: input.step, time_s: input.t1, detail };
     let mut factorizations = 0usize;
+    // The scaled operator needs a contact solve homogeneous in the forces (module
+    // doc, "Stiffer tangents"): glued and frictionless tools, no adhesion.
+    let scalable = input.contact
+        && model.problem.effects.adhesion().is_none()
+        && model
+            .problem
+            .tools
+            .iter()
+            .all(|t| matches!(t.contact, super::ToolContact::Glued | super::ToolContact::Frictionless));
 
     // f_in = sum_e w B^T C1 g e_in.
     let inelastic_force = |e_in: &(dyn Fn(usize) -> SVector<f64, S> + Sync)| -> Vec<f64> {
@@ -458,7 +553,11 @@ where
         let evaluate = |u: &[f64]| -> Result<Evaluation<S>, PressError> {
             for &d in &system.dof_of_free {
                 if !u[d as usize].is_finite() {
-                    return Err(not_converged(format!("non-finite displacement at dof {d}")));
+                    let node = d as usize / D;
+                    let element = model.cell_of_node(node).unwrap_or(usize::MAX);
+                    return Err(not_converged(format!(
+                        "element {element}: non-finite displacement at node {node} (dof {d})"
+                    )));
                 }
             }
             let updates = local(u).map_err(failure)?;
@@ -484,24 +583,76 @@ where
         let mut f_next: Option<Vec<f64>> = None;
         let mut anderson = Anderson::new(system);
         let (linear_scale, mut scale) = (scale, scale);
+        // With contact: the operator's factor `c` (module doc, "Stiffer tangents"),
+        // and the least residual so far (the divergence guard's reference).
+        let mut operator = 1.0;
+        let mut least = f64::INFINITY;
+        let mut plain_next = false;
         for iteration in 0..MAX_ITERATIONS {
             let Evaluation { updates, residual, norm } = match searched.take() {
                 Some(x) => x,
                 None => {
-                    let b: Vec<f64> = input.base.iter().zip(&f_in).map(|(b, f)| b + f).collect();
+                    // The contact solve of `c A u - F_c = base + x` is that of `A u -
+                    // F_c / c = (base + x) / c`; at c = 1 the very same operations as ever.
+                    let b: Vec<f64> = if operator == 1.0 {
+                        input.base.iter().zip(&f_in).map(|(b, f)| b + f).collect()
+                    } else {
+                        input.base.iter().zip(&f_in).map(|(b, f)| (b + f) / operator).collect()
+                    };
                     let forces = solve(&b, u1)?;
                     let evaluation = evaluate(u1)?;
                     match forces.filter(|_| input.contact) {
                         None => evaluation,
-                        Some(forces) => {
-                            // The fixed point's residual: the change of the inelastic
-                            // force (the contact forces are the reactions of the solve).
-                            let next = inelastic_force(&|e| evaluation.updates[e].1.inelastic);
+                        Some(mut forces) => {
+                            if operator != 1.0 {
+                                forces.iter_mut().for_each(|f| *f *= operator);
+                            }
+                            // The fixed point's residual: the change of the right-hand
+                            // side's extra force, `f_in(u) + (c - 1) A u_free` (the
+                            // contact forces are the reactions of the solve).
+                            let inelastic = inelastic_force(&|e| evaluation.updates[e].1.inelastic);
+                            // The cells' stiffest tangent sets the operator for the next solve.
+                            let stiffest = map_collect(ncell, |e| tangent_bound(&evaluation.updates[e].1.tangent))
+                                .into_iter()
+                                .fold(1.0, f64::max);
+                            let target =
+                                if scalable && stiffest > OPERATOR_SWITCH { 0.5 * (1.0 + stiffest) } else { 1.0 };
+                            let retarget =
+                                target > OPERATOR_RETARGET * operator || target * OPERATOR_RETARGET < operator;
+                            // The chain's linear force of the free displacements, `A u_free`.
+                            let linear = (operator != 1.0 || retarget).then(|| {
+                                let mut free = vec![0.0; ndof];
+                                for &d in &system.dof_of_free {
+                                    free[d as usize] = u1[d as usize];
+                                }
+                                inelastic_force(&|e| {
+                                    cell_strain::<D, N, S>(
+                                        &model.geometry[e].gradients,
+                                        &model.cell_displacements(e, &free),
+                                    )
+                                })
+                            });
+                            let extra = |c: f64| -> Vec<f64> {
+                                match linear.as_ref().filter(|_| c != 1.0) {
+                                    None => inelastic.clone(),
+                                    Some(l) => inelastic.iter().zip(l).map(|(f, l)| f + (c - 1.0) * l).collect(),
+                                }
+                            };
+                            let next = extra(operator);
                             let change: Vec<f64> = f_in.iter().zip(&next).map(|(a, b)| a - b).collect();
                             let norm = free_norm(system, &change);
                             scale = (linear_scale.powi(2) + free_norm(system, &forces).powi(2)).sqrt();
                             contact = Some((forces, evaluation.residual));
-                            f_next = Some(next);
+                            if retarget && norm > TOLERANCE * scale {
+                                // A new fixed-point map: its plain step, a fresh history.
+                                operator = target;
+                                anderson = Anderson::new(system);
+                                least = f64::INFINITY;
+                                plain_next = true;
+                                f_next = Some(extra(operator));
+                            } else {
+                                f_next = Some(next);
+                            }
                             Evaluation { updates: evaluation.updates, residual: change, norm }
                         }
                     }
@@ -511,8 +662,8 @@ where
                 converged = Some((updates, norm));
                 break;
             }
-            if iteration + 1 == MAX_ITERATIONS {
-                // Name the cell at the largest out-of-balance nodal force.
+            // Name the cell at the largest out-of-balance nodal force.
+            let worst_cell = |residual: &[f64]| {
                 let worst = system
                     .dof_of_free
                     .iter()
@@ -520,7 +671,22 @@ where
                     .max_by(|&a, &b| residual[a].abs().total_cmp(&residual[b].abs()))
                     .unwrap_or(0);
                 let node = worst / D;
-                let element = model.cell_of_node(node).unwrap_or(usize::MAX);
+                (model.cell_of_node(node).unwrap_or(usize::MAX), node, worst)
+            };
+            if input.contact && contact.is_some() {
+                if !norm.is_finite() || norm > DIVERGED_GROWTH * least {
+                    let (element, node, worst) = worst_cell(&residual);
+                    return Err(not_converged(format!(
+                        "element {element}: the contact fixed point diverged (residual {:.3e} of the force scale, \
+                         {:.1e} times its least, at iteration {iteration}; largest at node {node}, dof {worst})",
+                        norm / scale,
+                        norm / least
+                    )));
+                }
+                least = least.min(norm);
+            }
+            if iteration + 1 == MAX_ITERATIONS {
+                let (element, node, worst) = worst_cell(&residual);
                 return Err(not_converged(format!(
                     "element {element}: the residual is {:.3e} of the force scale after {MAX_ITERATIONS} \
                      iterations (largest at node {node}, dof {worst})",
@@ -569,6 +735,8 @@ where
                 }
             }
             f_in = match f_next.take() {
+                // A retargeted operator: its plain step.
+                Some(next) if std::mem::take(&mut plain_next) => next,
                 // With contact: the fixed point's next right-hand side, accelerated.
                 Some(next) => anderson.next(&f_in, next, norm),
                 None => inelastic_force(&|e| updates[e].1.inelastic),
@@ -604,6 +772,7 @@ where
             factorizations,
             contact_forces,
             out_of_balance,
+            operator,
         });
     }
     unreachable!("the last pass returns")
@@ -700,6 +869,7 @@ where
                 factorizations,
                 contact_forces,
                 out_of_balance,
+                operator: 1.0,
             });
         }
         if iteration + 1 == MAX_ITERATIONS {

@@ -580,6 +580,9 @@ where
                     step(&model, &state, h, bdf, t1, constraints, system, &mut solve, ga, dynamic, step_index + 1, None)
                 }?;
                 let mut settled = settled.expect("a contact step solves at least once");
+                if outcome.contact_scale != 1.0 {
+                    settled.scale_forces(outcome.contact_scale);
+                }
                 if let Some(r) = outcome.imbalance.as_ref() {
                     cm.rebalance(&mut settled, r);
                 }
@@ -663,6 +666,15 @@ where
             }
             Err(PressError::NotConverged { .. }) if point_retries < 3 && settings.step_ends_s.is_none() => {
                 // Retry from the old state at a quarter of the step.
+                point_retries += 1;
+                dt = h / 4.0;
+                continue;
+            }
+            Err(PressError::Inverted { .. })
+                if point_retries < 3 && settings.step_ends_s.is_none() && model.point.is_some() =>
+            {
+                // On the material-point path a step too long for a strong effect may end on
+                // an inverted cell (strong stiffening as a tool lifts off); retried as above.
                 point_retries += 1;
                 dt = h / 4.0;
                 continue;
@@ -924,6 +936,9 @@ struct StepOutcome<const S: usize> {
     imbalance: Option<Vec<f64>>,
     /// Factorizations the step made itself (the material-point path's tangents).
     factorizations: usize,
+    /// The factor the last contact solve's forces are to be multiplied by (the
+    /// material-point iteration's scaled operator; 1 otherwise).
+    contact_scale: f64,
 }
 
 impl ForceSegment {
@@ -1209,9 +1224,9 @@ where
         stress.push(s1);
     }
     let strain_prev = s0.strain.clone();
-    let (inelastic, unloading, damage_history, factorizations) = match point {
-        Some(p) => (p.inelastic, p.unloading, p.history, p.factorizations),
-        None => (Vec::new(), Vec::new(), Vec::new(), 0),
+    let (inelastic, unloading, damage_history, factorizations, contact_scale) = match point {
+        Some(p) => (p.inelastic, p.unloading, p.history, p.factorizations, p.operator),
+        None => (Vec::new(), Vec::new(), Vec::new(), 0, 1.0),
     };
     Ok(StepOutcome {
         state: State {
@@ -1232,6 +1247,7 @@ where
         residual,
         imbalance,
         factorizations,
+        contact_scale,
     })
 }
 
