@@ -95,7 +95,9 @@
 pub(crate) mod cut;
 pub(crate) mod fit;
 pub(crate) mod graded;
+pub(crate) mod guard;
 pub(crate) mod lattice;
+pub(crate) mod orient;
 pub(crate) mod smooth;
 pub(crate) mod stuffing;
 pub(crate) mod tree;
@@ -221,6 +223,25 @@ pub enum EnvelopeError {
         /// What is wrong.
         cause: String,
     },
+    /// Tets outside the dihedral angle targets [12°, 155°] that the final guard
+    /// (flips, peeling of thin boundary slivers) could not repair: refused rather
+    /// than emitted.
+    #[error(
+        "{num_cells} tets have dihedral angles outside [12, 155] deg after the repair; the worst, tet {cell} \
+         ({min_deg:.2}..{max_deg:.2} deg) at {centroid_mm:?} mm; try another --size-mm or --grade-levels"
+    )]
+    AngleGuard {
+        /// How many tets are outside.
+        num_cells: usize,
+        /// The worst one (0-based, in the mesh that would have been emitted).
+        cell: usize,
+        /// Its smallest dihedral angle [deg].
+        min_deg: f64,
+        /// Its largest dihedral angle [deg].
+        max_deg: f64,
+        /// Its centroid [mm].
+        centroid_mm: [f64; 3],
+    },
     /// The result failed its final check (a bug: please report it with the input).
     #[error("the envelope mesh failed its check: {cause}")]
     Internal {
@@ -255,6 +276,14 @@ pub enum EnvelopeWarning {
         /// The input region.
         region: String,
     },
+    /// Triangles faced against their neighbours; they were turned to agree with
+    /// the larger part of their shell before the inside test.
+    FlippedFaces {
+        /// The input region.
+        region: String,
+        /// Triangles turned.
+        num_triangles: usize,
+    },
     /// An input region got no cell (inside another region of smaller volume, or too thin).
     EmptyRegion {
         /// The input region.
@@ -283,6 +312,11 @@ impl fmt::Display for EnvelopeWarning {
             EnvelopeWarning::InsideOut { region } => {
                 write!(f, "region `{region}` is inside out (negative enclosed volume); it was counted flipped")
             }
+            EnvelopeWarning::FlippedFaces { region, num_triangles } => write!(
+                f,
+                "region `{region}`: {num_triangles} triangles faced against their neighbours; they were turned to \
+                 agree with the rest of their shell"
+            ),
             EnvelopeWarning::EmptyRegion { region } => write!(f, "region `{region}` got no cells"),
         }
     }
@@ -323,6 +357,12 @@ pub struct EnvelopeStats {
     pub fit_snaps: usize,
     /// Candidates for which the fitting's angle guard refused every split.
     pub fit_refused: usize,
+    /// Tets outside [12°, 155°] before the final guard.
+    pub guard_bad: usize,
+    /// Flips (2-3, 3-2) taken by the final guard.
+    pub guard_flips: usize,
+    /// Thin boundary tets removed by the final guard.
+    pub guard_peeled: usize,
     /// Wall time [s].
     pub time_s: f64,
 }
@@ -386,10 +426,20 @@ pub fn envelope_mesh_with_progress(
     // becomes a closed region of its own.
     let split = split_cells(surface);
     let surface = split.as_ref().unwrap_or(surface);
+    // Faces flipped against their neighbours (`orient.rs`): turned back, said.
+    let oriented = orient::consistent_orientation(surface);
+    let surface = oriented.as_ref().map_or(surface, |o| &o.0);
 
     let mut warnings = Vec::new();
     let num_regions = num_regions(surface);
     let region_name = |r: usize| surface.region_names.get(r).cloned().unwrap_or_else(|| format!("region{r}"));
+    if let Some((_, turned)) = &oriented {
+        for (r, &n) in turned.iter().enumerate() {
+            if n > 0 {
+                warnings.push(EnvelopeWarning::FlippedFaces { region: region_name(r), num_triangles: n });
+            }
+        }
+    }
     for r in 0..num_regions {
         if surface.signed_volume(Some(r as u32)) < 0.0 {
             warnings.push(EnvelopeWarning::InsideOut { region: region_name(r) });
@@ -482,6 +532,29 @@ pub fn envelope_mesh_with_progress(
         stats.fit_splits = f.splits;
         stats.fit_refused = f.refused;
         stats.fit_snaps = f.snaps;
+    }
+
+    // 7. The final angle guard (`guard.rs`): repair, or refuse.
+    progress("angle guard", 0.0);
+    let near = 0.5 * options.grade_tolerance.max(options.fit_tolerance) * diag;
+    let g = guard::repair(&mut mesh.nodes, &mut mesh.cells, &mut mesh.cell_regions, near);
+    stats.guard_bad = g.bad_before;
+    stats.guard_flips = g.flips;
+    stats.guard_peeled = g.peeled;
+    let bad = guard::bad_cells(&mesh.nodes, &mesh.cells);
+    if let Some(&worst) = bad.iter().min_by(|&&a, &&b| {
+        let s = |k: usize| smooth::score(&mesh.cells[k].map(|v| mesh.nodes[v as usize]));
+        s(a).total_cmp(&s(b)).then(a.cmp(&b))
+    }) {
+        let p = mesh.cells[worst].map(|v| mesh.nodes[v as usize]);
+        let (min_deg, max_deg) = crate::quality::dihedral_range_deg(&p);
+        return Err(EnvelopeError::AngleGuard {
+            num_cells: bad.len(),
+            cell: worst,
+            min_deg,
+            max_deg,
+            centroid_mm: [0, 1, 2].map(|k| 0.25 * (p[0][k] + p[1][k] + p[2][k] + p[3][k])),
+        });
     }
 
     for (r, name) in mesh.region_names.iter().enumerate() {
