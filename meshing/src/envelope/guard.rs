@@ -19,6 +19,11 @@
 //!    smallest of its four altitudes) under `near` [mm] is removed, when the
 //!    boundary stays manifold at its edges (every edge then in 0 or 2 boundary
 //!    faces). The boundary moves inward by less than that height.
+//! 3. **Splits**: an edge of the bad tet is cut at its midpoint in every tet
+//!    around it (each half keeps its parent's region; the midpoint of a boundary
+//!    or interface edge stays on that boundary or interface, which do not move),
+//!    when the worst score around the edge rises and fewer tets there are
+//!    outside [12°, 155°]; the best edge is taken.
 //!
 //! Whatever is still outside [12°, 155°] after [`ROUNDS`] rounds is returned to
 //! the caller, which refuses the mesh with [`super::EnvelopeError::AngleGuard`].
@@ -42,6 +47,8 @@ pub(crate) struct GuardStats {
     pub flips: usize,
     /// Boundary tets removed.
     pub peeled: usize,
+    /// Edges split at their midpoints.
+    pub splits: usize,
 }
 
 fn volume(p: &[P; 4]) -> f64 {
@@ -80,7 +87,7 @@ pub(crate) fn bad_cells(nodes: &[P], cells: &[[u32; 4]]) -> Vec<usize> {
 }
 
 struct Work<'a> {
-    nodes: &'a [P],
+    nodes: &'a mut Vec<P>,
     cells: &'a mut Vec<[u32; 4]>,
     regions: &'a mut Vec<u16>,
     alive: Vec<bool>,
@@ -123,7 +130,7 @@ impl Work<'_> {
         let mut consider = |old: Vec<u32>, new: Vec<[u32; 4]>| {
             let old_worst = old.iter().map(|&o| score(&self.pts(self.cells[o as usize]))).fold(f64::INFINITY, f64::min);
             let old_volume: f64 = old.iter().map(|&o| volume(&self.pts(self.cells[o as usize])).abs()).sum();
-            let new: Vec<[u32; 4]> = new.into_iter().map(|n| positive(self.nodes, n)).collect();
+            let new: Vec<[u32; 4]> = new.into_iter().map(|n| positive(self.nodes.as_slice(), n)).collect();
             let new_volume: f64 = new.iter().map(|&n| volume(&self.pts(n)).abs()).sum();
             if !((new_volume - old_volume).abs() <= 1e-9 * old_volume) {
                 return;
@@ -164,6 +171,57 @@ impl Work<'_> {
             }
         }
         best
+    }
+
+    /// The best midpoint split of an edge of cell `k` (every tet around the edge
+    /// cut in two, each half keeping its parent's region): (new worst score, the
+    /// edge, the cells around it), when the worst score around the edge rises and
+    /// fewer tets there are outside [12°, 155°].
+    fn best_split(&self, k: usize) -> Option<(f64, (u32, u32), Vec<u32>)> {
+        let c = self.cells[k];
+        let mut best: Option<(f64, (u32, u32), Vec<u32>)> = None;
+        for i in 0..4 {
+            for j in i + 1..4 {
+                let (a, b) = (c[i], c[j]);
+                let (pa, pb) = (self.nodes[a as usize], self.nodes[b as usize]);
+                let m = [0, 1, 2].map(|x| 0.5 * (pa[x] + pb[x]));
+                let around = self.holding(&[a, b]);
+                let olds: Vec<f64> = around.iter().map(|&o| score(&self.pts(self.cells[o as usize]))).collect();
+                let mut news = Vec::with_capacity(2 * around.len());
+                for &o in &around {
+                    let t = self.cells[o as usize];
+                    for end in [a, b] {
+                        news.push(score(&t.map(|v| if v == end { m } else { self.nodes[v as usize] })));
+                    }
+                }
+                let old_worst = olds.iter().copied().fold(f64::INFINITY, f64::min);
+                let new_worst = news.iter().copied().fold(f64::INFINITY, f64::min);
+                let bad = |x: &[f64]| x.iter().filter(|&&s| s < 1.0).count();
+                if new_worst > old_worst && bad(&news) < bad(&olds) && best.as_ref().is_none_or(|b| new_worst > b.0) {
+                    best = Some((new_worst, (a, b), around));
+                }
+            }
+        }
+        best
+    }
+
+    /// Splits edge `(a, b)` at its midpoint in the cells `around` it; returns the new cells.
+    fn split(&mut self, a: u32, b: u32, around: &[u32]) -> Vec<u32> {
+        let (pa, pb) = (self.nodes[a as usize], self.nodes[b as usize]);
+        let m = self.nodes.len() as u32;
+        self.nodes.push([0, 1, 2].map(|x| 0.5 * (pa[x] + pb[x])));
+        self.of_node.push(Vec::new());
+        let mut made = Vec::new();
+        for &o in around {
+            let t = self.cells[o as usize];
+            let region = self.regions[o as usize];
+            self.alive[o as usize] = false;
+            for end in [a, b] {
+                made.push(self.cells.len() as u32);
+                self.add(t.map(|v| if v == end { m } else { v }), region);
+            }
+        }
+        made
     }
 
     /// Whether removing cell `k` leaves every one of its edges in 0 or 2 boundary faces.
@@ -218,7 +276,7 @@ pub(crate) fn repair(nodes: &mut Vec<P>, cells: &mut Vec<[u32; 4]>, regions: &mu
         }
     }
     let n = cells.len();
-    let mut w = Work { nodes, cells, regions, alive: vec![true; n], of_node };
+    let mut w = Work { nodes: &mut *nodes, cells: &mut *cells, regions: &mut *regions, alive: vec![true; n], of_node };
     let mut bad: BTreeSet<u32> = bad.into_iter().map(|k| k as u32).collect();
     for _ in 0..ROUNDS {
         let mut changed = false;
@@ -246,6 +304,17 @@ pub(crate) fn repair(nodes: &mut Vec<P>, cells: &mut Vec<[u32; 4]>, regions: &mu
                 w.alive[k] = false;
                 bad.remove(&(k as u32));
                 stats.peeled += 1;
+                changed = true;
+            } else if let Some((_, (a, b), around)) = w.best_split(k) {
+                for &o in &around {
+                    bad.remove(&o);
+                }
+                for id in w.split(a, b, &around) {
+                    if score(&w.pts(w.cells[id as usize])) < 1.0 {
+                        bad.insert(id);
+                    }
+                }
+                stats.splits += 1;
                 changed = true;
             }
         }

@@ -6,7 +6,9 @@
 //!
 //! 1. **Inside test**: the generalized winding number of the whole soup
 //!    ([`crate::WindingNumber`]), inside where `w > 1/2`; shells given inside out
-//!    count flipped.
+//!    count flipped. Faces flipped against their neighbours in a shell are
+//!    turned back first (`orient.rs`; [`EnvelopeWarning::FlippedFaces`]): the
+//!    winding number is inverted next to each of them.
 //! 2. **Isosurface stuffing** (Labelle and Shewchuk 2007) on a uniform BCC lattice
 //!    of spacing `size_mm` (the long lattice edges; the short ones are `0.87 h`):
 //!    every boundary node lies on the input surface (a cut point of a lattice edge,
@@ -34,6 +36,11 @@
 //!    vertices and edges split (longest-edge propagation, new boundary nodes on
 //!    the input), each step taken only if every tet it makes keeps its dihedral
 //!    angles in [12°, 155°].
+//! 7. **Angle guard** (`guard.rs`): what is still outside [12°, 155°] is smoothed
+//!    again (region-shell interface nodes now sliding along the input), flipped
+//!    (2-3, 3-2), peeled (thin boundary slivers) or split; whatever stays outside
+//!    is refused ([`EnvelopeError::AngleGuard`]), never emitted. So every tet of a
+//!    returned mesh has its dihedral angles in [12°, 155°].
 //!
 //! ## What it does not promise
 //!
@@ -50,12 +57,12 @@
 //! bunny's Hausdorff distance stays 9.4e-3 at h = 0.2 mm and 2.0e-2 at 0.3 mm, a
 //! miss against the 1e-3 on the uniform lattice (the default). The
 //! graded lattice reaches it on the bunny (base 0.2 mm, 3 levels, default
-//! grading tolerance: 9.98e-4, tested) but it is opt-in, and its angles are measured, not
-//! proven: no Labelle–Shewchuk bound covers its tets and thresholds. Measured on
-//! the corpus (BENCHMARKS.md): within [13.8°, 151.3°] on the clean, duplicated,
-//! inverted, jittered and holed bunnies, the teapot and the sphere, but the bunny
-//! with 10 % of its faces flipped gets 200 tets outside [12°, 155°] (down to
-//! 0.36°) and the layered bunny one (10.06°, at an interface); its boundary
+//! grading tolerance: 9.98e-4, tested) but it is opt-in (about 10x the uniform
+//! lattice's time), and its angles are measured, not proven: no Labelle–Shewchuk
+//! bound covers its tets and thresholds. Measured on the corpus (BENCHMARKS.md,
+//! session 17): within [13.8°, 151.3°] on every file with 3 levels, once faces
+//! flipped against their neighbours are turned back (step 1) and the final guard
+//! (step 7) has smoothed the layered bunny's one interface tet; its boundary
 //! slivers are peeled off within half the tolerance of the input. On a shape curved everywhere (a sphere) grading
 //! saves nothing over a finer uniform lattice; the sizing only looks at the
 //! input's triangles within each cell's ball, so a feature the lattice's cells
@@ -67,7 +74,9 @@
 //! thinned: such parts are detected (inward rays shorter than `h / 2` that leave
 //! the inside) and reported as [`EnvelopeWarning::ThinFeature`], never dropped
 //! silently. Cells cut by region interfaces and layer planes have no proven angle
-//! bound; the quality report measures them.
+//! bound; the quality report measures them, and the final guard refuses what it
+//! cannot bring into [12°, 155°] (measured: the uniform lattice on the open teapot
+//! at 0.25 mm, 2 tets at 158° beside its opening, is refused).
 
 //! ## Example
 //!
@@ -118,6 +127,9 @@ use crate::winding::WindingNumber;
 use crate::Surface;
 use tree::{cross, norm, scale, sub};
 
+/// The default of [`EnvelopeOptions::grade_levels`] (and of `wagashi mesh --grade-levels`).
+pub const DEFAULT_GRADE_LEVELS: u32 = 0;
+
 /// The options of [`envelope_mesh`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct EnvelopeOptions {
@@ -155,7 +167,7 @@ impl EnvelopeOptions {
             max_lattice_vertices: 40_000_000,
             fit_tolerance: 1e-3,
             max_fit_rounds: 10,
-            grade_levels: 0,
+            grade_levels: DEFAULT_GRADE_LEVELS,
             grade_tolerance: 5e-4,
         }
     }
@@ -363,6 +375,8 @@ pub struct EnvelopeStats {
     pub guard_flips: usize,
     /// Thin boundary tets removed by the final guard.
     pub guard_peeled: usize,
+    /// Edges split at their midpoints by the final guard.
+    pub guard_splits: usize,
     /// Wall time [s].
     pub time_s: f64,
 }
@@ -507,7 +521,7 @@ pub fn envelope_mesh_with_progress(
     stats.interface_new_nodes = cut.new_nodes;
     // 5. Quality: move the worst tets' nodes (boundary ones along the input).
     progress("smoothing", 0.0);
-    let mut mobility = mobility(&mesh, winding.tree(), eps);
+    let mut mobility = mobility(&mesh, winding.tree(), eps, false);
     stats.smoothed_nodes = smooth::improve(&mut mesh.nodes, &mesh.cells, &mobility, winding.tree());
     if options.grade_levels > 0 {
         // The graded lattice's stencils have no proven angle bound: a second pass.
@@ -534,13 +548,26 @@ pub fn envelope_mesh_with_progress(
         stats.fit_snaps = f.snaps;
     }
 
-    // 7. The final angle guard (`guard.rs`): repair, or refuse.
+    // 7. The final angle guard (`guard.rs`): repair, or refuse. First more
+    // smoothing of what is left outside [12°, 155°], region-shell interface
+    // nodes now sliding along the input like boundary ones (they lie on it; layer
+    // planes are not input, so their nodes stay).
     progress("angle guard", 0.0);
+    if !guard::bad_cells(&mesh.nodes, &mesh.cells).is_empty() {
+        let slide = self::mobility(&mesh, winding.tree(), eps, layer_planes.is_empty());
+        for _ in 0..3 {
+            stats.smoothed_nodes += smooth::improve(&mut mesh.nodes, &mesh.cells, &slide, winding.tree());
+            if guard::bad_cells(&mesh.nodes, &mesh.cells).is_empty() {
+                break;
+            }
+        }
+    }
     let near = 0.5 * options.grade_tolerance.max(options.fit_tolerance) * diag;
     let g = guard::repair(&mut mesh.nodes, &mut mesh.cells, &mut mesh.cell_regions, near);
     stats.guard_bad = g.bad_before;
     stats.guard_flips = g.flips;
     stats.guard_peeled = g.peeled;
+    stats.guard_splits = g.splits;
     let bad = guard::bad_cells(&mesh.nodes, &mesh.cells);
     if let Some(&worst) = bad.iter().min_by(|&&a, &&b| {
         let s = |k: usize| smooth::score(&mesh.cells[k].map(|v| mesh.nodes[v as usize]));
@@ -725,8 +752,9 @@ fn thin_features(surface: &Surface, winding: &WindingNumber, h: f64, diag: f64) 
 
 /// How each node may move in the quality improvement: boundary nodes on the
 /// input slide along it, nodes of cells of two regions (interfaces) and boundary
-/// nodes off the input (across a hole) stay, the others are free.
-fn mobility(mesh: &TetMesh, tree: &TriangleTree, eps: f64) -> Vec<smooth::Mobility> {
+/// nodes off the input (across a hole) stay, the others are free. With
+/// `interfaces_slide`, interface nodes on the input slide along it too.
+fn mobility(mesh: &TetMesh, tree: &TriangleTree, eps: f64, interfaces_slide: bool) -> Vec<smooth::Mobility> {
     let n = mesh.nodes.len();
     let mut region = vec![u16::MAX; n];
     let mut interface = vec![false; n];
@@ -750,7 +778,11 @@ fn mobility(mesh: &TetMesh, tree: &TriangleTree, eps: f64) -> Vec<smooth::Mobili
         .into_par_iter()
         .map(|v| {
             if interface[v] {
-                smooth::Mobility::Fixed
+                if interfaces_slide && tree.closest_point_within(mesh.nodes[v], eps).is_some() {
+                    smooth::Mobility::OnSurface
+                } else {
+                    smooth::Mobility::Fixed
+                }
             } else if boundary[v] {
                 if tree.closest_point_within(mesh.nodes[v], eps).is_some() {
                     smooth::Mobility::OnSurface
