@@ -168,7 +168,8 @@ fn refusals_are_one_line_errors() {
 /// creases, curved and thin parts) on the bunny at 0.8 mm: a closer boundary than
 /// the uniform lattice at the same size, the angles within [12°, 155°] (the
 /// envelope's final guard), and the levels in the report; out of range, a clap error.
-/// Measured (session 17): uniform Hausdorff see the eprintln, graded smaller.
+/// Measured (session 17): Hausdorff / diagonal 9.3e-2 uniform (the ears lost at
+/// this size), 7.1e-3 graded; asserted: graded under half the uniform.
 #[test]
 fn grade_levels_refine_the_boundary() {
     let dir = tempfile::tempdir().unwrap();
