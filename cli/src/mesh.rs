@@ -30,7 +30,9 @@ use anyhow::{bail, Context};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use meshing::conforming::{conforming_mesh, ConformingOptions, ConformingStats};
-use meshing::envelope::{envelope_mesh_with_progress, EnvelopeOptions, EnvelopeStats, EnvelopeWarning};
+use meshing::envelope::{
+    envelope_mesh_with_progress, EnvelopeOptions, EnvelopeStats, EnvelopeWarning, DEFAULT_GRADE_LEVELS,
+};
 use meshing::quality::{report, QualityReport};
 use meshing::repair::{repair, RepairOptions};
 use meshing::WindingNumber;
@@ -45,6 +47,10 @@ const MESH_AFTER_HELP: &str = "\
 Examples:
   # The Stanford bunny (OBJ in mm) with 0.3 mm tets, and its quality report:
   wagashi mesh bunny.obj -o bunny.vtu --size-mm 0.3 --report bunny-report.json
+
+  # The same on a graded lattice (down to 0.3 / 2^3 mm at creases, curved and thin
+  # parts): the boundary within about 1e-3 of the diagonal, several times slower:
+  wagashi mesh bunny.obj -o bunny.vtu --size-mm 0.3 --grade-levels 3
 
   # A glTF scan (metres by default), for Gmsh, in cm as the scanner wrote it:
   wagashi mesh scan.glb -o scan.msh --size-mm 2 --units cm
@@ -96,6 +102,14 @@ pub struct MeshArgs {
     /// they must add up to the shape's height within 1 %.
     #[arg(long = "layers-mm", value_name = "T1,T2,...", value_delimiter = ',', value_parser = positive_number, allow_negative_numbers = true)]
     pub layers_mm: Vec<f64>,
+
+    /// Envelope mode (ignored by --mode conforming): refine the lattice by bisection down to --size-mm / 2^N
+    /// where the surface is creased, curved or thin (0: the uniform lattice;
+    /// at most 8). Grading brings the boundary within 1e-3 of the diagonal on
+    /// creased input (the bunny) at several times the uniform lattice's time.
+    #[arg(long = "grade-levels", value_name = "N", default_value_t = DEFAULT_GRADE_LEVELS,
+          value_parser = clap::value_parser!(u32).range(0..=8))]
+    pub grade_levels: u32,
 
     /// Also write the quality report as JSON here.
     #[arg(long, value_name = "REPORT.json")]
@@ -150,6 +164,8 @@ struct MeshReport<'a> {
     mode: &'static str,
     size_mm: f64,
     layers_mm: &'a [f64],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    grade_levels: Option<u32>,
     quality: &'a QualityReport,
     #[serde(skip_serializing_if = "Option::is_none")]
     envelope: Option<&'a EnvelopeStats>,
@@ -193,7 +209,11 @@ pub fn run(args: &MeshArgs) -> anyhow::Result<()> {
         (out.mesh, Vec::new(), None, Some(out.stats))
     } else {
         let bar = Progress::new();
-        let options = EnvelopeOptions { layers_mm: args.layers_mm.clone(), ..EnvelopeOptions::new(args.size_mm) };
+        let options = EnvelopeOptions {
+            layers_mm: args.layers_mm.clone(),
+            grade_levels: args.grade_levels,
+            ..EnvelopeOptions::new(args.size_mm)
+        };
         let meshed = envelope_mesh_with_progress(surface, &options, &|stage, f| bar.update(stage, f));
         bar.finish();
         let meshed = meshed.with_context(|| format!("meshing {}", args.surface.display()))?;
@@ -246,6 +266,7 @@ pub fn run(args: &MeshArgs) -> anyhow::Result<()> {
             mode: if conforming { "conforming" } else { "envelope" },
             size_mm: args.size_mm,
             layers_mm: &args.layers_mm,
+            grade_levels: (!conforming).then_some(args.grade_levels),
             quality: &quality,
             envelope: envelope_stats.as_ref(),
             conforming: conforming_stats.as_ref(),

@@ -53,7 +53,13 @@ fn main() {
             }
             *last = name.to_string();
         };
-        let out = envelope_mesh_with_progress(&s, &opts, &timing).unwrap_or_else(|e| panic!("{e}"));
+        let out = match envelope_mesh_with_progress(&s, &opts, &timing) {
+            Ok(out) => out,
+            Err(e) => {
+                println!("h {h}: refused after {:.2} s: {e}", t0.elapsed().as_secs_f64());
+                continue;
+            }
+        };
         let dt = t0.elapsed().as_secs_f64();
         let q = report(&out.mesh, &s, dt);
         let faces = out.mesh.boundary_facets();
@@ -103,9 +109,19 @@ fn main() {
             })
             .count();
         println!(
-            "  lattice tets {}, grading bisections {}, peeled slivers {}, tets outside [12, 155] deg: {outside_angles}",
-            out.stats.lattice_tets, out.stats.grade_bisections, out.stats.peeled_slivers
+            "  lattice tets {}, grading bisections {}, peeled slivers {}, tets outside [12, 155] deg: {outside_angles} \
+             (before the final guard {}: {} flips, {} peeled, {} splits)",
+            out.stats.lattice_tets,
+            out.stats.grade_bisections,
+            out.stats.peeled_slivers,
+            out.stats.guard_bad,
+            out.stats.guard_flips,
+            out.stats.guard_peeled,
+            out.stats.guard_splits
         );
+        for w in &out.warnings {
+            println!("  warning: {w}");
+        }
         println!(
             "  input vertices farther than 1e-3/3e-3/1e-2 diag: {} / {} / {} of {}; boundary centroids: {} / {} / {} of {}",
             over(1e-3),
