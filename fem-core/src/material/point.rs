@@ -169,6 +169,21 @@ impl InelasticLaw {
         )
     }
 
+    /// The largest share of the chain's dashpot flow that the law's correction takes
+    /// back, per unit viscosity [1/(MPa s)]: the correction's rate is at most this
+    /// times the chain's stress, against it. Bingham below its threshold blocks `c3`
+    /// whole (`1/c3`); the dual viscosity while unloading takes back
+    /// `(1 - exp(-psi))/c3` when `psi > 0`. The other laws take back none (the slider
+    /// is rate-independent; thinning adds flow). The stepper compares it with the
+    /// chain's instantaneous viscosity to keep BDF2 stable (`crate::press`, "Step control").
+    pub fn blocking_per_mpa_s(&self) -> f64 {
+        match *self {
+            InelasticLaw::Bingham { threshold_mpa, c3_mpa_s } if threshold_mpa != 0.0 => 1.0 / c3_mpa_s,
+            InelasticLaw::Dual { log_ratio, c3_mpa_s } if log_ratio > 0.0 => -(-log_ratio).exp_m1() / c3_mpa_s,
+            _ => 0.0,
+        }
+    }
+
     /// Whether the law carries a scalar history per cell (the damage's largest strain).
     pub fn needs_history(&self) -> bool {
         matches!(self, InelasticLaw::Damage { .. })
