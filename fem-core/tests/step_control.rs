@@ -194,7 +194,7 @@ fn hold_steps_follow_the_force_and_stay_few() {
 /// form of a chain whose `c3` is 1e12 MPa s. The blocking's backward Euler needs
 /// `k = g dt/c3 < 0.95`, i.e. steps under `0.45 c3/E1` = 9e-4 s (with `b = 1/2`):
 /// at least 1100 steps. Before the fix the run did not end (the test's bound
-/// stopped it at 2000 steps by t = 0.044 s); now 1353 steps. The errors against
+/// stopped it at 2000 steps by t = 0.139 s); now 1353 steps. The errors against
 /// the closed form, of the peak, at the step ends and every 5 ms: 5.1e-2 adaptive,
 /// 1.35e-1 and 6.5e-2 at fixed 1 and 0.5 ms steps (first order: the blocking is
 /// backward Euler and the steps are a third of the Voigt time `c1/E1` = 2 ms).
