@@ -175,7 +175,8 @@ impl InelasticLaw {
     /// whole (`1/c3`); the dual viscosity while unloading takes back
     /// `(1 - exp(-psi))/c3` when `psi > 0`. The other laws take back none (the slider
     /// is rate-independent; thinning adds flow). The stepper compares it with the
-    /// chain's instantaneous viscosity to keep BDF2 stable (`crate::press`, "Step control").
+    /// chain's instantaneous viscosity to keep BDF2 stable (the press stepper's module
+    /// doc, "Blocking corrections").
     pub fn blocking_per_mpa_s(&self) -> f64 {
         match *self {
             InelasticLaw::Bingham { threshold_mpa, c3_mpa_s } if threshold_mpa != 0.0 => 1.0 / c3_mpa_s,
