@@ -169,6 +169,22 @@ impl InelasticLaw {
         )
     }
 
+    /// The largest share of the chain's dashpot flow that the law's correction takes
+    /// back, per unit viscosity [1/(MPa s)]: the correction's rate is at most this
+    /// times the chain's stress, against it. Bingham below its threshold blocks `c3`
+    /// whole (`1/c3`); the dual viscosity while unloading takes back
+    /// `(1 - exp(-psi))/c3` when `psi > 0`. The other laws take back none (the slider
+    /// is rate-independent; thinning adds flow). The stepper compares it with the
+    /// chain's instantaneous viscosity to keep BDF2 stable (the press stepper's module
+    /// doc, "Blocking corrections").
+    pub fn blocking_per_mpa_s(&self) -> f64 {
+        match *self {
+            InelasticLaw::Bingham { threshold_mpa, c3_mpa_s } if threshold_mpa != 0.0 => 1.0 / c3_mpa_s,
+            InelasticLaw::Dual { log_ratio, c3_mpa_s } if log_ratio > 0.0 => -(-log_ratio).exp_m1() / c3_mpa_s,
+            _ => 0.0,
+        }
+    }
+
     /// Whether the law carries a scalar history per cell (the damage's largest strain).
     pub fn needs_history(&self) -> bool {
         matches!(self, InelasticLaw::Damage { .. })
@@ -423,6 +439,39 @@ mod tests {
     /// The slider's return lands on the yield surface; Bingham's update stops the
     /// flow below the threshold and leaves `sigma_B / c3` of it above; at the nulls
     /// every law returns the trial unchanged, bit for bit.
+    /// The blocking ratio the stepper uses is the one the updates take back: below
+    /// Bingham's threshold and while the dual viscosity unloads, the step's
+    /// inelastic strain is `-blocking dt tau1` (backward Euler), to 1e-14 relative
+    /// (the round-off of `tau_trial - tau1`; measured 1.3e-15 for the dual law);
+    /// the laws that take back nothing give 0.
+    #[test]
+    fn blocking_ratio_matches_the_updates() {
+        let c = c1();
+        let e0 = SVector::<f64, 4>::zeros();
+        let (g, dt, c3) = (0.05, 2.0, 3.0);
+        let small = uniaxial(-0.001);
+        for (law, unloading) in [
+            (InelasticLaw::Bingham { threshold_mpa: 0.004, c3_mpa_s: c3 }, false),
+            (InelasticLaw::Dual { log_ratio: 1.2, c3_mpa_s: c3 }, true),
+        ] {
+            let u = law.update(&c, &small, &e0, g, dt, unloading, &e0, 0.0).unwrap();
+            let expected = -u.tau * (law.blocking_per_mpa_s() * dt);
+            assert!(
+                (u.inelastic - expected).norm() <= 1e-14 * expected.norm(),
+                "{law:?}: {} vs {expected}",
+                u.inelastic
+            );
+        }
+        for law in [
+            InelasticLaw::Slider { yield_mpa: 0.005, hardening_mpa: 0.01 },
+            InelasticLaw::Thinning { inverse_stress_per_mpa: 400.0, exponent: 1.0, c3_mpa_s: c3 },
+            InelasticLaw::Dual { log_ratio: -1.2, c3_mpa_s: c3 },
+            InelasticLaw::Bingham { threshold_mpa: 0.0, c3_mpa_s: c3 },
+        ] {
+            assert_eq!(law.blocking_per_mpa_s(), 0.0, "{law:?}");
+        }
+    }
+
     #[test]
     fn updates_satisfy_their_laws() {
         let c = c1();

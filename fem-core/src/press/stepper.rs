@@ -109,6 +109,23 @@
 //! 42 steps and 1.0e-2 with the displacements alone). The strain-driven laws
 //! (stiffening, damage) are exact functions of the step end's strain and are not
 //! checked.
+//!
+//! *Blocking corrections.* A correction that takes back the chain's dashpot flow
+//! (Bingham below its threshold, `-tau/c3`; the dual viscosity while unloading,
+//! `-(1 - exp(-psi)) tau/c3`: a share `s` of `1/c3`) is driven by the whole chain
+//! stress, including the instantaneous viscous part `B2 e'`, whose BDF2 derivative
+//! looks two steps back. With `b = B2 s/c3`, an oscillation `y_n` of the inelastic
+//! strain at fixed total strain obeys `y_n - y_n-1 = b (alpha0 y_n - alpha1 y_n-1 +
+//! alpha2 y_n-2)`: roots 1 and `-alpha2 b/(1 - alpha0 b)`, independent of the step.
+//! At constant steps that is `-b/(2 - 3b)`: size 1 at `b = 1/2`, an undamped
+//! saw-tooth that no step makes smaller, so the flow control held the step where
+//! its ratio stays put (measured: a Bingham candidate of the fungi-steak diagnosis,
+//! `c3` 1.35e-5 MPa s, `B2` 6.75e-6 MPa s, `b` 0.49999, steps of 6e-9 s for ever).
+//! BDF1's recurrence `(1 - b)(y_n - y_n-1) = 0` has no such root, so a step whose
+//! parasitic root would exceed [`PARASITIC_ROOT`] takes BDF1 (first order in the
+//! viscous term, as the corrections themselves are). Chains with a small `B2`
+//! (`b` about 1e-5 for the real materials' fits) and laws that block nothing keep
+//! BDF2, bit for bit.
 
 use std::cell::{Cell, RefCell};
 use std::time::Instant;
@@ -156,6 +173,9 @@ const INSTANT_STEP_FRACTION: f64 = 1e-11;
 const EXACT_RATIO: f64 = 1e-4;
 /// The default flow tolerance relative to `rtol` (`Settings::flow_rtol`; module doc).
 pub(crate) const FLOW_RTOL_FACTOR: f64 = 0.1;
+/// The largest size of BDF2's parasitic root that a blocking correction may give it
+/// (module doc, "Blocking corrections"): an oscillation then halves every step.
+const PARASITIC_ROOT: f64 = 0.5;
 /// The largest growth of the step from one step to the next.
 const MAX_GROWTH: f64 = 4.0;
 /// The factorization cache holds at most this many numeric factors.
@@ -210,6 +230,14 @@ impl Bdf {
     /// Variable-step BDF2 for `omega = dt / dt_prev`.
     fn two(omega: f64) -> Bdf {
         Bdf { alpha: [(1.0 + 2.0 * omega) / (1.0 + omega), 1.0 + omega, omega * omega / (1.0 + omega)] }
+    }
+
+    /// Whether a blocking correction of ratio `blocking` (module doc, "Blocking
+    /// corrections") keeps this formula's parasitic root `-alpha2 b / (1 - alpha0 b)`
+    /// at most [`PARASITIC_ROOT`] in size. Always true at `b = 0`.
+    fn damps(&self, blocking: f64) -> bool {
+        let denominator = 1.0 - self.alpha[0] * blocking;
+        blocking == 0.0 || (denominator > 0.0 && self.alpha[2] * blocking <= PARASITIC_ROOT * denominator)
     }
 }
 
@@ -289,6 +317,17 @@ where
                 .collect()
         }
         _ => Vec::new(),
+    };
+    // The largest blocking ratio `b = B2 s/c3` over the regions whose law flows
+    // (module doc, "Blocking corrections"; 0 without such a law: BDF2 as before).
+    let blocking = match model.point.as_ref() {
+        Some(laws) => laws
+            .iter()
+            .zip(&model.region_kernel)
+            .filter(|(l, _)| l.flows() && !l.is_null())
+            .map(|(l, k)| k.viscous * l.blocking_per_mpa_s())
+            .fold(0.0, f64::max),
+        None => 0.0,
     };
     let flow_tol = {
         let (lo, hi) = problem.mesh.bounding_box();
@@ -406,6 +445,9 @@ where
             Some(&(_, _, h_prev)) if h <= 2.0 * h_prev * (1.0 + 1e-9) => Bdf::two(h / h_prev),
             _ => Bdf::ONE,
         };
+        // A blocking dashpot correction against a large instantaneous viscosity
+        // (module doc, "Blocking corrections"): BDF1 where BDF2's parasitic root is large.
+        let bdf = if bdf != Bdf::ONE && !bdf.damps(blocking) { Bdf::ONE } else { bdf };
         // Constraint sets only ever change from attached to released: drop the
         // attached factors then, so that two factors of a large mesh never coexist.
         if !constraints.plate_attached {
