@@ -174,12 +174,15 @@ fn second_touch_of(force: &[(f64, f64)], threshold: f64) -> Option<f64> {
 /// calibrated on specimen 1's first stroke, validated on specimen 2's first
 /// stroke and on its whole double compression, whose plate is a contact tool.
 /// Contact runs have no sensitivities, so the held-out check anchors that trial
-/// on finite differences (it used to stop the diagnosis); the material-point
-/// effect strain-stiffening, which the engine once refused with contact tools,
-/// now runs on that trial, but its contact fixed point (modified Newton without
-/// the consistent tangent, `fem_core::press` inelastic module) diverges on this
-/// stiffening fit, so it is still not evaluated and the verdict's sentence says
-/// so, naming the numerical failure. The verdict itself is recorded in VALIDATION.md.
+/// on finite differences (it used to stop the diagnosis). The material-point
+/// effect strain-stiffening runs on that trial since session 17 (the contact
+/// fixed point on the operator scaled to the stiffest tangent, `fem_core::press`
+/// inelastic module, "Stiffer tangents", and pairs in contact starting each step
+/// on their tool); until then it diverged (step 24, t = 2.47 s) and was reported
+/// as not evaluated. Asserted: both candidates evaluated, with finite held-out
+/// gap closures, and the verdict naming strain-stiffening, the larger LR
+/// (measured: `partial: strain-stiffening`, LR 1.51e5 against force-offset's
+/// 8.03e4; G = -0.35 and -42.8). The verdict itself is recorded in VALIDATION.md.
 #[test]
 fn fungi_steak_diagnosis_validates_on_a_double_compression() {
     let tmp = tempfile::tempdir().unwrap();
@@ -214,10 +217,12 @@ fn fungi_steak_diagnosis_validates_on_a_double_compression() {
     println!("{}", stdout(&o));
     let d = read_json(&cwd.join("diag/diagnosis.json"));
     assert_eq!(d["validation_trials"].as_array().map(Vec::len), Some(2), "{d}");
-    let g = d["candidates"]["force-offset"]["gap_closure"]["value"].as_f64();
-    assert!(g.is_some_and(f64::is_finite), "force-offset's held-out gap closure: {d}");
-    let why = d["not_evaluated"]["strain-stiffening"].as_str().unwrap_or_default();
-    assert!(why.starts_with("failed: ") && why.contains("material-point iteration did not converge"), "{why}");
-    let sentence = d["verdict"]["sentence"].as_str().unwrap();
-    assert!(sentence.contains("Not tested") && sentence.contains("strain-stiffening"), "{sentence}");
+    for effect in ["force-offset", "strain-stiffening"] {
+        let g = d["candidates"][effect]["gap_closure"]["value"].as_f64();
+        assert!(g.is_some_and(f64::is_finite), "{effect}'s held-out gap closure: {d}");
+        assert!(d["not_evaluated"].get(effect).is_none(), "{effect} not evaluated: {}", d["not_evaluated"]);
+    }
+    let effects: Vec<&str> =
+        d["verdict"]["effects"].as_array().unwrap().iter().filter_map(serde_json::Value::as_str).collect();
+    assert!(effects.contains(&"strain-stiffening"), "verdict {}: {effects:?}", d["verdict"]["label"]);
 }
