@@ -469,6 +469,21 @@ fn the_defective_bunnies_mesh_within_one_percent_of_the_clean_one() {
         if name == "bad_syn_inverted.obj" {
             assert!(out.warnings.iter().any(|w| matches!(w, EnvelopeWarning::InsideOut { .. })), "{:?}", out.warnings);
         }
+        // The hole's cap is measured apart (session 18: cap 2.91e-2 of the
+        // diagonal from the rim, 12 border edges, boundary distance 1.96e-2 as
+        // the clean bunny's at 0.3 mm); the other files have no hole: no border
+        // once welded (the jittered soup), or slits beside needle triangles
+        // (34 border edges of the degenerate file) that enclose no area.
+        eprintln!(
+            "  boundary {:.3e}, hole caps {:.3e} ({} border edges), raw {:.3e}",
+            q.hausdorff_relative, q.hole_cap_relative, q.num_border_edges, q.raw_hausdorff_relative
+        );
+        if name == "bad_syn_hole.obj" {
+            assert_eq!(q.num_border_edges, 12);
+            assert!(q.hole_cap_relative > 2.5e-2 && q.hausdorff_relative < 2e-2, "{q:?}");
+        } else {
+            assert_eq!((q.hole_cap_mm, q.widest_hole_mm), (0.0, 0.0), "{name}");
+        }
     }
 }
 
@@ -564,8 +579,14 @@ fn overlapping_spheres_mesh_their_union() {
     let err = (q.volume_mm3 - union) / union;
     eprintln!("union {union}: error {err:.3e}");
     assert!(err.abs() < 1e-2, "{err}");
-    // The caps inside the other sphere bound nothing: left out of the Hausdorff distance.
-    assert!(q.num_interior_input_triangles > 0);
+    // The caps inside the other sphere bound nothing: left out of the Hausdorff
+    // distance (session 18: 540 input triangles bound nothing, 158 in part;
+    // boundary distance 4.75e-3 of the diagonal, the lattice's rounding of the
+    // concave crease; raw 2.27e-1, the inner poles about d = 1.02 mm from the
+    // union's boundary).
+    assert!(q.num_interior_input_triangles > 0 && q.num_partly_interior_input_triangles > 0, "{q:?}");
+    assert!(q.hausdorff_relative < 6e-3, "{q:?}");
+    assert!(q.raw_hausdorff_mm > 0.9, "{q:?}");
 }
 
 /// The distance the envelope is judged by (`meshing::distance`), against closed
@@ -729,6 +750,16 @@ fn the_teapot_meshes_with_the_proven_bounds() {
     assert_conforming(&out.mesh);
     // Open and self-intersecting: no exact reference; its divergence-theorem volume is within 3 %.
     assert!(q.volume_error.abs() < 3e-2, "{}", q.volume_error);
+    // Session 18: 64 border edges once welded, the widest the body's top
+    // opening (a circle of diameter 14 mm: extent 14 sqrt 2 = 19.80 mm); the
+    // caps 1.31e-2 of the diagonal from the input; the boundary distance 2.35e-2
+    // (a miss of the 1e-3: the spout's thin lip, reported as a thin
+    // feature), the raw one 4.16e-2.
+    assert_eq!(q.num_border_edges, 64);
+    assert!((q.widest_hole_mm - 14.0 * 2f64.sqrt()).abs() < 1e-2, "{q:?}");
+    assert!(q.hole_cap_relative > 0.0 && q.hausdorff_relative < 2.5e-2, "{q:?}");
+    assert!(q.raw_hausdorff_relative > q.hausdorff_relative, "{q:?}");
+    assert!(out.warnings.iter().any(|w| matches!(w, EnvelopeWarning::ThinFeature { .. })), "{:?}", out.warnings);
     assert!(q.mesh_time_s > 0.0 && q.mesh_time_s.is_finite());
 }
 
