@@ -25,8 +25,7 @@
 //!   welded, so seams of unwelded patches and jittered soups are not holes)
 //!   are grouped in connected chains, and each chain gets a patch (the fan from
 //!   its vertices' centroid to its edges); a chain whose patch is smaller than
-//!   (1e-3 of the diagonal)^2 (the slit beside a needle triangle not welded to
-//!   its neighbours) is not a hole. A mesh boundary point nearer to a
+//!   (1e-3 of the diagonal)^2 (a slit enclosing no area) is not a hole. A mesh boundary point nearer to a
 //!   patch than to the bounding input is over a hole: its distance to the input
 //!   is reported apart (about the radius of the opening for a flat cap), with the
 //!   widest chain's extent. A cap that bulges farther from its patch than from the
@@ -359,8 +358,7 @@ fn border_edges(surface: &Surface, tolerance: f64, min_area: f64) -> Borders {
         let fan: Vec<[P; 3]> =
             edges.iter().map(|&(a, b)| [c, surface.vertices[a as usize], surface.vertices[b as usize]]).collect();
         let area: f64 = fan.iter().map(|t| 0.5 * norm(cross(sub(t[1], t[0]), sub(t[2], t[0])))).sum();
-        // A chain enclosing (almost) no area (the slit beside a needle triangle
-        // not welded to its neighbours) is not a hole.
+        // A chain enclosing (almost) no area (a slit) is not a hole.
         if area >= min_area {
             widest_mm = widest_mm.max(norm(sub(hi, lo)));
             patches.extend(fan);
