@@ -351,8 +351,39 @@ fn print_table(
         out,
         "Hausdorff",
         format!(
-            "{:.3e} mm = {:.2e} of the {:.4} mm diagonal (mesh->input {:.3e}, input->mesh {:.3e})",
-            q.hausdorff_mm, q.hausdorff_relative, q.diagonal_mm, q.mesh_to_surface_mm, q.surface_to_mesh_mm
+            "{:.3e} mm = {:.2e} of the {:.4} mm diagonal, to the input's part bounding the solid (mesh->input \
+             {:.3e}, input->mesh {:.3e}; {} input triangles bound nothing, {} in part)",
+            q.hausdorff_mm,
+            q.hausdorff_relative,
+            q.diagonal_mm,
+            q.mesh_to_surface_mm,
+            q.surface_to_mesh_mm,
+            q.num_interior_input_triangles,
+            q.num_partly_interior_input_triangles
+        ),
+    )?;
+    if q.num_border_edges > 0 {
+        row(
+            out,
+            "hole caps",
+            format!(
+                "{:.3e} mm = {:.2e} of the diagonal from the input, {:.2} % of the boundary ({} border edges, \
+                 widest hole {:.3} mm)",
+                q.hole_cap_mm,
+                q.hole_cap_relative,
+                100.0 * q.hole_cap_fraction,
+                q.num_border_edges,
+                q.widest_hole_mm
+            ),
+        )?;
+    }
+    row(
+        out,
+        "Hausdorff (raw)",
+        format!(
+            "{:.3e} mm = {:.2e} of the diagonal, every input triangle and hole cap counted (mesh->input {:.3e}, \
+             input->mesh {:.3e})",
+            q.raw_hausdorff_mm, q.raw_hausdorff_relative, q.raw_mesh_to_surface_mm, q.raw_surface_to_mesh_mm
         ),
     )?;
     for r in &q.regions {

@@ -34,7 +34,9 @@ fn the_bunny_to_vtu_with_a_json_report() {
     let o = mesh(dir.path(), &[bunny.to_str().unwrap(), "-o", "bunny.vtu", "--size-mm", "0.4", "--report", "r.json"]);
     assert_success(&o);
     let out = stdout(&o);
-    for key in ["dihedral angles", "radius-edge", "radius ratio", "volume", "Hausdorff", "region", "time"] {
+    for key in
+        ["dihedral angles", "radius-edge", "radius ratio", "volume", "Hausdorff", "Hausdorff (raw)", "region", "time"]
+    {
         assert!(out.contains(key), "{key} missing:\n{out}");
     }
     let json: serde_json::Value =
@@ -52,6 +54,8 @@ fn the_bunny_to_vtu_with_a_json_report() {
         "p999_radius_edge",
         "mean_radius_ratio",
         "hausdorff_relative",
+        "raw_hausdorff_relative",
+        "hole_cap_relative",
         "mesh_time_s",
     ] {
         assert!(q[key].as_f64().unwrap().is_finite(), "{key}");

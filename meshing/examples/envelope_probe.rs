@@ -96,6 +96,21 @@ fn main() {
             q.surface_to_mesh_mm / diag
         );
         println!(
+            "  raw Hausdorff {:.2e} (out->in {:.2e}, in->out {:.2e}); hole caps {:.2e} of diag ({:.2e} of the \
+             boundary samples, {} border edges, widest hole {:.3} mm); input triangles interior {}, in part {}; \
+             report {:.2} s",
+            q.raw_hausdorff_relative,
+            q.raw_mesh_to_surface_mm / diag,
+            q.raw_surface_to_mesh_mm / diag,
+            q.hole_cap_relative,
+            q.hole_cap_fraction,
+            q.num_border_edges,
+            q.widest_hole_mm,
+            q.num_interior_input_triangles,
+            q.num_partly_interior_input_triangles,
+            q.report_time_s
+        );
+        println!(
             "  fit: {} rounds, {} splits, {} refused",
             out.stats.fit_rounds, out.stats.fit_splits, out.stats.fit_refused
         );

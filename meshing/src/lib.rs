@@ -8,6 +8,7 @@
 
 pub mod bvh;
 pub mod conforming;
+pub mod distance;
 pub mod envelope;
 #[cfg(test)]
 mod fixtures;

@@ -30,14 +30,16 @@
 //!
 //! ## Hausdorff distance
 //!
-//! Both surfaces are sampled on a barycentric grid of spacing at most 1/300 of the
-//! diagonal (and at least one point per triangle: its corners, edge points and
-//! interior points), and each sample's exact distance to the other surface is
-//! found with a BVH. Input triangles that do not bound the inside (the winding
-//! number is on the same side of 1/2 just in front of and just behind them: interior
-//! sheets of overlapping parts, region interfaces, stray faces outside) are not
-//! sampled: the distance is to the inside's boundary, which is what a mesh can
-//! reproduce. The sampled maximum is within half a sample spacing of the true one.
+//! The distance the envelope mode is judged by ([`crate::distance`]): the
+//! symmetric Hausdorff distance between the mesh boundary and the part of the
+//! input that bounds the solid its winding number defines (inner caps of
+//! overlapping parts, parts of a self-intersecting input inside the rest,
+//! region interfaces and stray faces are not boundary), with the mesh's caps
+//! over holes of an open input measured apart ([`QualityReport::hole_cap_mm`],
+//! [`QualityReport::widest_hole_mm`]) rather than hidden, and the raw figure
+//! (every input triangle, caps included) beside it. Both surfaces are sampled on a
+//! barycentric grid of spacing at most 1/300 of the diagonal; the sampled maximum
+//! is below the true one by at most a sample spacing.
 
 #![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > 0.0)` also refuses NaN, deliberately.
 
@@ -47,7 +49,8 @@ use fem_core::mesh::TetMesh;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::envelope::tree::{cross, dot, norm, scale, sub, TriangleTree};
+use crate::distance::boundary_distance;
+use crate::envelope::tree::{cross, dot, norm, scale, sub};
 use crate::{Surface, WindingNumber};
 
 type P = [f64; 3];
@@ -203,16 +206,40 @@ pub struct QualityReport {
     pub volume_error: f64,
     /// The input's bounding-box diagonal [mm].
     pub diagonal_mm: f64,
-    /// Symmetric Hausdorff distance between the mesh boundary and the input [mm].
+    /// Symmetric Hausdorff distance between the mesh boundary (caps over the
+    /// input's holes left out) and the part of the input bounding the solid [mm]
+    /// (module docs).
     pub hausdorff_mm: f64,
     /// `hausdorff_mm / diagonal_mm`.
     pub hausdorff_relative: f64,
-    /// Largest distance from the mesh boundary to the input [mm].
+    /// Largest distance from the mesh boundary (caps over holes left out) to the
+    /// bounding part of the input [mm].
     pub mesh_to_surface_mm: f64,
-    /// Largest distance from the input (its part bounding the inside) to the mesh boundary [mm].
+    /// Largest distance from the bounding part of the input to the mesh boundary [mm].
     pub surface_to_mesh_mm: f64,
-    /// Input triangles left out of the Hausdorff distance (not bounding the inside).
+    /// Largest distance from the mesh boundary over the input's holes to the
+    /// input [mm] (0: none).
+    pub hole_cap_mm: f64,
+    /// `hole_cap_mm / diagonal_mm`.
+    pub hole_cap_relative: f64,
+    /// Fraction of the mesh boundary's samples over the input's holes.
+    pub hole_cap_fraction: f64,
+    /// Border edges of the input (after welding within 1e-6 of the diagonal).
+    pub num_border_edges: usize,
+    /// The widest connected chain of border edges: its bounding-box diagonal [mm].
+    pub widest_hole_mm: f64,
+    /// Raw symmetric Hausdorff distance: every input triangle counted, caps included [mm].
+    pub raw_hausdorff_mm: f64,
+    /// `raw_hausdorff_mm / diagonal_mm`.
+    pub raw_hausdorff_relative: f64,
+    /// Raw: largest distance from the mesh boundary to any input triangle [mm].
+    pub raw_mesh_to_surface_mm: f64,
+    /// Raw: largest distance from any input triangle to the mesh boundary [mm].
+    pub raw_surface_to_mesh_mm: f64,
+    /// Input triangles left out of the Hausdorff distance (not bounding the solid anywhere).
     pub num_interior_input_triangles: usize,
+    /// Input triangles bounding the solid in part (crossed by a jump of the winding number).
+    pub num_partly_interior_input_triangles: usize,
     /// Per region, in the mesh's order.
     pub regions: Vec<RegionQuality>,
     /// Meshing time [s], as given by the caller (0 when not given).
@@ -317,39 +344,8 @@ pub fn report(mesh: &TetMesh, surface: &Surface, mesh_time_s: f64) -> QualityRep
     // Hausdorff distance.
     let faces = mesh.boundary_facets();
     let out_tris: Vec<[P; 3]> = faces.iter().map(|f| f.map(|v| mesh.nodes[v as usize])).collect();
-    let in_tris: Vec<[P; 3]> = surface.triangles.iter().map(|t| t.map(|v| surface.vertices[v as usize])).collect();
-    let spacing = diagonal_mm / 300.0;
-    let out_tree = TriangleTree::new(out_tris.clone());
-    let in_tree = TriangleTree::new(in_tris.clone());
-    let mesh_to_surface_mm = out_tris.par_iter().map(|t| max_distance(t, spacing, &in_tree)).reduce(|| 0.0, f64::max);
-    let winding = WindingNumber::new(surface);
-    let delta = 1e-6 * diagonal_mm;
-    let bounding: Vec<bool> = in_tris
-        .par_iter()
-        .map(|t| {
-            let n = cross(sub(t[1], t[0]), sub(t[2], t[0]));
-            let ln = norm(n);
-            if !(ln > 0.0) {
-                return false;
-            }
-            let n = scale(n, delta / ln);
-            let c = scale(
-                [t[0][0] + t[1][0] + t[2][0], t[0][1] + t[1][1] + t[2][1], t[0][2] + t[1][2] + t[2][2]],
-                1.0 / 3.0,
-            );
-            let front = winding.is_inside([c[0] + n[0], c[1] + n[1], c[2] + n[2]]);
-            let back = winding.is_inside([c[0] - n[0], c[1] - n[1], c[2] - n[2]]);
-            front != back
-        })
-        .collect();
-    let num_interior_input_triangles = bounding.iter().filter(|&&b| !b).count();
-    let surface_to_mesh_mm = in_tris
-        .par_iter()
-        .zip(&bounding)
-        .filter(|(_, &b)| b)
-        .map(|(t, _)| max_distance(t, spacing, &out_tree))
-        .reduce(|| 0.0, f64::max);
-    let hausdorff_mm = mesh_to_surface_mm.max(surface_to_mesh_mm);
+    let d = boundary_distance(&out_tris, surface, diagonal_mm / 300.0);
+    let relative = |x: f64| if diagonal_mm > 0.0 { x / diagonal_mm } else { 0.0 };
     QualityReport {
         num_nodes: mesh.nodes.len(),
         num_cells: mesh.cells.len(),
@@ -366,11 +362,21 @@ pub fn report(mesh: &TetMesh, surface: &Surface, mesh_time_s: f64) -> QualityRep
         reference_volume_mm3,
         volume_error: (volume_mm3 - reference_volume_mm3) / reference_volume_mm3,
         diagonal_mm,
-        hausdorff_mm,
-        hausdorff_relative: if diagonal_mm > 0.0 { hausdorff_mm / diagonal_mm } else { 0.0 },
-        mesh_to_surface_mm,
-        surface_to_mesh_mm,
-        num_interior_input_triangles,
+        hausdorff_mm: d.hausdorff_mm,
+        hausdorff_relative: relative(d.hausdorff_mm),
+        mesh_to_surface_mm: d.mesh_to_boundary_mm,
+        surface_to_mesh_mm: d.boundary_to_mesh_mm,
+        hole_cap_mm: d.hole_cap_mm,
+        hole_cap_relative: relative(d.hole_cap_mm),
+        hole_cap_fraction: d.hole_cap_fraction,
+        num_border_edges: d.num_border_edges,
+        widest_hole_mm: d.widest_hole_mm,
+        raw_hausdorff_mm: d.raw_hausdorff_mm,
+        raw_hausdorff_relative: relative(d.raw_hausdorff_mm),
+        raw_mesh_to_surface_mm: d.raw_mesh_to_surface_mm,
+        raw_surface_to_mesh_mm: d.raw_surface_to_mesh_mm,
+        num_interior_input_triangles: d.num_interior_input_triangles,
+        num_partly_interior_input_triangles: d.num_partly_interior_input_triangles,
         regions,
         mesh_time_s,
         report_time_s: start.elapsed().as_secs_f64(),
@@ -407,28 +413,6 @@ fn nesting(surface: &Surface, volume: &[f64]) -> Vec<Option<usize>> {
             best
         })
         .collect()
-}
-
-/// The largest distance from the samples of triangle `t` (grid of about `spacing`) to `tree`.
-fn max_distance(t: &[P; 3], spacing: f64, tree: &TriangleTree) -> f64 {
-    let longest = (0..3).map(|i| norm(sub(t[(i + 1) % 3], t[i]))).fold(0.0, f64::max);
-    let k = if spacing > 0.0 { ((longest / spacing).ceil() as usize).clamp(1, 24) } else { 1 };
-    let mut worst: f64 = 0.0;
-    for i in 0..=k {
-        for j in 0..=k - i {
-            let (a, b) = (i as f64 / k as f64, j as f64 / k as f64);
-            let c = 1.0 - a - b;
-            let p = [
-                c * t[0][0] + a * t[1][0] + b * t[2][0],
-                c * t[0][1] + a * t[1][1] + b * t[2][1],
-                c * t[0][2] + a * t[1][2] + b * t[2][2],
-            ];
-            if let Some((_, d, _)) = tree.closest_point(p) {
-                worst = worst.max(d);
-            }
-        }
-    }
-    worst
 }
 
 #[cfg(test)]

@@ -1,0 +1,400 @@
+//! The distance between a mesh's boundary and the solid its input surface
+//! defines: what the envelope mode is judged by (issue 3's "Hausdorff <= 1e-3
+//! of the diagonal"), reported by [`crate::quality::report`].
+//!
+//! The envelope approximates the solid `w > 1/2` of the input's generalized
+//! winding number `w` ([`crate::WindingNumber`]). Its boundary is made of
+//!
+//! - the **bounding part of the input**: the input points where `w` jumps
+//!   across 1/2 through the surface (sampled on both sides at a small offset
+//!   along the triangle's normal). Inner caps of overlapping parts (`w` = 2 on
+//!   one side, 1 on the other), the part of a self-intersecting spout inside a
+//!   body, region interfaces and stray faces outside do not bound the solid;
+//! - **caps over holes**: where an open scan has no input, the solid is closed by
+//!   the level set `w = 1/2` across the opening, which no input triangle
+//!   represents.
+//!
+//! [`boundary_distance`] measures:
+//!
+//! - the **boundary Hausdorff distance**: the larger of (a) the distance from the
+//!   mesh boundary to the bounding part of the input, over the mesh boundary's
+//!   points not over a hole, and (b) the distance from the bounding part of the
+//!   input to the mesh boundary;
+//! - the **hole caps** separately: the input's border edges (edges of one
+//!   non-degenerate triangle once vertices within 1e-6 of the diagonal are
+//!   welded, so seams of unwelded patches and jittered soups are not holes)
+//!   are grouped in connected chains, and each chain gets a patch (the fan from
+//!   its vertices' centroid to its edges); a chain whose patch is smaller than
+//!   (1e-3 of the diagonal)^2 (a slit enclosing no area) is not a hole. A mesh boundary point nearer to a
+//!   patch than to the bounding input is over a hole: its distance to the input
+//!   is reported apart (about the radius of the opening for a flat cap), with the
+//!   widest chain's extent. A cap that bulges farther from its patch than from the
+//!   input is counted as boundary (reported, not hidden);
+//! - the **raw Hausdorff distance**: every input triangle counted, in both
+//!   directions, caps included (what the report gave before session 18).
+//!
+//! ## Sampling
+//!
+//! Both surfaces are sampled on a barycentric grid of spacing at most `spacing`
+//! (the report uses 1/300 of the diagonal; at most 24 intervals per edge, at
+//! least one), and each sample's exact distance to the other surface is found
+//! with a BVH: a sampled maximum is below the true one by at most the sample
+//! spacing. The jump of `w` is tested at grid points pulled towards the
+//! triangle's centroid by 1e-3 of their distance (so that points on sharp
+//! creases are probed inside their own triangle), at an offset of 1e-7 of the
+//! diagonal on each side, first on a grid of twice the sample spacing (to keep
+//! the report's time in check: each test is two winding-number evaluations). A
+//! triangle whose grid points all jump bounds the solid whole; one whose grid
+//! points all do not is interior (so a jump curve enclosing less than about two
+//! sample spacings inside one triangle is missed); a mixed one (a jump curve
+//! crosses it) is resampled at half the sample spacing and its sub-triangles
+//! with at least two jumping corners stand for its bounding part, which places
+//! the jump curve within about one such finer spacing (1/600 of the diagonal in
+//! the report). Near a jump curve the mesh -> input distance can so be
+//! overestimated by about that much: measured on the thin fin (a 1e-4 mm fin
+//! through a unit box) meshed on the graded lattice, 2.7e-3 of the diagonal
+//! where the raw figure is 5.8e-5 (the fin's junction with the box is a jump
+//! curve). The closed forms this is tested against (two overlapping spheres, an
+//! open scan's cap) are in `meshing/tests/envelope.rs`.
+
+#![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > 0.0)` also refuses NaN, deliberately.
+
+use std::collections::HashMap;
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::envelope::tree::{cross, norm, scale, sub, TriangleTree};
+use crate::topology::UnionFind;
+use crate::{Surface, WindingNumber};
+
+type P = [f64; 3];
+
+/// The distances of [`boundary_distance`] (see the module docs), all in mm.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct BoundaryDistance {
+    /// Symmetric Hausdorff distance between the mesh boundary (hole caps left
+    /// out) and the bounding part of the input [mm].
+    pub hausdorff_mm: f64,
+    /// Largest distance from the mesh boundary, hole caps left out, to the
+    /// bounding part of the input [mm].
+    pub mesh_to_boundary_mm: f64,
+    /// Largest distance from the bounding part of the input to the mesh boundary [mm].
+    pub boundary_to_mesh_mm: f64,
+    /// Largest distance from the mesh boundary over the input's holes to the
+    /// input [mm]; 0 when there is none.
+    pub hole_cap_mm: f64,
+    /// Fraction of the mesh boundary's samples over the input's holes.
+    pub hole_cap_fraction: f64,
+    /// Border edges of the input (after welding within 1e-6 of the diagonal).
+    pub num_border_edges: usize,
+    /// The largest bounding-box diagonal of a connected chain of border edges
+    /// enclosing a hole [mm] (the widest hole's extent); 0 without.
+    pub widest_hole_mm: f64,
+    /// Input triangles none of whose samples bound the solid.
+    pub num_interior_input_triangles: usize,
+    /// Input triangles crossed by a jump curve (part bounding, part not).
+    pub num_partly_interior_input_triangles: usize,
+    /// Raw symmetric Hausdorff distance: every input triangle, caps included [mm].
+    pub raw_hausdorff_mm: f64,
+    /// Raw: largest distance from the mesh boundary to any input triangle [mm].
+    pub raw_mesh_to_surface_mm: f64,
+    /// Raw: largest distance from any input triangle to the mesh boundary [mm].
+    pub raw_surface_to_mesh_mm: f64,
+}
+
+/// How much of one input triangle bounds the solid.
+enum Bounding {
+    All,
+    None,
+    /// Sub-triangles standing for the bounding part.
+    Part(Vec<[P; 3]>),
+}
+
+/// The distances between the mesh boundary triangles `boundary` [mm] and the
+/// solid `surface`'s winding number defines, sampled at `spacing` [mm] (module docs).
+pub fn boundary_distance(boundary: &[[P; 3]], surface: &Surface, spacing: f64) -> BoundaryDistance {
+    let diag = surface.diagonal();
+    let in_tris: Vec<[P; 3]> = surface.triangles.iter().map(|t| t.map(|v| surface.vertices[v as usize])).collect();
+    let out_tree = TriangleTree::new(boundary.to_vec());
+    let in_tree = TriangleTree::new(in_tris.clone());
+    let raw_mesh_to_surface_mm =
+        boundary.par_iter().map(|t| max_distance(t, spacing, &in_tree)).reduce(|| 0.0, f64::max);
+    let raw_surface_to_mesh_mm =
+        in_tris.par_iter().map(|t| max_distance(t, spacing, &out_tree)).reduce(|| 0.0, f64::max);
+
+    // The bounding part of the input, and its distance to the mesh.
+    let winding = WindingNumber::new(surface);
+    let delta = 1e-7 * diag;
+    let parts: Vec<(Bounding, f64)> = in_tris
+        .par_iter()
+        .map(|t| {
+            let k = intervals(t, spacing, 24);
+            let jumps = grid_jumps(t, k.div_ceil(2), &winding, delta);
+            if jumps.iter().all(|&j| j) {
+                (Bounding::All, max_distance(t, spacing, &out_tree))
+            } else if !jumps.iter().any(|&j| j) {
+                (Bounding::None, 0.0)
+            } else {
+                let k = 2 * k;
+                let jumps = grid_jumps(t, k, &winding, delta);
+                let points = grid_points(t, k);
+                let worst = points
+                    .iter()
+                    .zip(&jumps)
+                    .filter(|(_, &j)| j)
+                    .filter_map(|(&p, _)| out_tree.closest_point(p).map(|c| c.1))
+                    .fold(0.0, f64::max);
+                let subs = grid_triangles(k)
+                    .filter(|c| c.iter().filter(|&&i| jumps[i]).count() >= 2)
+                    .map(|c| c.map(|i| points[i]))
+                    .collect();
+                (Bounding::Part(subs), worst)
+            }
+        })
+        .collect();
+    let boundary_to_mesh_mm = parts.iter().map(|p| p.1).fold(0.0, f64::max);
+    let mut items: Vec<[P; 3]> = Vec::new();
+    let mut parent: Vec<u32> = Vec::new();
+    let (mut num_interior, mut num_partly) = (0, 0);
+    for (t, (part, _)) in parts.into_iter().enumerate() {
+        match part {
+            Bounding::All => {
+                items.push(in_tris[t]);
+                parent.push(t as u32);
+            }
+            Bounding::None => num_interior += 1,
+            Bounding::Part(subs) => {
+                num_partly += 1;
+                parent.extend(std::iter::repeat_n(t as u32, subs.len()));
+                items.extend(subs);
+            }
+        }
+    }
+    let bounding_tree = TriangleTree::new(items);
+
+    // Border edges, and the mesh's distance to the bounding input, caps apart.
+    let borders = border_edges(surface, 1e-6 * diag, (1e-3 * diag).powi(2));
+    let patch_tree = TriangleTree::new(borders.patches.clone());
+    let per_face: Vec<(f64, f64, usize, usize)> = boundary
+        .par_iter()
+        .map(|t| {
+            let (mut body, mut cap, mut num_cap) = (0.0f64, 0.0f64, 0);
+            let points = grid_points(t, intervals(t, spacing, 24));
+            for &p in &points {
+                let Some((_, d, _)) = bounding_tree.closest_point(p) else { continue };
+                let over_hole = patch_tree.closest_point_within(p, d).is_some_and(|c| c.1 < d);
+                if over_hole {
+                    cap = cap.max(d);
+                    num_cap += 1;
+                } else {
+                    body = body.max(d);
+                }
+            }
+            (body, cap, num_cap, points.len())
+        })
+        .collect();
+    let mesh_to_boundary_mm = per_face.iter().map(|f| f.0).fold(0.0, f64::max);
+    let hole_cap_mm = per_face.iter().map(|f| f.1).fold(0.0, f64::max);
+    let num_cap: usize = per_face.iter().map(|f| f.2).sum();
+    let num_samples: usize = per_face.iter().map(|f| f.3).sum();
+    // Nothing bounds the solid (no input triangle has a jump): only the raw figure means anything.
+    let (mesh_to_boundary_mm, boundary_to_mesh_mm) = if bounding_tree.num_triangles() == 0 {
+        (raw_mesh_to_surface_mm, raw_surface_to_mesh_mm)
+    } else {
+        (mesh_to_boundary_mm, boundary_to_mesh_mm)
+    };
+    BoundaryDistance {
+        hausdorff_mm: mesh_to_boundary_mm.max(boundary_to_mesh_mm),
+        mesh_to_boundary_mm,
+        boundary_to_mesh_mm,
+        hole_cap_mm,
+        hole_cap_fraction: if num_samples > 0 { num_cap as f64 / num_samples as f64 } else { 0.0 },
+        num_border_edges: borders.num_edges,
+        widest_hole_mm: borders.widest_mm,
+        num_interior_input_triangles: num_interior,
+        num_partly_interior_input_triangles: num_partly,
+        raw_hausdorff_mm: raw_mesh_to_surface_mm.max(raw_surface_to_mesh_mm),
+        raw_mesh_to_surface_mm,
+        raw_surface_to_mesh_mm,
+    }
+}
+
+/// Whether the winding number is on different sides of 1/2 at `p ± offset n`
+/// (`n` a unit normal): the surface at `p` bounds the solid `w > 1/2`.
+pub(crate) fn winding_jumps(winding: &WindingNumber, p: P, n: P, offset: f64) -> bool {
+    let front = winding.is_inside([p[0] + offset * n[0], p[1] + offset * n[1], p[2] + offset * n[2]]);
+    let back = winding.is_inside([p[0] - offset * n[0], p[1] - offset * n[1], p[2] - offset * n[2]]);
+    front != back
+}
+
+/// The unit normal of `t`, `None` for a degenerate triangle.
+pub(crate) fn unit_normal(t: &[P; 3]) -> Option<P> {
+    let n = cross(sub(t[1], t[0]), sub(t[2], t[0]));
+    let l = norm(n);
+    (l > 0.0).then(|| scale(n, 1.0 / l))
+}
+
+/// Grid intervals per edge for sample spacing `spacing`: 1 to `max`.
+fn intervals(t: &[P; 3], spacing: f64, max: usize) -> usize {
+    let longest = (0..3).map(|i| norm(sub(t[(i + 1) % 3], t[i]))).fold(0.0, f64::max);
+    if spacing > 0.0 {
+        ((longest / spacing).ceil() as usize).clamp(1, max)
+    } else {
+        1
+    }
+}
+
+/// The barycentric grid of `k` intervals on `t`, point `(i, j)` (weights
+/// `1 - a - b`, `a = i / k`, `b = j / k`) at index [`grid_index`]`(i, j, k)`.
+fn grid_points(t: &[P; 3], k: usize) -> Vec<P> {
+    let mut out = Vec::with_capacity((k + 1) * (k + 2) / 2);
+    for i in 0..=k {
+        for j in 0..=k - i {
+            let (a, b) = (i as f64 / k as f64, j as f64 / k as f64);
+            let c = 1.0 - a - b;
+            out.push([0, 1, 2].map(|d| c * t[0][d] + a * t[1][d] + b * t[2][d]));
+        }
+    }
+    out
+}
+
+fn grid_index(i: usize, j: usize, k: usize) -> usize {
+    // Rows i' < i hold k + 1 - i' points each.
+    i * (k + 1) - i * (i.saturating_sub(1)) / 2 + j
+}
+
+/// The `k^2` sub-triangles of the grid, as grid indices.
+fn grid_triangles(k: usize) -> impl Iterator<Item = [usize; 3]> {
+    (0..k).flat_map(move |i| {
+        (0..k - i).flat_map(move |j| {
+            let up = [grid_index(i, j, k), grid_index(i + 1, j, k), grid_index(i, j + 1, k)];
+            let down = (i + j + 1 < k)
+                .then(|| [grid_index(i + 1, j, k), grid_index(i + 1, j + 1, k), grid_index(i, j + 1, k)]);
+            std::iter::once(up).chain(down)
+        })
+    })
+}
+
+/// Whether the winding number jumps at each grid point of `t` (module docs).
+fn grid_jumps(t: &[P; 3], k: usize, winding: &WindingNumber, delta: f64) -> Vec<bool> {
+    let points = grid_points(t, k);
+    let Some(n) = unit_normal(t) else { return vec![false; points.len()] };
+    let c = [0, 1, 2].map(|d| (t[0][d] + t[1][d] + t[2][d]) / 3.0);
+    points
+        .iter()
+        .map(|p| {
+            let q = [0, 1, 2].map(|d| c[d] + (1.0 - 1e-3) * (p[d] - c[d]));
+            winding_jumps(winding, q, n, delta)
+        })
+        .collect()
+}
+
+/// The largest distance from the samples of triangle `t` (grid of about `spacing`) to `tree`.
+pub(crate) fn max_distance(t: &[P; 3], spacing: f64, tree: &TriangleTree) -> f64 {
+    grid_points(t, intervals(t, spacing, 24))
+        .into_iter()
+        .filter_map(|p| tree.closest_point(p).map(|c| c.1))
+        .fold(0.0, f64::max)
+}
+
+/// The input's border edges after welding.
+struct Borders {
+    /// Per chain of border edges enclosing a hole, the fan of triangles from its
+    /// vertices' centroid to each of its edges: a patch over the hole.
+    patches: Vec<[P; 3]>,
+    num_edges: usize,
+    widest_mm: f64,
+}
+
+/// Edges used by one non-degenerate triangle once vertices within `tolerance`
+/// [mm] are welded, grouped in connected chains, each with a patch over it
+/// when the patch's area is at least `min_area` [mm^2].
+fn border_edges(surface: &Surface, tolerance: f64, min_area: f64) -> Borders {
+    let used = vec![true; surface.vertices.len()];
+    let reps = crate::validate::weld_representatives(&surface.vertices, &used, tolerance);
+    let mut uses: HashMap<(u32, u32), usize> = HashMap::new();
+    for tri in &surface.triangles {
+        let r = tri.map(|v| reps[v as usize]);
+        let p = r.map(|v| surface.vertices[v as usize]);
+        if r[0] == r[1] || r[1] == r[2] || r[2] == r[0] || crate::predicates::is_degenerate(p[0], p[1], p[2]) {
+            continue;
+        }
+        for e in 0..3 {
+            let (a, b) = (r[e], r[(e + 1) % 3]);
+            *uses.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+        }
+    }
+    let mut border: Vec<(u32, u32)> = uses.into_iter().filter(|&(_, c)| c == 1).map(|(e, _)| e).collect();
+    border.sort_unstable();
+    let mut uf = UnionFind::new(surface.vertices.len());
+    for &(a, b) in &border {
+        uf.union(a, b);
+    }
+    // Per chain (keyed by its root, in order): its vertices and edges.
+    type Chain = (Vec<u32>, Vec<(u32, u32)>);
+    let mut chains: std::collections::BTreeMap<u32, Chain> = Default::default();
+    for &(a, b) in &border {
+        let chain = chains.entry(uf.find(a)).or_default();
+        chain.0.extend([a, b]);
+        chain.1.push((a, b));
+    }
+    let mut patches = Vec::new();
+    let mut widest_mm: f64 = 0.0;
+    for (mut vertices, edges) in chains.into_values() {
+        vertices.sort_unstable();
+        vertices.dedup();
+        let pts: Vec<P> = vertices.iter().map(|&v| surface.vertices[v as usize]).collect();
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        let mut c = [0.0; 3];
+        for p in &pts {
+            for d in 0..3 {
+                lo[d] = lo[d].min(p[d]);
+                hi[d] = hi[d].max(p[d]);
+                c[d] += p[d] / pts.len() as f64;
+            }
+        }
+        let fan: Vec<[P; 3]> =
+            edges.iter().map(|&(a, b)| [c, surface.vertices[a as usize], surface.vertices[b as usize]]).collect();
+        let area: f64 = fan.iter().map(|t| 0.5 * norm(cross(sub(t[1], t[0]), sub(t[2], t[0])))).sum();
+        // A chain enclosing (almost) no area (a slit) is not a hole.
+        if area >= min_area {
+            widest_mm = widest_mm.max(norm(sub(hi, lo)));
+            patches.extend(fan);
+        }
+    }
+    Borders { patches, num_edges: border.len(), widest_mm }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_indices_and_triangles_cover_the_grid() {
+        for k in 1..7 {
+            let t = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+            let points = grid_points(&t, k);
+            for i in 0..=k {
+                for j in 0..=k - i {
+                    let p = points[grid_index(i, j, k)];
+                    assert!((p[0] - i as f64 / k as f64).abs() < 1e-15 && (p[1] - j as f64 / k as f64).abs() < 1e-15);
+                }
+            }
+            let subs: Vec<[usize; 3]> = grid_triangles(k).collect();
+            assert_eq!(subs.len(), k * k);
+            // Positive, equal areas summing to the triangle's.
+            let area: f64 = subs
+                .iter()
+                .map(|c| {
+                    let q = c.map(|i| points[i]);
+                    let a = 0.5 * cross(sub(q[1], q[0]), sub(q[2], q[0]))[2];
+                    assert!((a - 0.5 / (k * k) as f64).abs() < 1e-15, "{a}");
+                    a
+                })
+                .sum();
+            assert!((area - 0.5).abs() < 1e-12);
+        }
+    }
+}
