@@ -4,38 +4,16 @@
 //!
 //! ## The generator, and how it differs from the diagnoser
 //!
-//! A campaign is six 2D plane-stress trials of a 20 x H x 10 mm block of a
+//! A campaign is four 2D plane-stress trials of a 20 x H x 10 mm block of a
 //! three-element gel (`E1` = 0.05 MPa, `c1` = 0.05 MPa s, `c3` = 5 MPa s,
-//! `nu` = 0.3; glued floor, frictionless plate), 5 s before contact, then
-//! [`DESIGN`]: push durations 2.5 to 12.5 s, holds 5 s to 5 relaxation times
-//! (505 s), strain 10 to 25 %, heights 10 and 15 mm (speed, hold, strain level
-//! and aspect ratio all vary, diagnosis-details.md §5.7), a withdrawal to half
-//! the depth over half the push duration (the release phase, where a dual
-//! viscosity shows), then the release and 20 s of recovery (one relaxation
-//! time after the long hold). The diagnoser is told the model
+//! `nu` = 0.3; glued floor, frictionless plate), 2 s before contact, then
+//! [`DESIGN`]: push durations 2.5 to 10 s, holds 5 to 30 s, strain 10 to 20 %,
+//! heights 10 and 15 mm (speed, hold, strain level and aspect ratio all vary,
+//! diagnosis-details.md §5.7), a withdrawal to half the depth over half the push
+//! duration (the release phase, where a dual viscosity shows), then the release
+//! and 20 s of recovery. The diagnoser is told the model
 //! (`three-element`, `nu`), the nominal geometry and protocol, the trials' age
 //! (`age_h`, the run order shuffled per campaign), the marker noise, and nothing else.
-//!
-//! **The design (session 18).** Sessions 12 to 17 ran the first four trials
-//! of [`DESIGN`], 2 s before contact. Most of their misses at lambda of 30 and
-//! more were `tie`s between pairs whose separating experiment, the one the
-//! diagnosis itself names when it says `tie` ([`super::separating_experiment`]),
-//! the design lacked. Issue 6 leaves the design to us, and a user following
-//! the diagnosis's advice would run those experiments, so the campaign now
-//! has them: the long hold ([`LONG_HOLD_TRIAL`], 5 relaxation times,
-//! `bingham-dashpot` against `stress-thinning`, with a long post-release
-//! record), the large strain at one aspect ratio ([`LARGE_STRAIN_TRIAL`], 10,
-//! 20 and 25 % on the 15 mm block at one strain rate, `strain-stiffening`
-//! against `finite-strain`), and 5 s of no-contact force record before every
-//! contact ([`PRE_CONTACT_S`], the advice for `force-offset`). Not in it: a
-//! second compression of the same sample (Mullins-type damage against
-//! `finite-strain` / `strain-stiffening`): a plate that pushes again after
-//! rising runs as a contact tool (wagashi_io's bundle docs, "Rigid tools"),
-//! with the quasi-static integrator and no sensitivities, whose refits cost
-//! finite-difference Jacobians; and a record with nothing on the sensor
-//! (`force-offset` against `gravity`), which the bundle format cannot say. The
-//! cost: about twice the CPU time per campaign (development seed 101, the
-//! first three campaigns: 14.1 s before, 29.2 s after).
 //!
 //! | | diagnoser | generator (the "real" trials) |
 //! |---|---|---|
@@ -72,11 +50,65 @@
 //! are ties between confusable pairs (bingham-dashpot / stress-thinning,
 //! strain-stiffening / finite-strain, force-offset / gravity), whose separating
 //! experiments (a hold of 5x the c3 time, two strain levels at one aspect
-//! ratio, a tared no-contact record) the four-trial design of then lacked; the others
+//! ratio, a tared no-contact record) this four-trial design lacks; the others
 //! are refits that stop short (`machine-compliance`, LR about a sixth of
 //! lambda_eff on seed 101) and effects left at `none`.
 //! `plate-friction` truths on the fine mesh sometimes stop with a contact that
 //! does not settle; such a campaign is listed as a failure, not scored.
+//!
+//! **The separating trials, tried and not kept (session 18).** The design
+//! above, with two trials added and 5 s (not 2 s) before contact, the
+//! experiments the diagnosis names when it says `tie`
+//! ([`super::separating_experiment`]; commit 7dac917 on branch wt/blind):
+//! a hold of five relaxation times (`(c1 + c3)/E1` = 101 s; 10 % in 5 s on
+//! the 10 mm block, hold 505 s, 101 s recorded after the release:
+//! `bingham-dashpot` against `stress-thinning`, and a long no-contact record
+//! for `force-offset`), and 25 % in 12.5 s with a 10 s hold on the 15 mm block
+//! (10, 20 and 25 % at one aspect ratio and one strain rate:
+//! `strain-stiffening` against `finite-strain`). Left out: a second
+//! compression of one sample (a plate that pushes again after rising runs as a
+//! contact tool, without sensitivities) and a record with nothing on the
+//! sensor (the bundle format cannot say it). Measured on development seeds 101
+//! and 102 (`wagashi diagnose --blind 24 --seed S`, the issue's scatter, the
+//! same case plans as session 16, 24 campaigns a seed, 44 scored and four
+//! `plate-friction` truths failed;
+//! thresholds untouched, the frozen CI seed not used): top-1 at lambda of 30
+//! and more 8/17 (0.47; seed 101 5/9, seed 102 3/8), at lambda = 12 2/6
+//! (0.33), false attribution on nulls 0/11, out-of-library flagged 5/10
+//! (0.50; 2/6 and 3/4), median closure error 1.56 over 6 (1.41 and 1.57);
+//! session 16 (the same campaigns with the four trials, the session-16 code)
+//! 9/18 (0.50; 4/9 and 5/9), 1/7, 0/11, 4/10 (0.40; 3/6 and 1/4), 0.006 over 3
+//! and 0.088 over 2. What went wrong: (1) the long hold makes a
+//! threshold of a few Pa visible (lambda 30 at `sigma_B` = 5.3 Pa on seed 101,
+//! against 0.37 kPa with the four trials), and a plateau of about 1 mN over
+//! 505 s is much like a force offset with drift: `bingham-dashpot` and
+//! `force-offset` took each other's place (seed 102: Bingham at 100 named
+//! `force-offset`, offset at 30 named `bingham-dashpot`, margins 166 and 262
+//! against 2 SE of 47 and 54), Bingham at 30 on seed 101 tied (margin 54
+//! against 105), `gravity` at 100 tied with `force-offset` (cosine 0.93); (2)
+//! the broad spectrum (a 30 s second mode, `E1/E2` 0.005 to 0.017) is named as
+//! an in-library effect (`bingham-dashpot` twice, margins 136 and 592 against 2
+//! SE of 90 and 109, `stress-thinning`, `partial: force-offset`),
+//! a wrong attribution the out-of-library score does not count; (3) `finite-strain`
+//! is named `strain-stiffening` (2/2: the tie became a misattribution, the
+//! 25 % level did not separate them); (4) the held-out closure of a campaign
+//! whose evidence sits in the long trial comes out negative (G_hat -1.5 to
+//! -12.8: with that trial held out, a drift or a plateau fitted on the short
+//! trials extrapolates over 600 s), so the closure errors are 0.2 to 13.8;
+//! (5) on the frozen CI set the strength calibration of `ageing` at lambda 100
+//! did not land within 20 % in its 12 evaluations (the test's assertion
+//! failed; the six campaigns before it came out `none`, `force-offset`,
+//! `machine-compliance`, `none` (thinning at 30), `none`, `bingham-dashpot`);
+//! and (6) a campaign cost twice the CPU (first three campaigns of seed 101:
+//! 14.1 s user before, 29.2 s after). What it did right: Mullins-type damage
+//! came out `partial: strain-stiffening` (2/2 at 100 and 300, flagged; 0/12
+//! before), `gravity` at 30 and `dual-viscosity` at 30 were named. The
+//! `plate-friction` failures (4 of 48) are the known contact that does not
+//! settle on the generator's fine mesh, three at t = 0 (trials 1, 3 and the
+//! new 25 % trial) and one at 0.11 s (the long hold). A design
+//! that keeps the long hold needs a diagnosis that tells a plateau from an
+//! offset by the no-contact segments alone (the offset's share there) and a
+//! held-out closure that does not extrapolate one trial's drift.
 //!
 //! **Withheld effects.** In-library: every effect the engine implements
 //! ([`EffectId::implemented`], taken from the registry, so new effects join the
@@ -184,62 +216,22 @@ pub struct TrialDesign {
     pub strain: f64,
     /// Nominal height [mm].
     pub height_mm: f64,
-    /// Recorded after the release [s].
-    pub recovery_s: f64,
 }
 
-/// The trials of every campaign (module docs, "The design"): the four of
-/// sessions 12 to 17 and, from session 18, the two separating trials,
-/// [`LONG_HOLD_TRIAL`] and [`LARGE_STRAIN_TRIAL`].
-pub const DESIGN: [TrialDesign; 6] = [
-    TrialDesign { push_s: 5.0, hold_s: 10.0, strain: 0.10, height_mm: 15.0, recovery_s: RECOVERY_S },
-    TrialDesign { push_s: 10.0, hold_s: 30.0, strain: 0.20, height_mm: 15.0, recovery_s: RECOVERY_S },
-    TrialDesign { push_s: 2.5, hold_s: 5.0, strain: 0.15, height_mm: 10.0, recovery_s: RECOVERY_S },
-    TrialDesign { push_s: 5.0, hold_s: 20.0, strain: 0.20, height_mm: 10.0, recovery_s: RECOVERY_S },
-    LONG_HOLD_TRIAL,
-    LARGE_STRAIN_TRIAL,
+/// The four trials of every campaign (module docs).
+pub const DESIGN: [TrialDesign; 4] = [
+    TrialDesign { push_s: 5.0, hold_s: 10.0, strain: 0.10, height_mm: 15.0 },
+    TrialDesign { push_s: 10.0, hold_s: 30.0, strain: 0.20, height_mm: 15.0 },
+    TrialDesign { push_s: 2.5, hold_s: 5.0, strain: 0.15, height_mm: 10.0 },
+    TrialDesign { push_s: 5.0, hold_s: 20.0, strain: 0.20, height_mm: 10.0 },
 ];
-
-/// The chain's relaxation time under a held strain, `(c1 + c3) / E1` [s] (101 s
-/// for the nominal gel), "the c3 time" of the diagnosis's advice.
-pub const RELAXATION_TIME_S: f64 = (C1_MPA_S + C3_MPA_S) / E1_MPA;
-
-/// The long hold (session 18): five relaxation times ([`RELAXATION_TIME_S`]),
-/// the diagnosis's advice for `bingham-dashpot` against `stress-thinning`
-/// ([`super::separating_experiment`]): the baseline's force decays to
-/// `exp(-5)` = 0.7 % of its start, a threshold holds a plateau, thinning
-/// decays toward zero. Same push (10 % in 5 s) as trial 0 but on the 10 mm
-/// block, whose three strain levels (10, 15, 20 %) it completes. Its record
-/// goes on for one relaxation time after the release (the others: 20 s): a
-/// long no-contact record where a force offset shows and a threshold does not
-/// (a plateau of a few mN over the hold is otherwise much like an offset; on
-/// development seed 101 with 20 s the two refits' cosine was 0.91), and the
-/// "longer post-release observation" that separates `dual-viscosity`.
-pub const LONG_HOLD_TRIAL: TrialDesign = TrialDesign {
-    push_s: 5.0,
-    hold_s: 5.0 * RELAXATION_TIME_S,
-    strain: 0.10,
-    height_mm: 10.0,
-    recovery_s: RELAXATION_TIME_S,
-};
-
-/// The large strain (session 18): 25 % on the 15 mm block at trial 0's and
-/// trial 1's strain rate (0.02 /s) and trial 0's hold, so that the three trials
-/// at one aspect ratio differ in strain level only (10, 20, 25 %; trial 1's
-/// hold is longer): the diagnosis's advice for `strain-stiffening` against
-/// `finite-strain` ("two strain levels at one aspect ratio"), with the
-/// largest level pushed as far as the bounds allow (the stiffening's lower
-/// bound `a` = -4 takes the modulus to zero at an equivalent strain of 25 %).
-pub const LARGE_STRAIN_TRIAL: TrialDesign =
-    TrialDesign { push_s: 12.5, hold_s: 10.0, strain: 0.25, height_mm: 15.0, recovery_s: RECOVERY_S };
 
 /// Width and thickness of the block [mm].
 const WIDTH_MM: f64 = 20.0;
 const THICKNESS_MM: f64 = 10.0;
-/// Before contact [s]: the 5 s of no-contact force record the diagnosis asks
-/// for `force-offset` ([`super::discriminator`]; session 18, 2 s before).
-pub const PRE_CONTACT_S: f64 = 5.0;
-/// Recorded after release [s] (every trial but the long hold).
+/// Before contact [s].
+const PRE_CONTACT_S: f64 = 2.0;
+/// After release [s].
 const RECOVERY_S: f64 = 20.0;
 /// The nominal material.
 const E1_MPA: f64 = 0.05;
@@ -485,7 +477,7 @@ struct Draws {
 fn protocol_times(d: &TrialDesign) -> (f64, f64, f64) {
     let push_end = PRE_CONTACT_S + d.push_s;
     let release = push_end + d.hold_s + 0.5 * d.push_s;
-    (push_end, release, release + d.recovery_s)
+    (push_end, release, release + RECOVERY_S)
 }
 
 /// Marker sample times: t = 0, eight during the hold, ten during the recovery.
@@ -1307,8 +1299,10 @@ pub fn run_blind(
                 w
             }
             Err(e) => {
-                failures.push(Failure { index: i, seed: s, case: *case, error: super::error_chain(&e) });
-                format!("{} at {} -> failed", case.truth.name(), case.lambda)
+                let error = super::error_chain(&e);
+                let w = format!("{} at {} -> failed: {error}", case.truth.name(), case.lambda);
+                failures.push(Failure { index: i, seed: s, case: *case, error });
+                w
             }
         };
         progress(i + 1, cases.len(), &what);
