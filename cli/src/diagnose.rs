@@ -606,8 +606,8 @@ fn run_blind(args: &DiagnoseArgs, n: usize, effects: Option<Vec<EffectId>>) -> a
         ..blind::default_options(args.seed)
     };
     let cases = blind::plan(n, args.seed);
-    let target =
-        if std::io::stderr().is_terminal() { ProgressDrawTarget::stderr() } else { ProgressDrawTarget::hidden() };
+    let terminal = std::io::stderr().is_terminal();
+    let target = if terminal { ProgressDrawTarget::stderr() } else { ProgressDrawTarget::hidden() };
     let bar = ProgressBar::with_draw_target(Some(n as u64), target);
     bar.set_style(
         ProgressStyle::with_template("{spinner} {elapsed_precise} [{bar:24}] {pos}/{len} campaigns {msg}")
@@ -619,6 +619,11 @@ fn run_blind(args: &DiagnoseArgs, n: usize, effects: Option<Vec<EffectId>>) -> a
     let result = blind::run_blind(&cases, args.seed, &scatter, &options, &|done, _, what| {
         bar.set_position(done as u64);
         bar.set_message(what.to_string());
+        // Without a terminal (a long run in the background), one line per
+        // campaign, so that a run stopped early still tells what it did.
+        if !terminal && done > 0 {
+            eprintln!("campaign {}/{n}: {what}", done - 1);
+        }
     });
     bar.finish_and_clear();
     let (outcomes, failures) = result;

@@ -288,6 +288,17 @@ fn a_mullins_campaign_is_generated_at_its_strength() {
 /// (margin 109.4 against 2 SE = 126.2 by whole segments) to `ageing` (2 SE =
 /// 42.6 by blocks); top-1 at lambda >= 30 went from 1/5 to 2/5 (still a miss);
 /// the nulls stayed `none`, the closure error 0.149.
+///
+/// Session 18: the design with the separating trials (a hold of five
+/// relaxation times, 25 % strain, 5 s before contact; blind.rs, "The
+/// separating trials, tried and not kept") was run on this set once
+/// (`calibrate-* frozen_blind_ci_set --nocapture`, commit 7dac917, load about
+/// 25) and failed this test's own check that every campaign is generated at
+/// its strength: `ageing` at lambda 100 did not land within 20 % in its 12
+/// evaluations. The six campaigns before it came out `none`,
+/// `force-offset`, `machine-compliance`, `none` (thinning at 30), `none`,
+/// `bingham-dashpot`, 58 to 175 s each. The design was not kept, so the
+/// assertions stay those of the four-trial design.
 #[test]
 fn frozen_blind_ci_set() {
     use super::blind::{default_options, run_blind, summarise, Case, OutOfLibrary, Scatter, Truth};
