@@ -18,78 +18,27 @@
 //!   compliance are refused naming the key.
 
 use fem_core::effects::{EffectId, Effects};
-use fem_core::material::{Material, MullinsDamage, Rheology};
+use fem_core::material::{Material, MullinsDamage};
 use fem_core::mesh;
 use fem_core::press::{
-    self, AnyPress, Attachment, AxisymmetricPress, PlanePress, PressProblem, PressResult, Protocol, Settings,
-    SolidPress, Tool, ToolContact, ToolShape,
+    self, AnyPress, Attachment, AxisymmetricPress, PlanePress, PressProblem, PressResult, Protocol, Settings, Tool,
+    ToolContact, ToolShape,
 };
 
 mod common;
-use common::with_plate_tool;
+use common::{as_plane, elastic, problems, ramp_hold_release, set_effects, with_plate_tool};
 
 const W: f64 = 20.0;
 const H: f64 = 15.0;
 const T: f64 = 10.0;
 
-fn elastic(e_mpa: f64, nu: f64) -> Material {
-    Material::new(Rheology::Elastic { e_mpa }, nu).unwrap()
-}
-
 fn compliance(c: f64) -> Effects {
     Effects::none().with(EffectId::MachineCompliance, &[c]).unwrap()
-}
-
-fn set_effects(p: &mut AnyPress, effects: &Effects) {
-    match p {
-        AnyPress::Plane(p) => p.effects = effects.clone(),
-        AnyPress::Solid(p) => p.effects = effects.clone(),
-        AnyPress::Axisymmetric(p) => p.effects = effects.clone(),
-    }
-}
-
-/// The block in plane stress, axisymmetric (a cylinder of radius W/2) and 3D.
-fn problems(m: &Material, protocol: &Protocol) -> Vec<(&'static str, AnyPress)> {
-    vec![
-        (
-            "plane",
-            AnyPress::Plane(
-                PlanePress::new_2d(mesh::rectangle(W, H, 2.5, "m").unwrap(), T, vec![m.clone()], protocol.clone())
-                    .unwrap(),
-            ),
-        ),
-        (
-            "axisymmetric",
-            AnyPress::Axisymmetric(
-                AxisymmetricPress::new_axisymmetric(
-                    mesh::axisymmetric_section(W / 2.0, H, 2.5, "m").unwrap(),
-                    vec![m.clone()],
-                    protocol.clone(),
-                )
-                .unwrap(),
-            ),
-        ),
-        (
-            "solid",
-            AnyPress::Solid(
-                SolidPress::new_3d(mesh::block([W, H, T], 5.0, "m").unwrap(), vec![m.clone()], protocol.clone())
-                    .unwrap(),
-            ),
-        ),
-    ]
 }
 
 /// The plate force at the step ends while the plate holds, and the largest of them.
 fn plate_forces(r: &PressResult, until: f64) -> Vec<(f64, f64)> {
     r.steps.iter().filter(|s| s.t_s <= until * (1.0 + 1e-12)).map(|s| (s.t_s, s.plate_force_n)).collect()
-}
-
-/// Ramp 1.5 mm in 10 s, hold to 30 s, release, recover to 60 s.
-fn ramp_hold_release(plate: Attachment, support: Attachment) -> Protocol {
-    let mut p = Protocol::ramp_hold_release(0.15, 10.0, 30.0, 60.0);
-    p.plate = plate;
-    p.support = support;
-    p
 }
 
 /// A flat plate tool (glued on the glued trial, frictionless on the frictionless
@@ -107,7 +56,7 @@ fn plate_tool_with_compliance_reproduces_the_constrained_plate() {
         [(Attachment::Glued, ToolContact::Glued), (Attachment::Frictionless, ToolContact::Frictionless)]
     {
         let protocol = ramp_hold_release(plate, plate);
-        for (name, mut reference) in problems(&m, &protocol) {
+        for (name, mut reference) in problems(&m, &protocol, [W, H, T]) {
             // About a third of the stroke taken by the frame at the peak.
             let c = if name == "solid" { 1.3 } else { 5.0 };
             set_effects(&mut reference, &compliance(c));
@@ -217,10 +166,7 @@ fn slider_behind_the_spring_follows_the_series_closed_form() {
     .unwrap();
     axisymmetric.effects = slider.clone();
     let fixed = Settings { fixed_dt_s: Some(1.0), ..Settings::default() };
-    let plate_tool = match with_plate_tool(&AnyPress::Plane(plane()), ToolContact::Frictionless) {
-        AnyPress::Plane(p) => p,
-        _ => unreachable!(),
-    };
+    let plate_tool = as_plane(with_plate_tool(&AnyPress::Plane(plane()), ToolContact::Frictionless));
     let peak_closed = closed(10.0, W * T);
     let no_spring = slider_stress(e, sy, hh, 2.25 / H, None);
     assert!(peak_closed > sy && no_spring > 1.05 * peak_closed, "{peak_closed} {no_spring}");
@@ -281,6 +227,30 @@ where
     p
 }
 
+/// The compliant run `r` of `problem` against its [`deflected_reference`]
+/// replaying `r`'s step ends: the largest plate-force difference at the step
+/// ends over the reference's peak force, and that peak [N].
+fn deflected_mismatch<const D: usize, const N: usize, const S: usize>(
+    problem: &PressProblem<D, N, S>,
+    r: &PressResult,
+    c: f64,
+) -> (f64, f64)
+where
+    fem_core::element::Simplex<D, N>: fem_core::element::ReferenceSimplex<D, N>,
+{
+    let reference = deflected_reference(problem, r, c);
+    let replay = Settings { step_ends_s: Some(r.steps.iter().map(|s| s.t_s).collect()), ..Settings::default() };
+    let expected = press::simulate(&reference, &replay, &mut |_| {}).unwrap();
+    let peak = expected.peak_force();
+    let worst = r
+        .steps
+        .iter()
+        .zip(&expected.steps)
+        .map(|(a, b)| (a.plate_force_n - b.plate_force_n).abs() / peak)
+        .fold(0.0, f64::max);
+    (worst, peak)
+}
+
 /// Mullins damage (d_inf = 0.4, strain 0.05) on an elastic chain behind the
 /// spring (3 mm/N), glued plate and glued plate tool, on press (1.5 mm), back to
 /// 0.3 mm, press deeper (2 mm): the run without compliance whose plate follows
@@ -297,22 +267,10 @@ fn damage_behind_the_spring_sees_the_deflected_displacement() {
     let c = 3.0;
     let mut plate = PlanePress::new_2d(mesh::rectangle(W, H, 2.5, "m").unwrap(), T, vec![m], protocol).unwrap();
     plate.effects = compliance(c);
-    let tool = match with_plate_tool(&AnyPress::Plane(plate.clone()), ToolContact::Glued) {
-        AnyPress::Plane(p) => p,
-        _ => unreachable!(),
-    };
+    let tool = as_plane(with_plate_tool(&AnyPress::Plane(plate.clone()), ToolContact::Glued));
     for (name, problem) in [("plate", plate), ("plate tool", tool)] {
         let r = press::simulate(&problem, &Settings::default(), &mut |_| {}).unwrap_or_else(|e| panic!("{name}: {e}"));
-        let reference = deflected_reference(&problem, &r, c);
-        let replay = Settings { step_ends_s: Some(r.steps.iter().map(|s| s.t_s).collect()), ..Settings::default() };
-        let expected = press::simulate(&reference, &replay, &mut |_| {}).unwrap();
-        let peak = expected.peak_force();
-        let worst = r
-            .steps
-            .iter()
-            .zip(&expected.steps)
-            .map(|(a, b)| (a.plate_force_n - b.plate_force_n).abs() / peak)
-            .fold(0.0, f64::max);
+        let (worst, peak) = deflected_mismatch(&problem, &r, c);
         let frame = c * peak / 2.0;
         eprintln!(
             "{name}: plate force {worst:.2e} of the peak {peak:.4e} N; frame {:.1} % ({} steps)",
@@ -353,16 +311,7 @@ fn sphere_behind_the_spring_sees_the_deflected_displacement() {
     problem.effects = compliance(c);
     let settings = Settings { fixed_dt_s: Some(0.25), ..Settings::default() };
     let r = press::simulate(&problem, &settings, &mut |_| {}).unwrap();
-    let reference = deflected_reference(&problem, &r, c);
-    let replay = Settings { step_ends_s: Some(r.steps.iter().map(|s| s.t_s).collect()), ..Settings::default() };
-    let expected = press::simulate(&reference, &replay, &mut |_| {}).unwrap();
-    let peak = expected.peak_force();
-    let worst = r
-        .steps
-        .iter()
-        .zip(&expected.steps)
-        .map(|(a, b)| (a.plate_force_n - b.plate_force_n).abs() / peak)
-        .fold(0.0, f64::max);
+    let (worst, peak) = deflected_mismatch(&problem, &r, c);
     let frame = c * peak / 1.0;
     eprintln!("sphere: plate force {worst:.2e} of the peak {peak:.4e} N; frame {:.1} %", 100.0 * frame);
     assert!(frame > 0.2, "the frame takes {frame:.3}");
@@ -383,10 +332,7 @@ fn null_compliance_is_the_baseline_and_refusals_name_the_key() {
         PlanePress::new_2d(mesh::rectangle(W, H, 5.0, "m").unwrap(), T, vec![Material::seed_mat1_force()], protocol)
             .unwrap();
     let slider = Effects::none().with(EffectId::PlasticSlider, &[0.002, 0.005]).unwrap();
-    let tool = match with_plate_tool(&AnyPress::Plane(base.clone()), ToolContact::Glued) {
-        AnyPress::Plane(p) => p,
-        _ => unreachable!(),
-    };
+    let tool = as_plane(with_plate_tool(&AnyPress::Plane(base.clone()), ToolContact::Glued));
     for (name, problem, effects) in [("tool", tool.clone(), Effects::none()), ("slider", base.clone(), slider)] {
         let mut a = problem.clone();
         a.effects = effects.clone();
