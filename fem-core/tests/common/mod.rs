@@ -1,6 +1,7 @@
 //! Set-ups shared by the contact test files (`contact.rs`, `compliance.rs`,
-//! `material_point_contact.rs`): the block in the three formulations, effects and
-//! protocol swapped in, the plate replaced by a plate tool.
+//! `material_point_contact.rs`, `adhesion.rs`): the block in the three
+//! formulations, effects and protocol swapped in, the plate replaced by a plate
+//! tool, the cohesive series closed form.
 //!
 //! Each test file includes this module as its own copy, and not every file uses
 //! every helper: unused ones would fail `-D warnings` (dead_code), as in the io
@@ -108,5 +109,21 @@ pub fn with_plate_tool(problem: &AnyPress, contact: ToolContact) -> AnyPress {
         AnyPress::Plane(p) => AnyPress::Plane(swap(p, contact)),
         AnyPress::Solid(p) => AnyPress::Solid(swap(p, contact)),
         AnyPress::Axisymmetric(p) => AnyPress::Axisymmetric(swap(p, contact)),
+    }
+}
+
+/// The plate force (compression positive) of a spring `k` in series with the
+/// rigid-linear cohesive law (strength `s` N, critical opening `dc`) at the plate
+/// displacement `d` (down positive), on the loading path: bonded while
+/// `k d >= -s`; then `F = -k (s + S d)/(k - S)` with `S = s/dc` (stable: `k > S`)
+/// until the opening `-d` reaches `dc`; zero beyond.
+pub fn series_force(k: f64, s: f64, dc: f64, d: f64) -> f64 {
+    let stiffness = s / dc;
+    if k * d >= -s {
+        k * d
+    } else if -d < dc {
+        -k * (s + stiffness * d) / (k - stiffness)
+    } else {
+        0.0
     }
 }
