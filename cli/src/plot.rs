@@ -8,6 +8,20 @@ use wagashi_io::ForceSeries;
 /// Size of the drawing [px].
 const SIZE: (u32, u32) = (900, 560);
 
+/// Draws the series' legend at the upper right and writes the drawing out.
+fn legend_and_present<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK)
+        .draw()?;
+    root.present()
+}
+
 /// The SVG text of the force plot titled `title`.
 pub fn force_svg(title: &str, simulated: &ForceSeries, measured: Option<&ForceSeries>) -> anyhow::Result<String> {
     let all = simulated.samples.iter().chain(measured.into_iter().flat_map(|m| &m.samples));
@@ -53,14 +67,7 @@ pub fn force_svg(title: &str, simulated: &ForceSeries, measured: Option<&ForceSe
             .map_err(draw_err)?
             .label("simulated")
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], BLUE.stroke_width(2)));
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.9))
-            .border_style(BLACK)
-            .draw()
-            .map_err(draw_err)?;
-        root.present().map_err(draw_err)?;
+        legend_and_present(&mut chart, &root).map_err(draw_err)?;
     }
     Ok(svg)
 }
@@ -114,14 +121,7 @@ pub fn fit_svg(campaign: &calibrate::trial::Campaign, runs: &[fem_core::press::P
                 .label(trial.name.clone())
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], colour.stroke_width(3)));
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.9))
-            .border_style(BLACK)
-            .draw()
-            .map_err(draw_err)?;
-        root.present().map_err(draw_err)?;
+        legend_and_present(&mut chart, &root).map_err(draw_err)?;
     }
     Ok(svg)
 }
@@ -190,14 +190,7 @@ pub fn shapes_svg(
                 .label(format!("{} simulated", channel.as_str()))
                 .legend(move |(x, y)| Cross::new((x + 12, y), 5, colour.stroke_width(2)));
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.9))
-            .border_style(BLACK)
-            .draw()
-            .map_err(draw_err)?;
-        root.present().map_err(draw_err)?;
+        legend_and_present(&mut chart, &root).map_err(draw_err)?;
     }
     Ok(svg)
 }

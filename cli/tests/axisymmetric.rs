@@ -10,29 +10,15 @@ use common::*;
 /// A gel cylinder (R = 4 mm, H = 9 mm) of the seed's material 1, glued, pushed
 /// 20 % in 10 s, held 30 s, released, recovering until 100 s, with two markers:
 /// one on the side at mid-height, one on the top face off the x axis.
-const CYLINDER: &str = r#"format = "wagashi-experiment/1"
-name = "gel"
-dimension = 3
-
-[specimen]
-shape = "cylinder"
+const CYLINDER: &str = mat1_experiment!(
+    "gel",
+    3,
+    r#"shape = "cylinder"
 radius_mm = 4.0
 height_mm = 9.0
 mass_g = 0.475
-material = "mat1"
-
-[materials.mat1]
-model = "five-element"
-poisson = 0.3746
-E1_MPa = 0.0349
-E2_MPa = 0.0221
-c1_MPa_s = 0.0071
-c2_MPa_s = 0.1869
-c3_MPa_s = 29.719
-
-[protocol]
-tool = "plate"
-tool_contact = "glued"
+"#,
+    r#"tool_contact = "glued"
 support = "glued"
 waypoints = [[0.0, 0.0], [10.0, 1.8], [40.0, 1.8]]
 release_s = 40.0
@@ -40,18 +26,15 @@ end_s = 100.0
 
 [data]
 markers = "markers.csv"
-"#;
+"#
+);
 
 const MARKERS: &str = "marker,t_s,x_mm,y_mm,z_mm\n\
 side,0.0,0.0,4.5,4.0\nside,40.0,0.0,4.5,4.0\n\
 top,0.0,1.2,9.0,-1.6\ntop,40.0,1.2,7.2,-1.6\n";
 
 fn write_cylinder(dir: &Path) -> std::path::PathBuf {
-    let bundle = dir.join("cylinder");
-    std::fs::create_dir_all(&bundle).unwrap();
-    std::fs::write(bundle.join("experiment.toml"), CYLINDER).unwrap();
-    std::fs::write(bundle.join("markers.csv"), MARKERS).unwrap();
-    bundle
+    write_files(&dir.join("cylinder"), &[("experiment.toml", CYLINDER), ("markers.csv", MARKERS)])
 }
 
 /// `markers.csv` rows: (name, t_s, [x, y, z]).

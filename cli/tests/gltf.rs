@@ -14,39 +14,23 @@ use serde_json::Value;
 
 /// A gel cylinder (R = 5 mm, H = 8 mm), pushed 1.6 mm in 10 s, held, released at
 /// 30 s, recovering until 60 s.
-const CYLINDER: &str = r#"format = "wagashi-experiment/1"
-name = "gel"
-dimension = 3
-
-[specimen]
-shape = "cylinder"
+const CYLINDER: &str = mat1_experiment!(
+    "gel",
+    3,
+    r#"shape = "cylinder"
 radius_mm = 5.0
 height_mm = 8.0
-material = "mat1"
-
-[materials.mat1]
-model = "five-element"
-poisson = 0.3746
-E1_MPa = 0.0349
-E2_MPa = 0.0221
-c1_MPa_s = 0.0071
-c2_MPa_s = 0.1869
-c3_MPa_s = 29.719
-
-[protocol]
-tool = "plate"
-tool_contact = "glued"
+"#,
+    r#"tool_contact = "glued"
 support = "glued"
 waypoints = [[0.0, 0.0], [10.0, 1.6], [30.0, 1.6]]
 release_s = 30.0
 end_s = 60.0
-"#;
+"#
+);
 
 fn write_cylinder(dir: &Path) -> PathBuf {
-    let bundle = dir.join("cylinder");
-    std::fs::create_dir_all(&bundle).unwrap();
-    std::fs::write(bundle.join("experiment.toml"), CYLINDER).unwrap();
-    bundle
+    write_files(&dir.join("cylinder"), &[("experiment.toml", CYLINDER)])
 }
 
 /// The glTF JSON chunk of a `.glb`, after checking the container.

@@ -256,27 +256,13 @@ fn double_compression_end_to_end_with_its_animation() {
 /// to; the 2D run's animation holds both, across the slab.
 #[test]
 fn two_asynchronous_plates_end_to_end() {
-    let toml = r#"format = "wagashi-experiment/1"
-name = "two-plates"
-dimension = 2
-
-[specimen]
-shape = "block"
+    let toml = mat1_experiment!(
+        "two-plates",
+        2,
+        r#"shape = "block"
 size_mm = [20.0, 10.0, 8.0]
-material = "mat1"
-
-[materials.mat1]
-model = "five-element"
-poisson = 0.3746
-E1_MPa = 0.0349
-E2_MPa = 0.0221
-c1_MPa_s = 0.0071
-c2_MPa_s = 0.1869
-c3_MPa_s = 29.719
-
-[protocol]
-tool = "plate"
-tool_contact = "frictionless"
+"#,
+        r#"tool_contact = "frictionless"
 support = "frictionless"
 waypoints = [[0.0, 0.0], [10.0, 2.0], [10.5, -3.0]]
 release_s = 30.0
@@ -288,11 +274,10 @@ shape = "plate"
 half_extents_mm = [40.0, 20.0, 40.0]
 contact = "frictionless"
 keyframes = [[0.0, 10.0, 30.5, 0.0], [15.0, 10.0, 30.5, 0.0], [25.0, 10.0, 28.0, 0.0], [25.5, 10.0, 30.5, 0.0]]
-"#;
+"#
+    );
     let tmp = tempfile::tempdir().unwrap();
-    let bundle = tmp.path().join("two");
-    std::fs::create_dir_all(&bundle).unwrap();
-    std::fs::write(bundle.join("experiment.toml"), toml).unwrap();
+    let bundle = write_files(&tmp.path().join("two"), &[("experiment.toml", toml)]);
     let out = tmp.path().join("out");
     let glb = tmp.path().join("two.glb");
     let o = press_in(tmp.path(), &bundle, &out, &["--size-mm", "1", "--pvd", "6", "--gltf", glb.to_str().unwrap()]);

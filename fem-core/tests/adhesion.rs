@@ -12,6 +12,9 @@ use fem_core::press::{
     ToolContact,
 };
 
+mod common;
+use common::series_force;
+
 const W: f64 = 20.0;
 const H: f64 = 15.0;
 const T: f64 = 10.0;
@@ -47,22 +50,6 @@ fn bits_equal(a: &PressResult, b: &PressResult) -> bool {
             .zip(&b.snapshots)
             .all(|(x, y)| x.displacement.iter().zip(&y.displacement).all(|(p, q)| p.to_bits() == q.to_bits()))
         && a.markers == b.markers
-}
-
-/// The plate force (compression positive) of a spring `k` in series with the
-/// rigid-linear cohesive law (strength `s` N, critical opening `dc`) at the plate
-/// displacement `d` (down positive), on the loading path: bonded while
-/// `k d >= -s`; then `F = -k (s + S d)/(k - S)` with `S = s/dc` (stable: `k > S`)
-/// until the opening `-d` reaches `dc`; zero beyond.
-fn series_force(k: f64, s: f64, dc: f64, d: f64) -> f64 {
-    let stiffness = s / dc;
-    if k * d >= -s {
-        k * d
-    } else if -d < dc {
-        -k * (s + stiffness * d) / (k - stiffness)
-    } else {
-        0.0
-    }
 }
 
 /// An elastic block in uniaxial stress (plane stress, frictionless plate and

@@ -14,82 +14,35 @@
 //!   compliant run's deflected displacement `d_cmd - c F` at its step ends: the
 //!   specimen sees the same force-displacement law, only the plate's history
 //!   changes.
+//! - Adhesion in tension, bonded, follows the series closed form with the
+//!   spring; pulled on into the softening branch the run stops with a typed
+//!   `NotConverged` at the knee (the deflection's bracket assumes a force that
+//!   does not grow as the plate backs off).
 //! - The null is the baseline bit for bit; tools that cannot carry the
 //!   compliance are refused naming the key.
 
 use fem_core::effects::{EffectId, Effects};
-use fem_core::material::{Material, MullinsDamage, Rheology};
+use fem_core::material::{Material, MullinsDamage};
 use fem_core::mesh;
 use fem_core::press::{
-    self, AnyPress, Attachment, AxisymmetricPress, PlanePress, PressProblem, PressResult, Protocol, Settings,
-    SolidPress, Tool, ToolContact, ToolShape,
+    self, AnyPress, Attachment, AxisymmetricPress, Keyframe, PlanePress, PressError, PressProblem, PressResult,
+    Protocol, Settings, Tool, ToolContact, ToolShape,
 };
 
 mod common;
-use common::with_plate_tool;
+use common::{as_plane, elastic, problems, ramp_hold_release, series_force, set_effects, with_plate_tool};
 
 const W: f64 = 20.0;
 const H: f64 = 15.0;
 const T: f64 = 10.0;
 
-fn elastic(e_mpa: f64, nu: f64) -> Material {
-    Material::new(Rheology::Elastic { e_mpa }, nu).unwrap()
-}
-
 fn compliance(c: f64) -> Effects {
     Effects::none().with(EffectId::MachineCompliance, &[c]).unwrap()
-}
-
-fn set_effects(p: &mut AnyPress, effects: &Effects) {
-    match p {
-        AnyPress::Plane(p) => p.effects = effects.clone(),
-        AnyPress::Solid(p) => p.effects = effects.clone(),
-        AnyPress::Axisymmetric(p) => p.effects = effects.clone(),
-    }
-}
-
-/// The block in plane stress, axisymmetric (a cylinder of radius W/2) and 3D.
-fn problems(m: &Material, protocol: &Protocol) -> Vec<(&'static str, AnyPress)> {
-    vec![
-        (
-            "plane",
-            AnyPress::Plane(
-                PlanePress::new_2d(mesh::rectangle(W, H, 2.5, "m").unwrap(), T, vec![m.clone()], protocol.clone())
-                    .unwrap(),
-            ),
-        ),
-        (
-            "axisymmetric",
-            AnyPress::Axisymmetric(
-                AxisymmetricPress::new_axisymmetric(
-                    mesh::axisymmetric_section(W / 2.0, H, 2.5, "m").unwrap(),
-                    vec![m.clone()],
-                    protocol.clone(),
-                )
-                .unwrap(),
-            ),
-        ),
-        (
-            "solid",
-            AnyPress::Solid(
-                SolidPress::new_3d(mesh::block([W, H, T], 5.0, "m").unwrap(), vec![m.clone()], protocol.clone())
-                    .unwrap(),
-            ),
-        ),
-    ]
 }
 
 /// The plate force at the step ends while the plate holds, and the largest of them.
 fn plate_forces(r: &PressResult, until: f64) -> Vec<(f64, f64)> {
     r.steps.iter().filter(|s| s.t_s <= until * (1.0 + 1e-12)).map(|s| (s.t_s, s.plate_force_n)).collect()
-}
-
-/// Ramp 1.5 mm in 10 s, hold to 30 s, release, recover to 60 s.
-fn ramp_hold_release(plate: Attachment, support: Attachment) -> Protocol {
-    let mut p = Protocol::ramp_hold_release(0.15, 10.0, 30.0, 60.0);
-    p.plate = plate;
-    p.support = support;
-    p
 }
 
 /// A flat plate tool (glued on the glued trial, frictionless on the frictionless
@@ -107,7 +60,7 @@ fn plate_tool_with_compliance_reproduces_the_constrained_plate() {
         [(Attachment::Glued, ToolContact::Glued), (Attachment::Frictionless, ToolContact::Frictionless)]
     {
         let protocol = ramp_hold_release(plate, plate);
-        for (name, mut reference) in problems(&m, &protocol) {
+        for (name, mut reference) in problems(&m, &protocol, [W, H, T]) {
             // About a third of the stroke taken by the frame at the peak.
             let c = if name == "solid" { 1.3 } else { 5.0 };
             set_effects(&mut reference, &compliance(c));
@@ -156,10 +109,15 @@ fn slider_stress(e: f64, sy: f64, hh: f64, strain: f64, peak_strain: Option<f64>
 /// The specimen's displacement `d` with `d + c A sigma(d / H) = d_cmd` (the
 /// series relation), by bisection: `sigma` grows with `d`.
 fn series(d_cmd: f64, c: f64, area: f64, sigma: &dyn Fn(f64) -> f64) -> f64 {
-    let (mut lo, mut hi) = (d_cmd.min(0.0) - 1.0, d_cmd.max(0.0) + 1.0);
+    root_of_increasing(d_cmd.min(0.0) - 1.0, d_cmd.max(0.0) + 1.0, |d| d + c * area * sigma(d / H) - d_cmd)
+}
+
+/// The root of `f`, increasing on `[lo, hi]` with a sign change there, by 200
+/// bisections.
+fn root_of_increasing(mut lo: f64, mut hi: f64, f: impl Fn(f64) -> f64) -> f64 {
     for _ in 0..200 {
         let mid = 0.5 * (lo + hi);
-        if mid + c * area * sigma(mid / H) > d_cmd {
+        if f(mid) > 0.0 {
             hi = mid;
         } else {
             lo = mid;
@@ -217,10 +175,7 @@ fn slider_behind_the_spring_follows_the_series_closed_form() {
     .unwrap();
     axisymmetric.effects = slider.clone();
     let fixed = Settings { fixed_dt_s: Some(1.0), ..Settings::default() };
-    let plate_tool = match with_plate_tool(&AnyPress::Plane(plane()), ToolContact::Frictionless) {
-        AnyPress::Plane(p) => p,
-        _ => unreachable!(),
-    };
+    let plate_tool = as_plane(with_plate_tool(&AnyPress::Plane(plane()), ToolContact::Frictionless));
     let peak_closed = closed(10.0, W * T);
     let no_spring = slider_stress(e, sy, hh, 2.25 / H, None);
     assert!(peak_closed > sy && no_spring > 1.05 * peak_closed, "{peak_closed} {no_spring}");
@@ -252,9 +207,9 @@ fn slider_behind_the_spring_follows_the_series_closed_form() {
 }
 
 /// The reference for a compliant run `r` of `problem`: the same problem without
-/// compliance whose plate (or crosshead tools, each shifted by its own
-/// keyframes) is at `d_cmd(t_i) - c F_i` at the run's step ends `t_i`, replaying
-/// them.
+/// compliance whose plate is at `d_cmd(t_i) - c F_i` at the run's step ends
+/// `t_i` up to the release (crosshead tools: at their keyframes' pose lifted by
+/// `c F_i`), replaying them.
 fn deflected_reference<const D: usize, const N: usize, const S: usize>(
     problem: &PressProblem<D, N, S>,
     r: &PressResult,
@@ -266,19 +221,53 @@ where
     let mut p = problem.clone();
     p.effects.clear(EffectId::MachineCompliance);
     let waypoints: Vec<[f64; 2]> = std::iter::once([0.0, 0.0])
-        .chain(r.steps.iter().map(|s| [s.t_s, problem.protocol.displacement(s.t_s) - c * s.plate_force_n]))
+        .chain(
+            r.steps
+                .iter()
+                .filter(|s| s.t_s <= problem.protocol.release_s * (1.0 + 1e-12))
+                .map(|s| [s.t_s, problem.protocol.displacement(s.t_s) - c * s.plate_force_n]),
+        )
         .collect();
     if p.tools.is_empty() {
         p.protocol.waypoints = waypoints;
     } else {
-        for tool in &mut p.tools {
-            let start = tool.keyframes[0].translation_mm;
-            let moved =
-                Tool::moving_down(&tool.name, tool.shape.clone(), start, &waypoints, tool.contact, tool.release_s);
-            tool.keyframes = moved.keyframes;
+        // The crosshead's tools (moving, not floors) at their keyframes' pose at
+        // each step end, lifted by `c F` along +y (a slide along x is kept).
+        for tool in p.tools.iter_mut().filter(|t| !t.floor && t.keyframes.len() > 1) {
+            let first = tool.keyframes[0];
+            let lifted = r.steps.iter().map(|s| {
+                let (mut translation_mm, rotation_rad) = tool.pose_at(s.t_s);
+                translation_mm[1] += c * s.plate_force_n;
+                Keyframe { t_s: s.t_s, translation_mm, rotation_rad }
+            });
+            tool.keyframes = std::iter::once(first).chain(lifted).collect();
         }
     }
     p
+}
+
+/// The compliant run `r` of `problem` against its [`deflected_reference`]
+/// replaying `r`'s step ends: the largest plate-force difference at the step
+/// ends over the reference's peak force, and that peak [N].
+fn deflected_mismatch<const D: usize, const N: usize, const S: usize>(
+    problem: &PressProblem<D, N, S>,
+    r: &PressResult,
+    c: f64,
+) -> (f64, f64)
+where
+    fem_core::element::Simplex<D, N>: fem_core::element::ReferenceSimplex<D, N>,
+{
+    let reference = deflected_reference(problem, r, c);
+    let replay = Settings { step_ends_s: Some(r.steps.iter().map(|s| s.t_s).collect()), ..Settings::default() };
+    let expected = press::simulate(&reference, &replay, &mut |_| {}).unwrap();
+    let peak = expected.peak_force();
+    let worst = r
+        .steps
+        .iter()
+        .zip(&expected.steps)
+        .map(|(a, b)| (a.plate_force_n - b.plate_force_n).abs() / peak)
+        .fold(0.0, f64::max);
+    (worst, peak)
 }
 
 /// Mullins damage (d_inf = 0.4, strain 0.05) on an elastic chain behind the
@@ -297,22 +286,10 @@ fn damage_behind_the_spring_sees_the_deflected_displacement() {
     let c = 3.0;
     let mut plate = PlanePress::new_2d(mesh::rectangle(W, H, 2.5, "m").unwrap(), T, vec![m], protocol).unwrap();
     plate.effects = compliance(c);
-    let tool = match with_plate_tool(&AnyPress::Plane(plate.clone()), ToolContact::Glued) {
-        AnyPress::Plane(p) => p,
-        _ => unreachable!(),
-    };
+    let tool = as_plane(with_plate_tool(&AnyPress::Plane(plate.clone()), ToolContact::Glued));
     for (name, problem) in [("plate", plate), ("plate tool", tool)] {
         let r = press::simulate(&problem, &Settings::default(), &mut |_| {}).unwrap_or_else(|e| panic!("{name}: {e}"));
-        let reference = deflected_reference(&problem, &r, c);
-        let replay = Settings { step_ends_s: Some(r.steps.iter().map(|s| s.t_s).collect()), ..Settings::default() };
-        let expected = press::simulate(&reference, &replay, &mut |_| {}).unwrap();
-        let peak = expected.peak_force();
-        let worst = r
-            .steps
-            .iter()
-            .zip(&expected.steps)
-            .map(|(a, b)| (a.plate_force_n - b.plate_force_n).abs() / peak)
-            .fold(0.0, f64::max);
+        let (worst, peak) = deflected_mismatch(&problem, &r, c);
         let frame = c * peak / 2.0;
         eprintln!(
             "{name}: plate force {worst:.2e} of the peak {peak:.4e} N; frame {:.1} % ({} steps)",
@@ -331,7 +308,8 @@ fn damage_behind_the_spring_sees_the_deflected_displacement() {
 /// run's `d_cmd - c F` at its step ends (replayed) gives the same forces, to
 /// 1e-7 of the peak (the curved tool's augmented Lagrangian settles each run's
 /// contact to its own tolerance, 1e-11 of the size, from different starts);
-/// measured 4.8e-9. The reported plate force is the tool's (1e-12).
+/// measured 3.5e-9 (4.8e-9 with the sphere moved by
+/// waypoints before session 18). The reported plate force is the tool's (1e-12).
 #[test]
 fn sphere_behind_the_spring_sees_the_deflected_displacement() {
     let body = 10.0;
@@ -353,16 +331,7 @@ fn sphere_behind_the_spring_sees_the_deflected_displacement() {
     problem.effects = compliance(c);
     let settings = Settings { fixed_dt_s: Some(0.25), ..Settings::default() };
     let r = press::simulate(&problem, &settings, &mut |_| {}).unwrap();
-    let reference = deflected_reference(&problem, &r, c);
-    let replay = Settings { step_ends_s: Some(r.steps.iter().map(|s| s.t_s).collect()), ..Settings::default() };
-    let expected = press::simulate(&reference, &replay, &mut |_| {}).unwrap();
-    let peak = expected.peak_force();
-    let worst = r
-        .steps
-        .iter()
-        .zip(&expected.steps)
-        .map(|(a, b)| (a.plate_force_n - b.plate_force_n).abs() / peak)
-        .fold(0.0, f64::max);
+    let (worst, peak) = deflected_mismatch(&problem, &r, c);
     let frame = c * peak / 1.0;
     eprintln!("sphere: plate force {worst:.2e} of the peak {peak:.4e} N; frame {:.1} %", 100.0 * frame);
     assert!(frame > 0.2, "the frame takes {frame:.3}");
@@ -383,10 +352,7 @@ fn null_compliance_is_the_baseline_and_refusals_name_the_key() {
         PlanePress::new_2d(mesh::rectangle(W, H, 5.0, "m").unwrap(), T, vec![Material::seed_mat1_force()], protocol)
             .unwrap();
     let slider = Effects::none().with(EffectId::PlasticSlider, &[0.002, 0.005]).unwrap();
-    let tool = match with_plate_tool(&AnyPress::Plane(base.clone()), ToolContact::Glued) {
-        AnyPress::Plane(p) => p,
-        _ => unreachable!(),
-    };
+    let tool = as_plane(with_plate_tool(&AnyPress::Plane(base.clone()), ToolContact::Glued));
     for (name, problem, effects) in [("tool", tool.clone(), Effects::none()), ("slider", base.clone(), slider)] {
         let mut a = problem.clone();
         a.effects = effects.clone();
@@ -410,4 +376,86 @@ fn null_compliance_is_the_baseline_and_refusals_name_the_key() {
     fixed.effects = compliance(0.1);
     let err = press::simulate(&fixed, &Settings::default(), &mut |_| {}).unwrap_err();
     assert!(err.to_string().contains("machine_compliance_mm_per_N"), "{err}");
+}
+
+/// The plate force of the adhesive block behind the spring: the root `F` of
+/// `F = series_force(k, s, dc, d_cmd - c F)` (the spring `c` in series with the
+/// block `k` and the cohesive law), by bisection; unique where `k - S - c k S >
+/// 0` (`S = s/dc`), where `F - series_force(.., d_cmd - c F)` increases.
+fn adhesive_series(k: f64, s: f64, dc: f64, c: f64, d_cmd: f64) -> f64 {
+    root_of_increasing(-2.0 * s - 1.0, k * d_cmd.abs() + 1.0, |f| f - series_force(k, s, dc, d_cmd - c * f))
+}
+
+/// Adhesion behind the spring: the elastic block of `tests/adhesion.rs` (plane
+/// stress, E = 0.05 MPa, frictionless plate and support, `k = E A/H`, strength
+/// `s = 0.3 k` N, `delta_c` = 1.2 mm: softening stiffness `S = k/4`) pressed
+/// 0.15 mm in 1 s, then pulled at 0.4125 mm/s, with a compliance `c = 1/k` (the
+/// spring as stiff as the block).
+///
+/// - Bonded, in tension (pulled to 0.5 mm above the unloaded height by 2.576 s,
+///   before the knee at `d_cmd = -s (1 + c k)/k = -0.6` mm): the plate force at
+///   every step end follows the series closed form [`adhesive_series`] (`F = k
+///   d_cmd/(1 + c k)`) to 1e-9 of the strength, and the run without compliance
+///   whose plate follows `d_cmd - c F` gives the same forces to 1e-9 of the peak.
+/// - Into the softening branch (pulled on to 1.5 mm): the series relation still
+///   has one root (`k - S - c k S = k/2 > 0`: `F = -k (s + S d_cmd)/(k - S - c k
+///   S)`), but the force grows as the plate backs off there, which the
+///   deflection's bracket (`press::stepper`, "Machine compliance") assumes it does
+///   not: the run stops with a typed `NotConverged` naming the machine compliance
+///   at the knee's step (t = 2.818 s), not a panic. Asserted as such: when the
+///   bracket learns this branch, this part becomes the closed-form check.
+#[test]
+fn adhesion_behind_the_spring_follows_the_series_closed_form_until_the_softening() {
+    let area = W * T;
+    let e = 0.05;
+    let k = e * area / H;
+    let strength = 0.3 * k;
+    let dc = strength / (0.25 * k);
+    let c = 1.0 / k;
+    let problem = |lift: f64, end: f64| {
+        let mut protocol = Protocol::ramp_hold_release(0.15, 1.0, end, end);
+        protocol.waypoints = vec![[0.0, 0.0], [1.0, 0.15], [end, -lift]];
+        protocol.plate = Attachment::Frictionless;
+        protocol.support = Attachment::Frictionless;
+        let mut p =
+            PlanePress::new_2d(mesh::rectangle(W, H, 2.5, "m").unwrap(), T, vec![elastic(e, 0.3)], protocol).unwrap();
+        p.effects = Effects::none()
+            .with(EffectId::Adhesion, &[strength / area, dc])
+            .unwrap()
+            .with(EffectId::MachineCompliance, &[c])
+            .unwrap();
+        p
+    };
+    let fixed = Settings { fixed_dt_s: Some(0.05), ..Settings::default() };
+    // Bonded: 0.65 mm at 0.4125 mm/s after t = 1 s.
+    let bonded = problem(0.5, 1.0 + 0.65 / 0.4125);
+    let r = press::simulate(&bonded, &fixed, &mut |_| {}).unwrap();
+    let mut worst: f64 = 0.0;
+    for s in &r.steps {
+        let expected = adhesive_series(k, strength, dc, c, bonded.protocol.displacement(s.t_s));
+        worst = worst.max((s.plate_force_n - expected).abs() / strength);
+    }
+    let pull = r.steps.iter().map(|s| s.plate_force_n).fold(0.0, f64::min);
+    let (worst_reference, peak) = deflected_mismatch(&bonded, &r, c);
+    // Into the softening branch.
+    let peak_t = 1.0 + (0.15 + 0.6) / 0.4125;
+    let softening = problem(1.5, 5.0);
+    let mut ends: Vec<f64> = (1..=100).map(|i| 0.05 * i as f64).chain([peak_t]).collect();
+    ends.sort_by(f64::total_cmp);
+    let err = press::simulate(&softening, &Settings { step_ends_s: Some(ends), ..Settings::default() }, &mut |_| {})
+        .unwrap_err();
+    eprintln!(
+        "adhesion behind the spring, bonded: largest force error {worst:.2e} of the strength {strength:.4} N (pull \
+         {pull:.4} N), deflected reference {worst_reference:.2e} of the peak {peak:.4e} N; softening: {err}"
+    );
+    assert!(pull < -0.8 * strength, "pull {pull} N of the strength {strength} N");
+    assert!(worst <= 1e-9, "{worst:.3e} of the strength");
+    assert!(worst_reference <= 1e-9, "deflected reference {worst_reference:.3e} of the peak");
+    match err {
+        PressError::NotConverged { time_s, ref detail, .. } => {
+            assert!(detail.starts_with("machine compliance:"), "{err}");
+            assert!((time_s - peak_t).abs() <= 0.05 + 1e-9, "{err}");
+        }
+        _ => panic!("expected NotConverged at the knee, got {err:?}"),
+    }
 }

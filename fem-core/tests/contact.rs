@@ -15,7 +15,7 @@ use fem_core::press::{
 };
 
 mod common;
-use common::with_plate_tool;
+use common::{elastic, problems, with_plate_tool};
 
 const W: f64 = 20.0;
 const H: f64 = 15.0;
@@ -28,40 +28,12 @@ fn protocol(plate: Attachment, support: Attachment) -> Protocol {
     p
 }
 
-fn problems(plate: Attachment, support: Attachment) -> Vec<(&'static str, AnyPress)> {
-    let m = Material::seed_mat1_force();
-    let p = protocol(plate, support);
-    vec![
-        (
-            "plane",
-            AnyPress::Plane(
-                PlanePress::new_2d(mesh::rectangle(W, H, 2.5, "m").unwrap(), T, vec![m.clone()], p.clone()).unwrap(),
-            ),
-        ),
-        (
-            "axisymmetric",
-            AnyPress::Axisymmetric(
-                AxisymmetricPress::new_axisymmetric(
-                    mesh::axisymmetric_section(W / 2.0, H, 2.5, "m").unwrap(),
-                    vec![m.clone()],
-                    p.clone(),
-                )
-                .unwrap(),
-            ),
-        ),
-        (
-            "solid",
-            AnyPress::Solid(SolidPress::new_3d(mesh::block([W, H, T], 5.0, "m").unwrap(), vec![m.clone()], p).unwrap()),
-        ),
-    ]
-}
-
 fn run(p: &AnyPress) -> PressResult {
     press::simulate_any(p, &Settings::default(), &mut |_| {}).unwrap()
 }
 
 fn compare(plate: Attachment, support: Attachment, contact: ToolContact) {
-    for (name, reference) in problems(plate, support) {
+    for (name, reference) in problems(&Material::seed_mat1_force(), &protocol(plate, support), [W, H, T]) {
         // The tool run chooses its steps; the reference replays them, so that the two
         // differ by the contact treatment only.
         let tool_problem = with_plate_tool(&reference, contact);
@@ -106,10 +78,6 @@ fn ramp(depth: f64, push_s: f64) -> Protocol {
     let mut p = Protocol::ramp_hold_release(depth / push_s, push_s, push_s, push_s);
     p.waypoints.truncate(2);
     p
-}
-
-fn elastic(e_mpa: f64, nu: f64) -> Material {
-    Material::new(fem_core::material::Rheology::Elastic { e_mpa }, nu).unwrap()
 }
 
 /// A frictionless rigid sphere of `radius` pressed `depth` in `push_s` into the

@@ -42,6 +42,21 @@ fn block(m: Material, protocol: Protocol, effects: Effects) -> PlanePress {
     p
 }
 
+/// The axisymmetric runs' cylinder radius [mm].
+const RADIUS: f64 = 10.0;
+
+/// A cylinder (radius [`RADIUS`], height `H`, 2.5 mm cells) of `m`, axisymmetric.
+fn cylinder(m: Material, protocol: Protocol, effects: Effects) -> AxisymmetricPress {
+    let mut p = AxisymmetricPress::new_axisymmetric(
+        mesh::axisymmetric_section(RADIUS, H, 2.5, "m").unwrap(),
+        vec![m],
+        protocol,
+    )
+    .unwrap();
+    p.effects = effects;
+    p
+}
+
 fn fixed(dt: f64) -> Settings {
     Settings { fixed_dt_s: Some(dt), ..Settings::default() }
 }
@@ -50,9 +65,22 @@ fn effect(id: EffectId, values: &[f64]) -> Effects {
     Effects::none().with(id, values).unwrap()
 }
 
-/// Uniaxial stress [MPa] at every step end (the plate force over the area).
-fn stress_history(r: &PressResult) -> Vec<(f64, f64)> {
-    r.steps.iter().map(|s| (s.t_s, s.plate_force_n / A)).collect()
+/// The largest |plate force / `area` - `closed(d)`| over the step ends up to
+/// `until_s`, over `peak` [MPa]: `d` is the protocol's plate displacement [mm],
+/// `closed` the uniaxial stress it gives [MPa].
+fn largest_stress_error(
+    r: &PressResult,
+    protocol: &Protocol,
+    area: f64,
+    until_s: f64,
+    peak: f64,
+    closed: impl Fn(f64) -> f64,
+) -> f64 {
+    r.steps
+        .iter()
+        .filter(|s| s.t_s <= until_s)
+        .map(|s| (s.plate_force_n / area - closed(protocol.displacement(s.t_s))).abs() / peak)
+        .fold(0.0, f64::max)
 }
 
 /// Largest |a - b| over the step ends that fall on `times` (to 1e-9 s).
@@ -278,11 +306,7 @@ fn slider_knee_and_set_match_the_closed_form() {
         );
         p.markers = vec![MarkerRequest { name: "top".into(), position: vec![W / 2.0, H], times: vec![25.0] }];
         let r = press::simulate(&p, &settings, &mut |_| {}).unwrap();
-        let mut worst: f64 = 0.0;
-        for (t, s) in stress_history(&r).into_iter().filter(|x| x.0 <= 15.0) {
-            let expected = closed(p.protocol.displacement(t) / H);
-            worst = worst.max((s - expected).abs() / peak);
-        }
+        let worst = largest_stress_error(&r, &p.protocol, A, 15.0, peak, |d| closed(d / H));
         let top = r.markers[0].samples[0].1[1];
         println!("{name}: largest stress error {worst:.2e} of the peak; top {top:.12} vs {:.12}", H * (1.0 - set));
         assert!(worst < 1e-9, "{name}: {worst}");
@@ -294,21 +318,12 @@ fn slider_knee_and_set_match_the_closed_form() {
         }
     }
     // Axisymmetric: a cylinder R = 10 mm, H = 15 mm.
-    let radius = 10.0;
-    let mut p = AxisymmetricPress::new_axisymmetric(
-        mesh::axisymmetric_section(radius, H, 2.5, "m").unwrap(),
-        vec![material(Rheology::Elastic { e_mpa: e }, nu)],
-        uniaxial(waypoints, 15.0, 25.0),
-    )
-    .unwrap();
-    p.effects = slider;
+    let radius = RADIUS;
+    let mut p = cylinder(material(Rheology::Elastic { e_mpa: e }, nu), uniaxial(waypoints, 15.0, 25.0), slider);
     p.markers = vec![MarkerRequest { name: "top".into(), position: vec![0.0, H], times: vec![25.0] }];
     let r = press::simulate(&p, &fixed(1.0), &mut |_| {}).unwrap();
     let area = std::f64::consts::PI * radius * radius;
-    let mut worst: f64 = 0.0;
-    for s in r.steps.iter().filter(|s| s.t_s <= 15.0) {
-        worst = worst.max((s.plate_force_n / area - closed(p.protocol.displacement(s.t_s) / H)).abs() / peak);
-    }
+    let worst = largest_stress_error(&r, &p.protocol, area, 15.0, peak, |d| closed(d / H));
     let top = r.markers[0].samples[0].1[1];
     println!("axisymmetric: largest stress error {worst:.2e}; top {top:.12}");
     assert!(worst < 1e-9, "axisymmetric: {worst}");
@@ -536,29 +551,17 @@ fn strain_stiffening_matches_the_elastic_closed_form() {
             );
             p.markers = vec![MarkerRequest { name: "top".into(), position: vec![W / 2.0, H], times: vec![25.0] }];
             let r = press::simulate(&p, &settings, &mut |_| {}).unwrap();
-            let mut worst: f64 = 0.0;
-            for (t, s) in stress_history(&r).into_iter().filter(|x| x.0 <= 15.0) {
-                worst = worst.max((s - closed(p.protocol.displacement(t) / H)).abs() / peak);
-            }
+            let worst = largest_stress_error(&r, &p.protocol, A, 15.0, peak, |d| closed(d / H));
             let top = r.markers[0].samples[0].1[1];
             println!("a = {a}, {name}: largest stress error {worst:.2e} of the peak; top {top:.12}");
             assert!(worst < 1e-9, "a = {a}, {name}: {worst}");
             assert!((top - H).abs() < 1e-9, "a = {a}, {name}: top {top}");
         }
-        let radius = 10.0;
-        let mut p = AxisymmetricPress::new_axisymmetric(
-            mesh::axisymmetric_section(radius, H, 2.5, "m").unwrap(),
-            vec![material(Rheology::Elastic { e_mpa: e }, nu)],
-            uniaxial(waypoints.clone(), 15.0, 25.0),
-        )
-        .unwrap();
-        p.effects = stiff;
+        let radius = RADIUS;
+        let p = cylinder(material(Rheology::Elastic { e_mpa: e }, nu), uniaxial(waypoints.clone(), 15.0, 25.0), stiff);
         let r = press::simulate(&p, &fixed(1.0), &mut |_| {}).unwrap();
         let area = std::f64::consts::PI * radius * radius;
-        let mut worst: f64 = 0.0;
-        for s in r.steps.iter().filter(|s| s.t_s <= 15.0) {
-            worst = worst.max((s.plate_force_n / area - closed(p.protocol.displacement(s.t_s) / H)).abs() / peak);
-        }
+        let worst = largest_stress_error(&r, &p.protocol, area, 15.0, peak, |d| closed(d / H));
         println!("a = {a}, axisymmetric: largest stress error {worst:.2e}");
         assert!(worst < 1e-9, "axisymmetric: {worst}");
     }
@@ -689,31 +692,20 @@ fn finite_strain_matches_the_large_strain_closed_form() {
             );
             p.markers = vec![MarkerRequest { name: "side".into(), position: vec![W, H / 2.0], times: vec![10.0] }];
             let r = press::simulate(&p, &settings, &mut |_| {}).unwrap();
-            let mut worst: f64 = 0.0;
-            for (t, s) in stress_history(&r) {
-                worst = worst.max((s - force(p.protocol.displacement(t))).abs() / peak);
-            }
+            let worst = largest_stress_error(&r, &p.protocol, A, f64::INFINITY, peak, force);
             let side = r.markers[0].samples[0].1[0];
             let expected = W * (1.0 + lateral(depth));
             println!("blend {blend}, {name}: largest stress error {worst:.2e} of the peak; side {side:.12} vs {expected:.12}");
             assert!(worst < 1e-9, "blend {blend}, {name}: {worst}");
             assert!((side - expected).abs() < 1e-9, "blend {blend}, {name}: side {side} vs {expected}");
         }
-        let radius = 10.0;
-        let mut p = AxisymmetricPress::new_axisymmetric(
-            mesh::axisymmetric_section(radius, H, 2.5, "m").unwrap(),
-            vec![material(Rheology::Elastic { e_mpa: e }, nu)],
-            uniaxial(waypoints.clone(), 10.0, 10.0),
-        )
-        .unwrap();
-        p.effects = effects;
+        let radius = RADIUS;
+        let mut p =
+            cylinder(material(Rheology::Elastic { e_mpa: e }, nu), uniaxial(waypoints.clone(), 10.0, 10.0), effects);
         p.markers = vec![MarkerRequest { name: "side".into(), position: vec![radius, H / 2.0], times: vec![10.0] }];
         let r = press::simulate(&p, &fixed(1.0), &mut |_| {}).unwrap();
         let area = std::f64::consts::PI * radius * radius;
-        let mut worst: f64 = 0.0;
-        for s in &r.steps {
-            worst = worst.max((s.plate_force_n / area - force(p.protocol.displacement(s.t_s))).abs() / peak);
-        }
+        let worst = largest_stress_error(&r, &p.protocol, area, f64::INFINITY, peak, force);
         let side = r.markers[0].samples[0].1[0];
         let expected = radius * (1.0 + lateral(depth));
         println!("blend {blend}, axisymmetric: largest stress error {worst:.2e}; side {side:.12} vs {expected:.12}");

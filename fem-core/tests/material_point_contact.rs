@@ -7,66 +7,18 @@
 //! sweet with a plastic slider leaves a dent after it lifts off, none without.
 
 use fem_core::effects::{EffectId, Effects};
-use fem_core::material::{Material, MullinsDamage, Rheology};
+use fem_core::material::{Material, MullinsDamage};
 use fem_core::mesh;
 use fem_core::press::{
-    self, AnyPress, Attachment, AxisymmetricPress, PlanePress, PressResult, Protocol, Settings, SolidPress, Tool,
-    ToolContact, ToolShape,
+    self, Attachment, AxisymmetricPress, PressResult, Protocol, Settings, Tool, ToolContact, ToolShape,
 };
 
 mod common;
-use common::with_plate_tool;
+use common::{elastic, problems, ramp_hold_release, set_effects, set_protocol, with_plate_tool};
 
 const W: f64 = 20.0;
 const H: f64 = 15.0;
 const T: f64 = 10.0;
-
-fn set_effects(p: &mut AnyPress, effects: &Effects) {
-    match p {
-        AnyPress::Plane(p) => p.effects = effects.clone(),
-        AnyPress::Solid(p) => p.effects = effects.clone(),
-        AnyPress::Axisymmetric(p) => p.effects = effects.clone(),
-    }
-}
-
-fn set_protocol(p: &mut AnyPress, protocol: &Protocol) {
-    match p {
-        AnyPress::Plane(p) => p.protocol = protocol.clone(),
-        AnyPress::Solid(p) => p.protocol = protocol.clone(),
-        AnyPress::Axisymmetric(p) => p.protocol = protocol.clone(),
-    }
-}
-
-/// The block in plane stress, axisymmetric and 3D.
-fn problems(m: &Material, protocol: &Protocol) -> Vec<(&'static str, AnyPress)> {
-    vec![
-        (
-            "plane",
-            AnyPress::Plane(
-                PlanePress::new_2d(mesh::rectangle(W, H, 2.5, "m").unwrap(), T, vec![m.clone()], protocol.clone())
-                    .unwrap(),
-            ),
-        ),
-        (
-            "axisymmetric",
-            AnyPress::Axisymmetric(
-                AxisymmetricPress::new_axisymmetric(
-                    mesh::axisymmetric_section(W / 2.0, H, 2.5, "m").unwrap(),
-                    vec![m.clone()],
-                    protocol.clone(),
-                )
-                .unwrap(),
-            ),
-        ),
-        (
-            "solid",
-            AnyPress::Solid(
-                SolidPress::new_3d(mesh::block([W, H, T], 5.0, "m").unwrap(), vec![m.clone()], protocol.clone())
-                    .unwrap(),
-            ),
-        ),
-    ]
-}
 
 /// Compares the tool run with the constrained plate's replay of its steps: the
 /// bottom force over the trial to [`FORCE_TOL`] of the peak, the final shapes to
@@ -75,7 +27,7 @@ fn problems(m: &Material, protocol: &Protocol) -> Vec<(&'static str, AnyPress)> 
 fn compare(m: &Material, protocol: &Protocol, effects: &Effects, contact: ToolContact) {
     let tol = FORCE_TOL;
     let hold_until = protocol.release_s.min(protocol.end_s);
-    for (name, mut reference) in problems(m, protocol) {
+    for (name, mut reference) in problems(m, protocol, [W, H, T]) {
         set_effects(&mut reference, effects);
         let tool_problem = with_plate_tool(&reference, contact);
         let got = press::simulate_any(&tool_problem, &Settings::default(), &mut |_| {})
@@ -104,14 +56,6 @@ fn compare(m: &Material, protocol: &Protocol, effects: &Effects, contact: ToolCo
         assert!(worst_tool <= TOOL_TOL, "{name}: tool force differs by {worst_tool:.3e} of the peak");
         assert!(du <= tol * stroke, "{name}: final shapes differ by {du:.3e} mm");
     }
-}
-
-/// Ramp 1.5 mm in 10 s, hold to 30 s, release, recover to 60 s.
-fn ramp_hold_release(plate: Attachment, support: Attachment) -> Protocol {
-    let mut p = Protocol::ramp_hold_release(0.15, 10.0, 30.0, 60.0);
-    p.plate = plate;
-    p.support = support;
-    p
 }
 
 /// Press, back up most of the way, press deeper, all held (glued), release at 40 s.
@@ -202,7 +146,7 @@ fn dent(problem: &AxisymmetricPress, r: &PressResult) -> f64 {
 }
 
 fn elastic_sweet() -> Material {
-    Material::new(Rheology::Elastic { e_mpa: 0.05 }, 0.3).unwrap()
+    elastic(0.05, 0.3)
 }
 
 /// With a plastic slider the punch leaves a dent after it lifts off (the
@@ -353,7 +297,7 @@ fn strong_stiffening_with_a_plate_tool_runs_press_release_press() {
     protocol.waypoints = vec![[0.0, 0.0], [10.0, 7.5], [20.0, 0.0], [30.0, 7.5]];
     protocol.plate = Attachment::Frictionless;
     protocol.support = Attachment::Frictionless;
-    for (name, mut reference) in problems(&Material::seed_mat1_force(), &protocol) {
+    for (name, mut reference) in problems(&Material::seed_mat1_force(), &protocol, [W, H, T]) {
         set_effects(&mut reference, &strong_stiffening());
         let tool_problem = with_plate_tool(&reference, ToolContact::Frictionless);
         let got = press::simulate_any(&tool_problem, &Settings::default(), &mut |_| {})

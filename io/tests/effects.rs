@@ -18,28 +18,19 @@ fn effects_of(p: &AnyPress) -> &Effects {
 }
 
 /// A small 2D trial, elastic, frictionless plate, glued floor.
-const PLANE: &str = r#"format = "wagashi-experiment/1"
-name = "small"
-dimension = 2
-
-[specimen]
-shape = "block"
+const PLANE: &str = gel_experiment!(
+    "small",
+    2,
+    r#"shape = "block"
 size_mm = [20.0, 15.0, 10.0]
-material = "gel"
-
-[materials.gel]
-model = "elastic"
-poisson = 0.45
-E_MPa = 0.05
-
-[protocol]
-tool = "plate"
-tool_contact = "frictionless"
+"#,
+    r#"tool_contact = "frictionless"
 support = "glued"
 waypoints = [[0.0, 0.0], [1.0, 1.5]]
 release_s = 1.0
 end_s = 1.0
-"#;
+"#
+);
 
 fn plane_bundle(toml: &str) -> TestBundle {
     bundle(&[("experiment.toml", toml)])

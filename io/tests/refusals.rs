@@ -477,41 +477,14 @@ fn marker_just_beyond_one_percent_of_the_thickness() {
     read_bundle(&b.dir).unwrap();
 }
 
-const CYLINDER: &str = r#"format = "wagashi-experiment/1"
-name = "gel"
-dimension = 3
-
-[specimen]
-shape = "cylinder"
-radius_mm = 4.0
-height_mm = 9.0
-material = "gel"
-
-[materials.gel]
-model = "elastic"
-poisson = 0.45
-E_MPa = 0.05
-
-[protocol]
-tool = "plate"
-tool_contact = "frictionless"
-support = "frictionless"
-waypoints = [[0.0, 0.0], [2.0, 0.9]]
-release_s = 2.0
-end_s = 10.0
-
-[data]
-markers = "markers.csv"
-"#;
-
 #[test]
 fn marker_off_a_cylinder() {
     // Smallest size min(2R, H) = 8 mm: 0.08 mm allowed.
     let ok = "marker,t_s,x_mm,y_mm,z_mm\nside,0.0,4.0,4.5,0.0\ntop,0.0,1.0,9.0,1.0\ndiag,0.0,2.8284,3.0,2.8284\n";
-    let b = bundle(&[("experiment.toml", CYLINDER), ("markers.csv", ok)]);
+    let b = bundle(&[("experiment.toml", GEL_CYLINDER), ("markers.csv", ok)]);
     read_bundle(&b.dir).unwrap();
     let bad = "marker,t_s,x_mm,y_mm,z_mm\nside,0.0,4.0,4.5,0.0\naxis,0.0,0.0,4.5,3.0\n";
-    let b = bundle(&[("experiment.toml", CYLINDER), ("markers.csv", bad)]);
+    let b = bundle(&[("experiment.toml", GEL_CYLINDER), ("markers.csv", bad)]);
     assert_invalid(read_bundle(&b.dir), &b.file("markers.csv"), 3, "marker axis");
 }
 
@@ -552,7 +525,7 @@ fn dimension_other_than_two_or_three() {
 
 #[test]
 fn cylinder_in_2d() {
-    let toml = two_d(CYLINDER);
+    let toml = two_d(GEL_CYLINDER);
     let b = bundle(&[("experiment.toml", &toml), ("markers.csv", "marker,t_s,x_mm,y_mm\n")]);
     let msg =
         assert_invalid(read_bundle(&b.dir), &b.file("experiment.toml"), line_of(&toml, "shape"), "specimen.shape");

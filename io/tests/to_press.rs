@@ -127,30 +127,15 @@ fn bundle_files(toml: &str) -> TestBundle {
 
 #[test]
 fn cylinder() {
-    let toml = r#"format = "wagashi-experiment/1"
-name = "gel"
-dimension = 3
-[specimen]
-shape = "cylinder"
-radius_mm = 4.0
-height_mm = 9.0
-mass_g = 0.5
-material = "gel"
-[materials.gel]
-model = "three-element"
-poisson = 0.45
-E1_MPa = 0.05
-c1_MPa_s = 0.3
-c3_MPa_s = 12.0
-[protocol]
-tool = "plate"
-tool_contact = "frictionless"
-support = "frictionless"
-waypoints = [[0.0, 0.0], [2.0, 0.9]]
-release_s = 2.0
-end_s = 10.0
-"#;
-    let b = bundle(&[("experiment.toml", toml)]);
+    // The gel cylinder with a mass, three-element, without markers.
+    let toml = edit(GEL_CYLINDER, "height_mm = 9.0\n", "height_mm = 9.0\nmass_g = 0.5\n");
+    let toml = edit(
+        &toml,
+        "model = \"elastic\"\npoisson = 0.45\nE_MPa = 0.05\n",
+        "model = \"three-element\"\npoisson = 0.45\nE1_MPa = 0.05\nc1_MPa_s = 0.3\nc3_MPa_s = 12.0\n",
+    );
+    let toml = edit(&toml, "\n[data]\nmarkers = \"markers.csv\"\n", "");
+    let b = bundle(&[("experiment.toml", &toml)]);
     let p = solid(read_bundle(&b.dir).unwrap().to_press(1.0).unwrap());
     assert_eq!(p.mesh.region_names, vec!["gel".to_string()]);
     let v = std::f64::consts::PI * 16.0 * 9.0;

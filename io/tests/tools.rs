@@ -9,28 +9,19 @@ use fem_core::press::{AnyPress, Attachment, Keyframe, Tool, ToolContact, ToolSha
 use wagashi_io::{read_bundle, write_bundle, BundleError, BundleWrite, ForceSample, ForceSeries};
 
 /// A 20 x 10 x 8 mm elastic block pressed 1 mm in 10 s, held, released at 20 s.
-const BLOCK: &str = r#"format = "wagashi-experiment/1"
-name = "tools"
-dimension = 3
-
-[specimen]
-shape = "block"
+const BLOCK: &str = gel_experiment!(
+    "tools",
+    3,
+    r#"shape = "block"
 size_mm = [20.0, 10.0, 8.0]
-material = "gel"
-
-[materials.gel]
-model = "elastic"
-poisson = 0.45
-E_MPa = 0.05
-
-[protocol]
-tool = "plate"
-tool_contact = "glued"
+"#,
+    r#"tool_contact = "glued"
 support = "glued"
 waypoints = [[0.0, 0.0], [10.0, 1.0], [20.0, 1.0]]
 release_s = 20.0
 end_s = 30.0
-"#;
+"#
+);
 
 /// The same gel as a cylinder, R = 6 mm, H = 10 mm.
 fn cylinder(toml: &str) -> String {

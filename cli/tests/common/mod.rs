@@ -7,6 +7,39 @@ use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
+/// The `experiment.toml` text (a `&'static str`) of a specimen of the seed's
+/// material 1 (five-element) pressed by a plate: `name`, `dimension`, the
+/// `[specimen]` lines before `material` (shape, sizes, mass) and the `[protocol]`
+/// lines after `tool = "plate"`, each a string literal ending in a newline.
+#[allow(unused_macros)] // not every test file builds a mat1 bundle
+macro_rules! mat1_experiment {
+    ($name:literal, $dimension:literal, $specimen:literal, $protocol:literal) => {
+        concat!(
+            "format = \"wagashi-experiment/1\"\nname = \"",
+            $name,
+            "\"\ndimension = ",
+            $dimension,
+            "\n\n[specimen]\n",
+            $specimen,
+            "material = \"mat1\"\n\n[materials.mat1]\nmodel = \"five-element\"\npoisson = 0.3746\n",
+            "E1_MPa = 0.0349\nE2_MPa = 0.0221\nc1_MPa_s = 0.0071\nc2_MPa_s = 0.1869\nc3_MPa_s = 29.719\n\n",
+            "[protocol]\ntool = \"plate\"\n",
+            $protocol
+        )
+    };
+}
+#[allow(unused_imports)] // not every test file builds a mat1 bundle
+pub(crate) use mat1_experiment;
+
+/// Writes `files` (name, text) into the folder `dir` (created); returns `dir`.
+pub fn write_files(dir: &Path, files: &[(&str, &str)]) -> PathBuf {
+    std::fs::create_dir_all(dir).unwrap();
+    for (name, text) in files {
+        std::fs::write(dir.join(name), text).unwrap();
+    }
+    dir.to_path_buf()
+}
+
 /// The repository's `examples/` folder.
 pub fn examples() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples").canonicalize().unwrap()

@@ -545,6 +545,29 @@ where
         1e-9 * (0..D).map(|k| hi[k] - lo[k]).fold(1.0, f64::max)
     }
 
+    /// The constructors' problem: density 1 g/cm^3, no markers, extra snapshots,
+    /// tools or effects; validated.
+    fn checked(
+        mesh: SimplexMesh<D, N>,
+        formulation: Formulation,
+        materials: Vec<Material>,
+        protocol: Protocol,
+    ) -> Result<Self, PressError> {
+        let p = Self {
+            mesh,
+            formulation,
+            materials,
+            density_t_mm3: 1e-9,
+            protocol,
+            markers: Vec::new(),
+            snapshot_times: Vec::new(),
+            tools: Vec::new(),
+            effects: Effects::none(),
+        };
+        p.validate()?;
+        Ok(p)
+    }
+
     fn validate_axis(&self) -> Result<(), PressError> {
         let tol = self.axis_tolerance();
         if let Some((i, p)) = self.mesh.nodes.iter().enumerate().find(|(_, p)| !(p[0] >= -tol)) {
@@ -579,19 +602,7 @@ impl PlanePress {
         materials: Vec<Material>,
         protocol: Protocol,
     ) -> Result<Self, PressError> {
-        let p = Self {
-            mesh,
-            formulation: Formulation::PlaneStress { thickness_mm },
-            materials,
-            density_t_mm3: 1e-9,
-            protocol,
-            markers: Vec::new(),
-            snapshot_times: Vec::new(),
-            tools: Vec::new(),
-            effects: Effects::none(),
-        };
-        p.validate()?;
-        Ok(p)
+        Self::checked(mesh, Formulation::PlaneStress { thickness_mm }, materials, protocol)
     }
 }
 
@@ -600,37 +611,13 @@ impl AxisymmetricPress {
     /// `bottom`, `top` and `axis`, e.g. from [`crate::mesh::axisymmetric_section`]),
     /// density 1 g/cm^3, no markers.
     pub fn new_axisymmetric(mesh: TriMesh, materials: Vec<Material>, protocol: Protocol) -> Result<Self, PressError> {
-        let p = Self {
-            mesh,
-            formulation: Formulation::Axisymmetric,
-            materials,
-            density_t_mm3: 1e-9,
-            protocol,
-            markers: Vec::new(),
-            snapshot_times: Vec::new(),
-            tools: Vec::new(),
-            effects: Effects::none(),
-        };
-        p.validate()?;
-        Ok(p)
+        Self::checked(mesh, Formulation::Axisymmetric, materials, protocol)
     }
 }
 
 impl SolidPress {
     /// A 3D problem, density 1 g/cm^3, no markers.
     pub fn new_3d(mesh: TetMesh, materials: Vec<Material>, protocol: Protocol) -> Result<Self, PressError> {
-        let p = Self {
-            mesh,
-            formulation: Formulation::Solid,
-            materials,
-            density_t_mm3: 1e-9,
-            protocol,
-            markers: Vec::new(),
-            snapshot_times: Vec::new(),
-            tools: Vec::new(),
-            effects: Effects::none(),
-        };
-        p.validate()?;
-        Ok(p)
+        Self::checked(mesh, Formulation::Solid, materials, protocol)
     }
 }

@@ -6,6 +6,48 @@ use std::path::{Path, PathBuf};
 
 use wagashi_io::BundleError;
 
+/// The `experiment.toml` text (a `&'static str`) of an elastic gel (E = 0.05
+/// MPa, nu = 0.45) pressed by a plate: `name`, `dimension`, the `[specimen]`
+/// lines before `material` (shape and sizes) and the `[protocol]` lines after
+/// `tool = "plate"`, each a string literal ending in a newline.
+#[allow(unused_macros)] // not every test file builds a gel bundle
+macro_rules! gel_experiment {
+    ($name:literal, $dimension:literal, $specimen:literal, $protocol:literal) => {
+        concat!(
+            "format = \"wagashi-experiment/1\"\nname = \"",
+            $name,
+            "\"\ndimension = ",
+            $dimension,
+            "\n\n[specimen]\n",
+            $specimen,
+            "material = \"gel\"\n\n[materials.gel]\nmodel = \"elastic\"\npoisson = 0.45\nE_MPa = 0.05\n\n[protocol]\ntool = \"plate\"\n",
+            $protocol
+        )
+    };
+}
+#[allow(unused_imports)] // not every test file builds a gel bundle
+pub(crate) use gel_experiment;
+
+/// The gel cylinder (R = 4 mm, H = 9 mm) between frictionless plates, pushed
+/// 0.9 mm in 2 s, with markers.
+pub const GEL_CYLINDER: &str = gel_experiment!(
+    "gel",
+    3,
+    r#"shape = "cylinder"
+radius_mm = 4.0
+height_mm = 9.0
+"#,
+    r#"tool_contact = "frictionless"
+support = "frictionless"
+waypoints = [[0.0, 0.0], [2.0, 0.9]]
+release_s = 2.0
+end_s = 10.0
+
+[data]
+markers = "markers.csv"
+"#
+);
+
 /// A valid 3D block bundle (experiment-format.md's example).
 pub const EXPERIMENT: &str = r#"format = "wagashi-experiment/1"
 name = "mat1-uniform"
