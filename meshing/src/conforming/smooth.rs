@@ -79,6 +79,12 @@ pub(crate) fn angle_quality(min_deg: f64, max_deg: f64) -> f64 {
     min_deg.min(MAX_ANGLE_WEIGHT * (180.0 - max_deg))
 }
 
+/// The [`angle_quality`] of the tet `t` of `nodes`.
+pub(crate) fn tet_angle_quality(nodes: &[Point], t: [u32; 4]) -> f64 {
+    let (lo, hi) = dihedral_range_deg(&t.map(|v| nodes[v as usize]));
+    angle_quality(lo, hi)
+}
+
 /// The weight of the largest dihedral angle's supplement in [`angle_quality`]:
 /// with the default sliver bound of 10 deg, tets with an angle over 160 deg are
 /// smoothed too. With a weight of 1 (angles over 170 deg only), tets at 166 to
