@@ -7,6 +7,7 @@
 //! and runs no simulation.
 
 pub mod bvh;
+mod cells;
 pub mod conforming;
 pub mod distance;
 pub mod envelope;

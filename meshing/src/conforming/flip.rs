@@ -50,13 +50,11 @@
 //! not depend on hashing or threads. The mesh is no longer Delaunay
 //! afterwards; nothing downstream needs it.
 
-use std::collections::VecDeque;
-
 use rustc_hash::FxHashSet;
 
-use super::smooth::angle_quality;
+use super::smooth::tet_angle_quality as quality;
+use crate::cells::CellStore;
 use crate::predicates::{orient3d, Point};
-use crate::quality::dihedral_range_deg;
 
 /// Rounds of removals at most.
 pub const FLIP_ROUNDS: usize = 8;
@@ -88,11 +86,6 @@ pub struct FlipStats {
     pub cap_refusals: [usize; 6],
     /// Rounds run.
     pub rounds: usize,
-}
-
-fn quality(nodes: &[Point], t: [u32; 4]) -> f64 {
-    let (lo, hi) = dihedral_range_deg(&t.map(|v| nodes[v as usize]));
-    angle_quality(lo, hi)
 }
 
 /// The best triangulation of the ring `ring` (cyclic, so that each
@@ -166,14 +159,10 @@ fn even(t: [u32; 4], u: [u32; 4]) -> bool {
     inversions % 2 == 0
 }
 
-/// The mesh being improved: cells (dead ones kept until the end) and each
-/// vertex's live cells.
+/// The mesh being improved: its cells and the subfacets.
 struct Work<'a> {
     nodes: &'a [Point],
-    cells: Vec<[u32; 4]>,
-    regions: Vec<u16>,
-    alive: Vec<bool>,
-    star: Vec<Vec<u32>>,
+    cells: CellStore,
     constrained: &'a FaceSet,
 }
 
@@ -189,22 +178,17 @@ struct Removal {
 }
 
 impl Work<'_> {
-    /// The live cells with corners `a` and `b`.
-    fn around(&self, a: u32, b: u32) -> impl Iterator<Item = u32> + '_ {
-        self.star[a as usize].iter().copied().filter(move |&k| self.cells[k as usize].contains(&b))
-    }
-
     /// Whether the face `f` is on the boundary: constrained, or with one tet.
     fn boundary_face(&self, f: [u32; 3]) -> bool {
         let mut k = f;
         k.sort_unstable();
         self.constrained.contains(&k)
-            || self.around(f[0], f[1]).filter(|&t| self.cells[t as usize].contains(&f[2])).count() < 2
+            || self.cells.around(f[0], f[1]).filter(|&t| self.cells.cells[t as usize].contains(&f[2])).count() < 2
     }
 
     /// Whether cell `t` is a cap: two or more boundary faces.
     fn cap(&self, t: u32) -> bool {
-        let c = self.cells[t as usize];
+        let c = self.cells.cells[t as usize];
         super::delaunay::FACE.iter().filter(|f| self.boundary_face(f.map(|j| c[j]))).count() >= 2
     }
 
@@ -212,7 +196,7 @@ impl Work<'_> {
     /// than `floor` (module docs).
     /// `Err`: why not, as an index of [`FlipStats::cap_refusals`].
     fn removal(&self, t: u32, c: u32, d: u32, floor: f64) -> Result<Removal, usize> {
-        let tets: Vec<u32> = self.around(c, d).collect();
+        let tets: Vec<u32> = self.cells.around(c, d).collect();
         let n = tets.len();
         if n < 3 {
             return Err(0);
@@ -220,7 +204,7 @@ impl Work<'_> {
         // Each tet (c, d, x, y), positively oriented: the ring's step x -> y.
         let mut next: Vec<(u32, u32)> = Vec::with_capacity(n);
         for &k in &tets {
-            let cell = self.cells[k as usize];
+            let cell = self.cells.cells[k as usize];
             let mut o = cell.iter().copied().filter(|&v| v != c && v != d);
             let (Some(x), Some(y)) = (o.next(), o.next()) else { return Err(0) };
             next.push(if even(cell, [c, d, x, y]) { (x, y) } else { (y, x) });
@@ -248,7 +232,8 @@ impl Work<'_> {
         if n > MAX_RING {
             return Err(1);
         }
-        if tets.iter().any(|&k| self.regions[k as usize] != self.regions[t as usize]) {
+        let regions = &self.cells.regions;
+        if tets.iter().any(|&k| regions[k as usize] != regions[t as usize]) {
             return Err(2);
         }
         for &x in &ring {
@@ -258,7 +243,7 @@ impl Work<'_> {
                 return Err(3);
             }
         }
-        let old = tets.iter().map(|&k| quality(self.nodes, self.cells[k as usize])).fold(floor, f64::min);
+        let old = tets.iter().map(|&k| quality(self.nodes, self.cells.cells[k as usize])).fold(floor, f64::min);
         let (q, triangles) = best_triangulation(self.nodes, c, d, &ring).ok_or(4usize)?;
         if q <= old {
             return Err(5);
@@ -266,37 +251,27 @@ impl Work<'_> {
         Ok(Removal { tets, c, d, ring, triangles, quality: q })
     }
 
-    fn kill(&mut self, k: u32) {
-        self.alive[k as usize] = false;
-        for v in self.cells[k as usize] {
-            self.star[v as usize].retain(|&j| j != k);
-        }
-    }
-
-    fn add(&mut self, t: [u32; 4], region: u16) -> u32 {
-        let k = self.cells.len() as u32;
-        self.cells.push(t);
-        self.regions.push(region);
-        self.alive.push(true);
-        for v in t {
-            self.star[v as usize].push(k);
-        }
-        k
-    }
-
     /// Makes the removal `r`; the new cells.
     fn apply(&mut self, r: &Removal) -> Vec<u32> {
-        let region = self.regions[r.tets[0] as usize];
+        let region = self.cells.regions[r.tets[0] as usize];
         for &k in &r.tets {
-            self.kill(k);
+            self.cells.kill(k);
         }
         let mut made = Vec::with_capacity(2 * r.triangles.len());
         for &[i, k, j] in &r.triangles {
             let [a, b, e] = [r.ring[i], r.ring[k], r.ring[j]];
-            made.push(self.add([a, b, e, r.d], region));
-            made.push(self.add([b, a, e, r.c], region));
+            made.push(self.cells.add([a, b, e, r.d], region));
+            made.push(self.cells.add([b, a, e, r.c], region));
         }
         made
+    }
+
+    /// The number of live caps under `bound`.
+    fn bad_caps(&self, bound: f64) -> usize {
+        let s = &self.cells;
+        (0..s.cells.len() as u32)
+            .filter(|&k| s.alive[k as usize] && quality(self.nodes, s.cells[k as usize]) < bound && self.cap(k))
+            .count()
     }
 }
 
@@ -312,44 +287,19 @@ pub fn remove_edges(
     sliver_deg: f64,
 ) -> FlipStats {
     let mut stats = FlipStats::default();
-    let mut star = vec![Vec::new(); nodes.len()];
-    for (k, c) in cells.iter().enumerate() {
-        for &v in c {
-            star[v as usize].push(k as u32);
-        }
-    }
-    let mut w = Work {
-        nodes,
-        cells: std::mem::take(cells),
-        regions: std::mem::take(regions),
-        alive: Vec::new(),
-        star,
-        constrained,
-    };
-    w.alive = vec![true; w.cells.len()];
-    let bad_caps = |w: &Work| {
-        (0..w.cells.len() as u32)
-            .filter(|&k| w.alive[k as usize] && quality(w.nodes, w.cells[k as usize]) < sliver_deg && w.cap(k))
-            .count()
-    };
-    stats.caps_before = bad_caps(&w);
+    let cells_in = CellStore::new(nodes.len(), std::mem::take(cells), std::mem::take(regions));
+    let mut w = Work { nodes, cells: cells_in, constrained };
+    stats.caps_before = w.bad_caps(sliver_deg);
     for _ in 0..FLIP_ROUNDS {
         stats.rounds += 1;
         // Caps first, then the worst, then by index.
-        let mut bad: Vec<(bool, f64, u32)> = (0..w.cells.len() as u32)
-            .filter(|&k| w.alive[k as usize])
-            .map(|k| (k, quality(nodes, w.cells[k as usize])))
-            .filter(|&(_, q)| q < sliver_deg)
-            .map(|(k, q)| (!w.cap(k), q, k))
-            .collect();
-        bad.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)).then(a.2.cmp(&b.2)));
-        let mut queue: VecDeque<u32> = bad.into_iter().map(|(_, _, k)| k).collect();
+        let mut queue = w.cells.bad_queue(|c| quality(nodes, c), |k| w.cap(k), sliver_deg);
         let mut made = 0;
         while let Some(t) = queue.pop_front() {
-            if !w.alive[t as usize] {
+            if !w.cells.alive[t as usize] {
                 continue;
             }
-            let cell = w.cells[t as usize];
+            let cell = w.cells.cells[t as usize];
             let own = quality(nodes, cell);
             if own >= sliver_deg {
                 continue;
@@ -375,7 +325,7 @@ pub fn remove_edges(
             stats.by_ring_size[r.tets.len()] += 1;
             made += 1;
             for k in w.apply(&r) {
-                if quality(nodes, w.cells[k as usize]) < sliver_deg {
+                if quality(nodes, w.cells.cells[k as usize]) < sliver_deg {
                     queue.push_back(k);
                 }
             }
@@ -385,16 +335,16 @@ pub fn remove_edges(
             break;
         }
     }
-    stats.caps_after = bad_caps(&w);
-    let Work { cells: all, regions: all_regions, alive, .. } = w;
-    *cells = all.iter().zip(&alive).filter(|(_, &a)| a).map(|(c, _)| *c).collect();
-    *regions = all_regions.iter().zip(&alive).filter(|(_, &a)| a).map(|(r, _)| *r).collect();
+    stats.caps_after = w.bad_caps(sliver_deg);
+    (*cells, *regions) = w.cells.into_live();
     stats
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cells::{outer_faces, positive};
+    use crate::quality::dihedral_range_deg;
 
     fn volume(nodes: &[Point], t: [u32; 4]) -> f64 {
         let [a, b, c, d] = t.map(|v| nodes[v as usize]);
@@ -403,16 +353,6 @@ mod tests {
         let w = [d[0] - a[0], d[1] - a[1], d[2] - a[2]];
         (u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0]))
             / 6.0
-    }
-
-    /// Positively oriented order of `t` (exact).
-    fn positive(nodes: &[Point], t: [u32; 4]) -> [u32; 4] {
-        let q = t.map(|v| nodes[v as usize]);
-        match orient3d(q[0], q[1], q[2], q[3]) {
-            1 => t,
-            -1 => [t[1], t[0], t[2], t[3]],
-            _ => panic!("flat tet {t:?}"),
-        }
     }
 
     /// The ring's tets `(c, d, p_i, p_{i+1})` around the edge `cd` (vertices
@@ -424,31 +364,6 @@ mod tests {
 
     fn worst(nodes: &[Point], cells: &[[u32; 4]]) -> f64 {
         cells.iter().map(|&t| dihedral_range_deg(&t.map(|v| nodes[v as usize])).0).fold(180.0, f64::min)
-    }
-
-    /// The faces (sorted corners) of exactly one of `cells`.
-    fn outer_faces(cells: &[[u32; 4]]) -> Vec<[u32; 3]> {
-        let mut faces: Vec<[u32; 3]> = cells
-            .iter()
-            .flat_map(|t| {
-                super::super::delaunay::FACE.map(|f| {
-                    let mut k = f.map(|j| t[j]);
-                    k.sort_unstable();
-                    k
-                })
-            })
-            .collect();
-        faces.sort_unstable();
-        let mut out = Vec::new();
-        let mut i = 0;
-        while i < faces.len() {
-            let j = (i..faces.len()).find(|&j| faces[j] != faces[i]).unwrap_or(faces.len());
-            if j - i == 1 {
-                out.push(faces[i]);
-            }
-            i = j;
-        }
-        out
     }
 
     /// A flat boundary cap with a ring of `n` tets around its interior edge

@@ -120,14 +120,15 @@
 //!    and every existing point stay as they were. Candidates: the apexes of
 //!    regular tets over the tet's boundary faces (three heights), their mean
 //!    for a cap, its circumcentre; the best star is taken when its worst tet
-//!    beats the cavity's and no tet exceeds the volume bound. This is the
+//!    beats the cavity's, its dihedral angles stay within the cavity's range
+//!    and no tet exceeds the volume bound. This is the
 //!    constrained insertion the Delaunay stages cannot make on a bent scan
 //!    ("What is not done").
 //! 7. **Smoothing** (`smooth.rs`): Steiner vertices of bad tets (smallest
 //!    dihedral angle, or 180 deg minus the largest, under the sliver bound)
 //!    move to the candidate position that most raises that quality over their
-//!    star, never inverting a tet (exact `orient3d`) nor exceeding the volume
-//!    bound: interior ones anywhere, those on an input triangle within its
+//!    star, never inverting a tet (exact `orient3d`), exceeding the volume
+//!    bound nor taking the star's dihedral angles out of their range: interior ones anywhere, those on an input triangle within its
 //!    plane, those on an input edge along it; input vertices never move, so the
 //!    boundary stays exact. Then the Steiner vertices of tets of radius-edge
 //!    ratio over the refinement bound move likewise to lower their star's

@@ -22,8 +22,11 @@
 //! seeded by the vertex: deterministic), all projected on what the vertex may
 //! move along — and moves to the one that most raises the smallest quality of
 //! its star, provided every tet of the star stays positively oriented (exact
-//! `orient3d`) and under the volume bound of refinement. A move never lowers
-//! the star's smallest quality; the connectivity is unchanged (the mesh is no
+//! `orient3d`), under the volume bound of refinement and with the star's
+//! dihedral angles within their range where the vertex is (no smaller
+//! smallest angle, no larger largest one: a better quality alone could
+//! trade a small angle for a larger largest one, session 18). A move never
+//! lowers the star's smallest quality; the connectivity is unchanged (the mesh is no
 //! longer Delaunay afterwards, which nothing downstream needs).
 //!
 //! Then [`smooth_radius_edge`] moves, the same way, the movable vertices of
@@ -54,10 +57,19 @@ pub struct SmoothStats {
 /// Candidate positions tried per vertex (12 left fandisk's worst tet at 166 deg).
 const TRIES: usize = 24;
 
-/// The smallest [`angle_quality`] of `star` with `v` at `at`; `None` when a tet of
-/// it would not be positively oriented or would be larger than `max_volume`.
-fn star_min(nodes: &[Point], cells: &[[u32; 4]], star: &[u32], v: u32, at: Point, max_volume: f64) -> Option<f64> {
+/// The smallest [`angle_quality`] of `star` with `v` at `at`, and its
+/// smallest and largest dihedral angle [deg]; `None` when a tet of it would
+/// not be positively oriented or would be larger than `max_volume`.
+fn star_min(
+    nodes: &[Point],
+    cells: &[[u32; 4]],
+    star: &[u32],
+    v: u32,
+    at: Point,
+    max_volume: f64,
+) -> Option<(f64, (f64, f64))> {
     let mut worst = f64::INFINITY;
+    let mut range = (f64::INFINITY, f64::NEG_INFINITY);
     for &c in star {
         let q = cells[c as usize].map(|u| if u == v { at } else { nodes[u as usize] });
         if orient3d(q[0], q[1], q[2], q[3]) != 1 {
@@ -67,9 +79,16 @@ fn star_min(nodes: &[Point], cells: &[[u32; 4]], star: &[u32], v: u32, at: Point
             return None;
         }
         let (lo, hi) = dihedral_range_deg(&q);
+        range = (range.0.min(lo), range.1.max(hi));
         worst = worst.min(angle_quality(lo, hi));
     }
-    Some(worst)
+    Some((worst, range))
+}
+
+/// Whether the dihedral range `new` [deg] is within `old`: neither its
+/// smallest nor its largest angle is worse.
+pub(crate) fn within(new: (f64, f64), old: (f64, f64)) -> bool {
+    new.0 >= old.0 && new.1 <= old.1
 }
 
 /// The quality smoothing raises: the smallest dihedral angle, or the supplement
@@ -77,6 +96,12 @@ fn star_min(nodes: &[Point], cells: &[[u32; 4]], star: &[u32], v: u32, at: Point
 /// angle near 180 deg is as bad as one with an angle near 0) [deg].
 pub(crate) fn angle_quality(min_deg: f64, max_deg: f64) -> f64 {
     min_deg.min(MAX_ANGLE_WEIGHT * (180.0 - max_deg))
+}
+
+/// The [`angle_quality`] of the tet `t` of `nodes`.
+pub(crate) fn tet_angle_quality(nodes: &[Point], t: [u32; 4]) -> f64 {
+    let (lo, hi) = dihedral_range_deg(&t.map(|v| nodes[v as usize]));
+    angle_quality(lo, hi)
 }
 
 /// The weight of the largest dihedral angle's supplement in [`angle_quality`]:
@@ -121,12 +146,13 @@ pub(crate) fn smooth(
         let (lo, hi) = dihedral_range_deg(q);
         angle_quality(lo, hi) < bound_deg
     };
-    // The cost is the star's smallest quality, negated.
+    // The cost is the star's smallest quality, negated; a candidate must
+    // keep the star's dihedral angles within their range where it is.
     let start = |nodes: &[Point], star: &[u32], v: u32, here: Point| {
-        star_min(nodes, cells, star, v, here, f64::INFINITY).map(|q| (-q, ()))
+        star_min(nodes, cells, star, v, here, f64::INFINITY).map(|(q, range)| (-q, range))
     };
-    let cost = |nodes: &[Point], star: &[u32], v: u32, at: Point, _: &()| {
-        star_min(nodes, cells, star, v, at, max_volume).map(|q| -q)
+    let cost = |nodes: &[Point], star: &[u32], v: u32, at: Point, range: &(f64, f64)| {
+        star_min(nodes, cells, star, v, at, max_volume).filter(|&(_, r)| within(r, *range)).map(|(q, _)| -q)
     };
     smooth_with(nodes, cells, freedom, passes, 0xD1E5, bad, start, cost)
 }
@@ -283,6 +309,33 @@ pub(crate) fn smooth_radius_edge(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Sliver smoothing of the octahedron's free centre put near the face
+    /// x + y + z = 1 (its star's dihedral angles 5.34 to 170.33 deg): the
+    /// centre moves, the star's smallest angle rises by over 10 deg (measured:
+    /// to 54.74, the largest to 90.00 deg, the octants') and its angles stay
+    /// within their range before (smallest not smaller, largest not larger).
+    /// `within` itself: both ends are checked.
+    #[test]
+    fn sliver_smoothing_keeps_the_stars_angles_within_their_range() {
+        let (mut nodes, cells) = crate::fixtures::octahedron_star([0.3, 0.3, 0.33]);
+        let range = |nodes: &[Point]| {
+            cells
+                .iter()
+                .map(|c| dihedral_range_deg(&c.map(|v| nodes[v as usize])))
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), (lo, hi)| (a.min(lo), b.max(hi)))
+        };
+        let before = range(&nodes);
+        let mut freedom = vec![Freedom::Fixed; nodes.len()];
+        freedom[0] = Freedom::Free;
+        let stats = smooth(&mut nodes, &cells, &freedom, 30.0, f64::INFINITY, 8);
+        let after = range(&nodes);
+        eprintln!("dihedral range {before:?} -> {after:?}");
+        assert!(stats.moves > 0, "{stats:?}");
+        assert!(after.0 > before.0 + 10.0, "{before:?} -> {after:?}");
+        assert!(within(after, before), "{before:?} -> {after:?}");
+        assert!(!within((before.0 - 1e-9, before.1), before) && !within((before.0, before.1 + 1e-9), before));
+    }
 
     /// The eight tets of an octahedron about a free centre moved off its
     /// middle: smoothing for the radius-edge ratio lowers the star's largest

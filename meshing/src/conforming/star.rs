@@ -49,13 +49,21 @@
 //! edge. The candidate whose star has the best worst tet wins, and the
 //! insertion is made only when that worst tet is better than the cavity's
 //! worst, the star has fewer tets under the sliver bound than the cavity,
-//! and no new tet exceeds the volume bound. Without the second condition the
+//! its dihedral angles lie within the range of the cavity's (neither a
+//! smaller smallest angle nor a larger largest one), and no new tet exceeds
+//! the volume bound. Without the second condition the
 //! stars traded each cap for several slivers (tets from the point to surface
 //! faces seen at a grazing angle): the armadillo at 8 mm went from 3.44 % of
 //! tets under 10 deg to 7.11 %. Bad tets are visited caps
 //! first, then by increasing quality, then by index, in rounds (at most
 //! [`STAR_ROUNDS`]) while a round inserts something; new bad tets join the
-//! queue. Sequential, every choice in a fixed order: the result depends on
+//! queue. Without the range condition, stars whose worst tet was better by
+//! [`angle_quality`] (the smallest angle, or half the supplement of the
+//! largest) could still have a larger largest angle than the cavity they
+//! replaced: on the armadillo at 8 mm (session 18) two stars for slivers
+//! raised it from 165.80 and 171.68 deg to 176.62 and 176.88 deg (the
+//! cavities' worst tets were flat at their smallest angle, 0.004 and 1.12
+//! deg). Sequential, every choice in a fixed order: the result depends on
 //! neither hashing nor threads.
 
 use std::collections::VecDeque;
@@ -65,7 +73,8 @@ use rustc_hash::{FxHashMap, FxHashSet};
 use super::delaunay::FACE;
 use super::flip::FaceSet;
 use super::perturb::insphere;
-use super::smooth::angle_quality;
+use super::smooth::{angle_quality, tet_angle_quality as quality, within};
+use crate::cells::CellStore;
 use crate::predicates::{cross, dot, orient3d, sub, Point};
 use crate::quality::dihedral_range_deg;
 
@@ -96,23 +105,15 @@ pub struct StarStats {
     pub rounds: usize,
 }
 
-fn quality(nodes: &[Point], t: [u32; 4]) -> f64 {
-    let (lo, hi) = dihedral_range_deg(&t.map(|v| nodes[v as usize]));
-    angle_quality(lo, hi)
-}
-
 fn volume(q: [Point; 4]) -> f64 {
     dot(sub(q[1], q[0]), cross(sub(q[2], q[0]), sub(q[3], q[0]))) / 6.0
 }
 
-/// The mesh being improved: nodes (new ones appended), cells (dead ones kept
-/// until the end) and each vertex's live cells.
+/// The mesh being improved: nodes (new ones appended), its cells and the
+/// subfacets.
 struct Work<'a> {
     nodes: Vec<Point>,
-    cells: Vec<[u32; 4]>,
-    regions: Vec<u16>,
-    alive: Vec<bool>,
-    star: Vec<Vec<u32>>,
+    cells: CellStore,
     constrained: &'a FaceSet,
 }
 
@@ -131,15 +132,25 @@ struct Insertion {
     old: f64,
     bad_new: usize,
     bad_old: usize,
+    /// The smallest and largest dihedral angle of the star [deg].
+    range_new: (f64, f64),
+    /// The same of the cavity.
+    range_old: (f64, f64),
+}
+
+impl Insertion {
+    /// Whether the star may replace its cavity: its worst tet is better, it
+    /// has fewer tets under the sliver bound, and neither its smallest nor
+    /// its largest dihedral angle is worse than the cavity's (module docs).
+    fn improves(&self) -> bool {
+        self.quality > self.old && self.bad_new < self.bad_old && within(self.range_new, self.range_old)
+    }
 }
 
 impl Work<'_> {
     /// The live cell other than `t` with the face `f`, if any.
     fn across(&self, t: u32, f: [u32; 3]) -> Option<u32> {
-        self.star[f[0] as usize]
-            .iter()
-            .copied()
-            .find(|&k| k != t && self.cells[k as usize].contains(&f[1]) && self.cells[k as usize].contains(&f[2]))
+        self.cells.around(f[0], f[1]).find(|&k| k != t && self.cells.cells[k as usize].contains(&f[2]))
     }
 
     fn constrained(&self, f: [u32; 3]) -> bool {
@@ -151,7 +162,7 @@ impl Work<'_> {
     /// The faces of cell `t` (inner normals) and the cells across them
     /// (`None`: a boundary face, constrained or with one tet).
     fn faces(&self, t: u32) -> [Side; 4] {
-        let c = self.cells[t as usize];
+        let c = self.cells.cells[t as usize];
         FACE.map(|f| {
             let f = f.map(|j| c[j]);
             (f, if self.constrained(f) { None } else { self.across(t, f) })
@@ -194,7 +205,7 @@ impl Work<'_> {
         if apexes.len() >= 2 {
             out.push([0, 1, 2].map(|k| (apexes[0][k] + apexes[1][k]) / 2.0));
         }
-        let q = self.cells[t as usize].map(|v| self.point(v));
+        let q = self.cells.cells[t as usize].map(|v| self.point(v));
         if let Some(c) = circumcentre(q) {
             let longest = (0..4)
                 .flat_map(|i| (i + 1..4).map(move |j| (i, j)))
@@ -211,14 +222,14 @@ impl Work<'_> {
     /// The insertion of `p` for the bad cell `t` (module docs), when `p`'s
     /// star is valid and within the volume bound.
     fn insertion(&self, t: u32, p: Point, max_volume: f64, circumballs: bool, sliver_deg: f64) -> Option<Insertion> {
-        let region = self.regions[t as usize];
+        let region = self.cells.regions[t as usize];
         let mut member: FxHashSet<u32> = FxHashSet::default();
         let mut dropped: FxHashSet<u32> = FxHashSet::default();
         let mut order: Vec<u32> = vec![t];
         member.insert(t);
         let mut faces_of: FxHashMap<u32, [Side; 4]> = FxHashMap::default();
         let mut faces = |w: &Self, k: u32| *faces_of.entry(k).or_insert_with(|| w.faces(k));
-        let same = |k: u32| self.regions[k as usize] == region;
+        let same = |k: u32| self.cells.regions[k as usize] == region;
         // 1. Circumballs.
         let mut queue = VecDeque::from([t]);
         while let Some(k) = queue.pop_front() {
@@ -227,7 +238,7 @@ impl Work<'_> {
                 if member.contains(&u) || !same(u) {
                     continue;
                 }
-                let q = self.cells[u as usize].map(|v| self.point(v));
+                let q = self.cells.cells[u as usize].map(|v| self.point(v));
                 if circumballs
                     && order.len() < MAX_CAVITY / 2
                     && orient3d(q[0], q[1], q[2], q[3]) == 1
@@ -299,55 +310,53 @@ impl Work<'_> {
         }
         // Every vertex of the cavity stays (is on a boundary face).
         let on_boundary: FxHashSet<u32> = boundary.iter().flatten().copied().collect();
-        if cavity.iter().any(|&k| self.cells[k as usize].iter().any(|v| !on_boundary.contains(v))) {
+        if cavity.iter().any(|&k| self.cells.cells[k as usize].iter().any(|v| !on_boundary.contains(v))) {
             return None;
         }
         let mut worst = f64::INFINITY;
         let mut bad_new = 0;
+        let mut range_new = (f64::INFINITY, f64::NEG_INFINITY);
         for f in &boundary {
             let q = [self.point(f[0]), self.point(f[1]), self.point(f[2]), p];
             if volume(q) > max_volume {
                 return None;
             }
             let (lo, hi) = dihedral_range_deg(&q);
+            range_new = (range_new.0.min(lo), range_new.1.max(hi));
             let a = angle_quality(lo, hi);
             worst = worst.min(a);
             bad_new += usize::from(a < sliver_deg);
         }
-        let old_q: Vec<f64> = cavity.iter().map(|&k| quality(&self.nodes, self.cells[k as usize])).collect();
-        let old = old_q.iter().copied().fold(f64::INFINITY, f64::min);
-        let bad_old = old_q.iter().filter(|&&q| q < sliver_deg).count();
-        Some(Insertion { p, cavity, faces: boundary, quality: worst, old, bad_new, bad_old })
-    }
-
-    fn kill(&mut self, k: u32) {
-        self.alive[k as usize] = false;
-        for v in self.cells[k as usize] {
-            self.star[v as usize].retain(|&j| j != k);
+        let mut range_old = (f64::INFINITY, f64::NEG_INFINITY);
+        let mut old = f64::INFINITY;
+        let mut bad_old = 0;
+        for &k in &cavity {
+            let (lo, hi) = dihedral_range_deg(&self.cells.cells[k as usize].map(|v| self.point(v)));
+            range_old = (range_old.0.min(lo), range_old.1.max(hi));
+            let a = angle_quality(lo, hi);
+            old = old.min(a);
+            bad_old += usize::from(a < sliver_deg);
         }
-    }
-
-    fn add(&mut self, t: [u32; 4], region: u16) -> u32 {
-        let k = self.cells.len() as u32;
-        self.cells.push(t);
-        self.regions.push(region);
-        self.alive.push(true);
-        for v in t {
-            self.star[v as usize].push(k);
-        }
-        k
+        Some(Insertion { p, cavity, faces: boundary, quality: worst, old, bad_new, bad_old, range_new, range_old })
     }
 
     /// Makes the insertion `s`; the new cells.
     fn apply(&mut self, s: &Insertion) -> Vec<u32> {
-        let region = self.regions[s.cavity[0] as usize];
-        let v = self.nodes.len() as u32;
+        let region = self.cells.regions[s.cavity[0] as usize];
         self.nodes.push(s.p);
-        self.star.push(Vec::new());
+        let v = self.cells.add_node();
         for &k in &s.cavity {
-            self.kill(k);
+            self.cells.kill(k);
         }
-        s.faces.iter().map(|f| self.add([f[0], f[1], f[2], v], region)).collect()
+        s.faces.iter().map(|f| self.cells.add([f[0], f[1], f[2], v], region)).collect()
+    }
+
+    /// The number of live caps under `bound`.
+    fn bad_caps(&self, bound: f64) -> usize {
+        let s = &self.cells;
+        (0..s.cells.len() as u32)
+            .filter(|&k| s.alive[k as usize] && quality(&self.nodes, s.cells[k as usize]) < bound && self.cap(k))
+            .count()
     }
 }
 
@@ -382,50 +391,22 @@ pub fn insert_stars(
     max_volume: f64,
 ) -> StarStats {
     let mut stats = StarStats::default();
-    let mut star = vec![Vec::new(); nodes.len()];
-    for (k, c) in cells.iter().enumerate() {
-        for &v in c {
-            star[v as usize].push(k as u32);
-        }
-    }
-    let mut w = Work {
-        nodes: std::mem::take(nodes),
-        cells: std::mem::take(cells),
-        regions: std::mem::take(regions),
-        alive: Vec::new(),
-        star,
-        constrained,
-    };
-    w.alive = vec![true; w.cells.len()];
-    let bad_caps = |w: &Work| {
-        (0..w.cells.len() as u32)
-            .filter(|&k| w.alive[k as usize] && quality(&w.nodes, w.cells[k as usize]) < sliver_deg && w.cap(k))
-            .count()
-    };
-    stats.caps_before = bad_caps(&w);
+    let cells_in = CellStore::new(nodes.len(), std::mem::take(cells), std::mem::take(regions));
+    let mut w = Work { nodes: std::mem::take(nodes), cells: cells_in, constrained };
+    stats.caps_before = w.bad_caps(sliver_deg);
     for _ in 0..STAR_ROUNDS {
         stats.rounds += 1;
-        let mut bad: Vec<(bool, f64, u32)> = (0..w.cells.len() as u32)
-            .filter(|&k| w.alive[k as usize])
-            .map(|k| (k, quality(&w.nodes, w.cells[k as usize])))
-            .filter(|&(_, q)| q < sliver_deg)
-            .map(|(k, q)| (!w.cap(k), q, k))
-            .collect();
-        bad.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)).then(a.2.cmp(&b.2)));
-        let mut queue: VecDeque<u32> = bad.into_iter().map(|(_, _, k)| k).collect();
+        let mut queue = w.cells.bad_queue(|c| quality(&w.nodes, c), |k| w.cap(k), sliver_deg);
         let mut made = 0;
         while let Some(t) = queue.pop_front() {
-            if !w.alive[t as usize] || quality(&w.nodes, w.cells[t as usize]) >= sliver_deg {
+            if !w.cells.alive[t as usize] || quality(&w.nodes, w.cells.cells[t as usize]) >= sliver_deg {
                 continue;
             }
             let mut chosen: Option<Insertion> = None;
             for p in w.candidates(t) {
                 for circumballs in [false, true] {
                     let Some(s) = w.insertion(t, p, max_volume, circumballs, sliver_deg) else { continue };
-                    if s.quality > s.old
-                        && s.bad_new < s.bad_old
-                        && chosen.as_ref().is_none_or(|c| s.quality > c.quality)
-                    {
+                    if s.improves() && chosen.as_ref().is_none_or(|c| s.quality > c.quality) {
                         chosen = Some(s);
                     }
                 }
@@ -441,7 +422,7 @@ pub fn insert_stars(
             stats.tets_made += s.faces.len();
             made += 1;
             for k in w.apply(&s) {
-                if quality(&w.nodes, w.cells[k as usize]) < sliver_deg {
+                if quality(&w.nodes, w.cells.cells[k as usize]) < sliver_deg {
                     queue.push_back(k);
                 }
             }
@@ -451,55 +432,19 @@ pub fn insert_stars(
             break;
         }
     }
-    stats.caps_after = bad_caps(&w);
-    let Work { nodes: all_nodes, cells: all, regions: all_regions, alive, .. } = w;
-    *nodes = all_nodes;
-    *cells = all.iter().zip(&alive).filter(|(_, &a)| a).map(|(c, _)| *c).collect();
-    *regions = all_regions.iter().zip(&alive).filter(|(_, &a)| a).map(|(r, _)| *r).collect();
+    stats.caps_after = w.bad_caps(sliver_deg);
+    *nodes = w.nodes;
+    (*cells, *regions) = w.cells.into_live();
     stats
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cells::{outer_faces, positive, sorted_faces};
 
     fn volume_of(nodes: &[Point], t: [u32; 4]) -> f64 {
         volume(t.map(|v| nodes[v as usize]))
-    }
-
-    /// Positively oriented order of `t` (exact).
-    fn positive(nodes: &[Point], t: [u32; 4]) -> [u32; 4] {
-        let q = t.map(|v| nodes[v as usize]);
-        match orient3d(q[0], q[1], q[2], q[3]) {
-            1 => t,
-            -1 => [t[1], t[0], t[2], t[3]],
-            _ => panic!("flat tet {t:?}"),
-        }
-    }
-
-    /// The faces (sorted corners) of exactly one of `cells`.
-    fn outer_faces(cells: &[[u32; 4]]) -> Vec<[u32; 3]> {
-        let mut faces: Vec<[u32; 3]> = cells
-            .iter()
-            .flat_map(|t| {
-                FACE.map(|f| {
-                    let mut k = f.map(|j| t[j]);
-                    k.sort_unstable();
-                    k
-                })
-            })
-            .collect();
-        faces.sort_unstable();
-        let mut out = Vec::new();
-        let mut i = 0;
-        while i < faces.len() {
-            let j = (i..faces.len()).find(|&j| faces[j] != faces[i]).unwrap_or(faces.len());
-            if j - i == 1 {
-                out.push(faces[i]);
-            }
-            i = j;
-        }
-        out
     }
 
     /// A cap with the tets over it: `c = (0, 1, e)`, `d = (0, -1, e)`
@@ -541,6 +486,7 @@ mod tests {
         let before: f64 = cells.iter().map(|&t| volume_of(&nodes, t)).sum();
         let lo = worst(&nodes, &cells);
         assert!(lo < 1.2, "{lo}");
+        let (lo_before, hi_before) = range(&nodes, &cells);
         let outer = outer_faces(&cells);
         let constrained = hinge_faces();
         for f in &constrained {
@@ -563,6 +509,16 @@ mod tests {
         assert!(cells.iter().all(|t| !(t.contains(&0) && t.contains(&1) && t.contains(&2) && t.contains(&3))));
         let lo = worst(&nodes, &cells);
         assert!(lo >= 17.0, "{lo}");
+        let (lo_after, hi_after) = range(&nodes, &cells);
+        assert!(lo_after >= lo_before && hi_after <= hi_before, "{lo_before}..{hi_before} -> {lo_after}..{hi_after}");
+    }
+
+    /// The smallest and largest dihedral angle of `cells` [deg].
+    fn range(nodes: &[Point], cells: &[[u32; 4]]) -> (f64, f64) {
+        cells
+            .iter()
+            .map(|&t| dihedral_range_deg(&t.map(|v| nodes[v as usize])))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), (lo, hi)| (a.min(lo), b.max(hi)))
     }
 
     /// The same cap with the interior face `c d p` (p at 90 deg) constrained
@@ -577,21 +533,10 @@ mod tests {
         let free = hinge_faces();
         let mut split = hinge_faces();
         split.insert([0, 1, 5]);
-        let work = |constrained| {
-            let mut star = vec![Vec::new(); nodes.len()];
-            for (k, c) in cells.iter().enumerate() {
-                for &v in c {
-                    star[v as usize].push(k as u32);
-                }
-            }
-            Work {
-                nodes: nodes.clone(),
-                cells: cells.clone(),
-                regions: vec![0; cells.len()],
-                alive: vec![true; cells.len()],
-                star,
-                constrained,
-            }
+        let work = |constrained| Work {
+            nodes: nodes.clone(),
+            cells: CellStore::new(nodes.len(), cells.clone(), vec![0; cells.len()]),
+            constrained,
         };
         let open = work(&free).insertion(0, p, f64::INFINITY, true, 10.0).expect("star of p without the subfacet");
         assert_eq!(open.cavity.len(), 5);
@@ -600,17 +545,7 @@ mod tests {
         let before: f64 = cells.iter().map(|&t| volume_of(&nodes, t)).sum();
         let mut regions = vec![0u16; cells.len()];
         insert_stars(&mut nodes, &mut cells, &mut regions, &split, 10.0, f64::INFINITY);
-        let faces: Vec<[u32; 3]> = cells
-            .iter()
-            .flat_map(|t| {
-                FACE.map(|f| {
-                    let mut k = f.map(|j| t[j]);
-                    k.sort_unstable();
-                    k
-                })
-            })
-            .collect();
-        assert!(faces.contains(&[0, 1, 5]));
+        assert!(sorted_faces(&cells).contains(&[0, 1, 5]));
         let after: f64 = cells.iter().map(|&t| volume_of(&nodes, t)).sum();
         assert!((after - before).abs() < 1e-12, "{before} -> {after}");
     }

@@ -55,6 +55,7 @@ use rayon::prelude::*;
 
 use super::smooth::{self, Mobility};
 use super::tree::{add, norm, scale, sub, TriangleTree};
+use crate::cells::CellStore;
 
 type P = [f64; 3];
 
@@ -85,14 +86,9 @@ pub(crate) fn fit(
     max_rounds: usize,
 ) -> FitStats {
     let mut stats = FitStats::default();
-    let mut of_node: Vec<Vec<u32>> = vec![Vec::new(); nodes.len()];
-    for (k, c) in cells.iter().enumerate() {
-        for &v in c {
-            of_node[v as usize].push(k as u32);
-        }
-    }
     let boundary = boundary_faces(cells).into_iter().map(|f| (sorted(f), f)).collect();
-    let mut w = Work { nodes, cells, regions, mobility, of_node, input, touched: Vec::new(), boundary };
+    let store = CellStore::new(nodes.len(), std::mem::take(cells), std::mem::take(regions));
+    let mut w = Work { nodes, cells: store, mobility, input, touched: Vec::new(), boundary };
     // After the first round, only what the last round changed is looked at again:
     // edges and triangles with a touched node (a node of a changed tet), and the
     // input points that were still far.
@@ -213,8 +209,9 @@ pub(crate) fn fit(
         }
         touched = Some(std::mem::take(&mut w.touched));
     }
+    (*cells, *regions) = (w.cells.cells, w.cells.regions);
     if stats.rounds > 0 {
-        smooth::improve(w.nodes, w.cells, w.mobility, input);
+        smooth::improve(w.nodes, cells, w.mobility, input);
     }
     stats
 }
@@ -228,10 +225,9 @@ const LEPP_DEPTH: usize = 4;
 
 struct Work<'a> {
     nodes: &'a mut Vec<P>,
-    cells: &'a mut Vec<[u32; 4]>,
-    regions: &'a mut Vec<u16>,
+    /// The cells (none dies: splits keep every slot) and their regions.
+    cells: CellStore,
     mobility: &'a mut Vec<Mobility>,
-    of_node: Vec<Vec<u32>>,
     input: &'a TriangleTree,
     /// Nodes of the tets changed in this round (new nodes included).
     touched: Vec<bool>,
@@ -256,7 +252,7 @@ impl Work<'_> {
 
 impl Work<'_> {
     fn around(&self, a: u32, b: u32) -> Vec<u32> {
-        self.of_node[a as usize].iter().copied().filter(|&k| self.cells[k as usize].contains(&b)).collect()
+        self.cells.around(a, b).collect()
     }
 
     /// Moves node `v` to `p` if every tet of it then scores at least [`GUARD`] and
@@ -264,9 +260,9 @@ impl Work<'_> {
     /// lengthen and their chords stray: measured on the sphere). Returns whether it did.
     fn snap(&mut self, v: u32, p: P) -> bool {
         let here = self.nodes[v as usize];
-        let shortest = self.of_node[v as usize]
+        let shortest = self.cells.star[v as usize]
             .iter()
-            .flat_map(|&k| self.cells[k as usize])
+            .flat_map(|&k| self.cells.cells[k as usize])
             .filter(|&x| x != v)
             .map(|x| norm(sub(self.nodes[x as usize], here)))
             .fold(f64::INFINITY, f64::min);
@@ -274,13 +270,14 @@ impl Work<'_> {
             return false;
         }
         self.nodes[v as usize] = p;
-        let ok = self.of_node[v as usize]
+        let ok = self.cells.star[v as usize]
             .iter()
-            .all(|&k| smooth::score(&self.cells[k as usize].map(|x| self.nodes[x as usize])) >= GUARD);
+            .all(|&k| smooth::score(&self.cells.cells[k as usize].map(|x| self.nodes[x as usize])) >= GUARD);
         if !ok {
             self.nodes[v as usize] = here;
         } else {
-            let around: Vec<u32> = self.of_node[v as usize].iter().flat_map(|&k| self.cells[k as usize]).collect();
+            let around: Vec<u32> =
+                self.cells.star[v as usize].iter().flat_map(|&k| self.cells.cells[k as usize]).collect();
             for x in around {
                 self.touch(x);
             }
@@ -305,7 +302,7 @@ impl Work<'_> {
             }
             let mut longer: Option<(f64, (u32, u32))> = None;
             for &k in &around {
-                let c = self.cells[k as usize];
+                let c = self.cells.cells[k as usize];
                 for i in 0..4 {
                     for j in i + 1..4 {
                         let (x, y) = if c[i] < c[j] { (c[i], c[j]) } else { (c[j], c[i]) };
@@ -339,7 +336,7 @@ impl Work<'_> {
         // On the boundary when a face (a, b, x) is in one tet only.
         let mut third: Vec<u32> = Vec::with_capacity(2 * around.len());
         for &k in &around {
-            third.extend(self.cells[k as usize].iter().copied().filter(|&v| v != a && v != b));
+            third.extend(self.cells.cells[k as usize].iter().copied().filter(|&v| v != a && v != b));
         }
         third.sort_unstable();
         let single: Vec<u32> =
@@ -373,7 +370,7 @@ impl Work<'_> {
         let at = |v: u32| if v == m { target } else { self.nodes[v as usize] };
         let replaced = |c: [u32; 4], from: u32| c.map(|v| if v == from { m } else { v });
         for &k in &around {
-            let c = self.cells[k as usize];
+            let c = self.cells.cells[k as usize];
             for from in [a, b] {
                 if !(smooth::score(&replaced(c, from).map(at)) >= GUARD) {
                     return false;
@@ -382,7 +379,7 @@ impl Work<'_> {
         }
         self.nodes.push(target);
         self.mobility.push(mobility);
-        self.of_node.push(Vec::new());
+        self.cells.add_node();
         self.touch(m);
         for x in single {
             if let Some(f) = self.boundary.remove(&sorted([a, b, x])) {
@@ -393,25 +390,11 @@ impl Work<'_> {
             }
         }
         for &k in &around {
-            let c = self.cells[k as usize];
-            for v in c {
+            for v in self.cells.cells[k as usize] {
                 self.touch(v);
             }
-            let new = self.cells.len() as u32;
-            self.cells[k as usize] = replaced(c, a);
-            self.cells.push(replaced(c, b));
-            self.regions.push(self.regions[k as usize]);
-            // Cell k now holds m instead of a; the new cell holds a, m and the other two.
-            self.of_node[a as usize].retain(|&x| x != k);
-            self.of_node[a as usize].push(new);
-            self.of_node[m as usize].push(k);
-            self.of_node[m as usize].push(new);
-            for &v in &c {
-                if v != a && v != b {
-                    self.of_node[v as usize].push(new);
-                }
-            }
         }
+        self.cells.bisect(a, b, m, &around);
         true
     }
 }

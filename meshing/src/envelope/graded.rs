@@ -66,6 +66,7 @@ use rayon::prelude::*;
 
 use super::stuffing::Grid;
 use super::tree::{cross, dot, norm, scale, sub, TriangleTree};
+use crate::cells::CellStore;
 
 type P = [f64; 3];
 
@@ -126,31 +127,28 @@ impl GradedLattice {
         let coords: Vec<[i64; 3]> =
             (0..base.num_vertices() as u32).map(|v| base.coords(v).map(|c| c << bits)).collect();
         let cells = base.tets();
-        let mut r = Refiner { of_node: vec![Vec::new(); coords.len()], coords, cells, changed: Vec::new() };
-        for (k, c) in r.cells.iter().enumerate() {
-            for &v in c {
-                r.of_node[v as usize].push(k as u32);
-            }
-        }
-        let mut stats = GradeStats { base_tets: r.cells.len(), ..GradeStats::default() };
+        let tags = vec![(); cells.len()];
+        let store = CellStore::new(coords.len(), cells, tags);
+        let mut r = Refiner { coords, cells: store, changed: Vec::new() };
+        let mut stats = GradeStats { base_tets: r.cells.cells.len(), ..GradeStats::default() };
         let mut g = GradedLattice { origin: base.origin, unit, coords: Vec::new(), cells: Vec::new() };
         // The smallest longest edge, squared, in integer units (with a margin for
         // the exact comparisons: any edge longer than this is cut).
         let min_long = (0.5 * h / unit) / (1u64 << levels) as f64 * 2.0;
         let min_long2 = (min_long * min_long * 1.000_001) as i128;
-        let mut todo: Vec<u32> = (0..r.cells.len() as u32).collect();
+        let mut todo: Vec<u32> = (0..r.cells.cells.len() as u32).collect();
         while !todo.is_empty() && r.coords.len() < max_vertices {
             let position = |v: u32| g.position_of(&r.coords, v);
             let cut: Vec<bool> = todo
                 .par_iter()
                 .map(|&k| {
-                    let c = r.cells[k as usize];
+                    let c = r.cells.cells[k as usize];
                     let (a, b) = r.longest(c);
                     r.len2(a, b) > min_long2 && too_coarse(surface, &c.map(position), tol)
                 })
                 .collect();
             let marked: Vec<[u32; 4]> =
-                todo.iter().zip(&cut).filter(|(_, &c)| c).map(|(&k, _)| r.cells[k as usize]).collect();
+                todo.iter().zip(&cut).filter(|(_, &c)| c).map(|(&k, _)| r.cells.cells[k as usize]).collect();
             if marked.is_empty() {
                 break;
             }
@@ -161,7 +159,7 @@ impl GradedLattice {
                     break;
                 }
                 // Still a cell (an earlier cut of this round may have split it)?
-                if !r.of_node[c[0] as usize].iter().any(|&k| r.cells[k as usize] == c) {
+                if !r.cells.star[c[0] as usize].iter().any(|&k| r.cells.cells[k as usize] == c) {
                     continue;
                 }
                 let (a, b) = r.longest(c);
@@ -174,7 +172,7 @@ impl GradedLattice {
         }
         stats.bisections = r.coords.len() - base.num_vertices();
         g.coords = r.coords;
-        g.cells = r.cells;
+        g.cells = r.cells.cells;
         (g, stats)
     }
 
@@ -335,8 +333,8 @@ pub(crate) fn peel_slivers(
 
 struct Refiner {
     coords: Vec<[i64; 3]>,
-    cells: Vec<[u32; 4]>,
-    of_node: Vec<Vec<u32>>,
+    /// The cells (none dies: bisection keeps every slot); no tags.
+    cells: CellStore<()>,
     /// Cells made or changed since it was cleared.
     changed: Vec<u32>,
 }
@@ -363,7 +361,7 @@ impl Refiner {
     }
 
     fn around(&self, a: u32, b: u32) -> Vec<u32> {
-        self.of_node[a as usize].iter().copied().filter(|&k| self.cells[k as usize].contains(&b)).collect()
+        self.cells.around(a, b).collect()
     }
 
     /// Cuts edge `(a, b)` (sorted) in every tet around it, after cutting first the
@@ -375,7 +373,7 @@ impl Refiner {
             if around.is_empty() {
                 return false;
             }
-            let other = around.iter().map(|&k| self.longest(self.cells[k as usize])).find(|&e| e != (a, b));
+            let other = around.iter().map(|&k| self.longest(self.cells.cells[k as usize])).find(|&e| e != (a, b));
             match other {
                 Some((x, y)) => {
                     if !self.bisect(x, y) {
@@ -394,21 +392,9 @@ impl Refiner {
         }
         let m = self.coords.len() as u32;
         self.coords.push([0, 1, 2].map(|k| (p[k] + q[k]) / 2));
-        self.of_node.push(Vec::new());
-        for &k in around {
-            let c = self.cells[k as usize];
-            let new = self.cells.len() as u32;
-            self.cells[k as usize] = c.map(|v| if v == a { m } else { v });
-            self.cells.push(c.map(|v| if v == b { m } else { v }));
-            self.of_node[a as usize].retain(|&x| x != k);
-            self.of_node[a as usize].push(new);
-            self.of_node[m as usize].push(k);
-            self.of_node[m as usize].push(new);
-            for &v in &c {
-                if v != a && v != b {
-                    self.of_node[v as usize].push(new);
-                }
-            }
+        self.cells.add_node();
+        let made = self.cells.bisect(a, b, m, around);
+        for (&k, new) in around.iter().zip(made) {
             self.changed.push(k);
             self.changed.push(new);
         }
