@@ -766,6 +766,100 @@ fn finite_strain_signature_on_the_seed_material() {
     assert!(f[2] - 2.0 * f[1] + f[0] < fb[2] - 2.0 * fb[1] + fb[0], "{f:?} vs {fb:?}");
 }
 
+/// The real fungi-steak cylinder (R = 4 mm, H = 9 mm) of material `m`, pushed to
+/// `depth` [mm] in 20 s by a plate with `plates` at both ends, meshed at `size` [mm].
+fn fungi_cylinder(m: Material, size: f64, depth: f64, plates: Attachment, effects: Effects) -> AxisymmetricPress {
+    let mut protocol = Protocol::ramp_hold_release(depth / 20.0, 20.0, 20.0, 20.0);
+    protocol.waypoints = vec![[0.0, 0.0], [20.0, depth]];
+    protocol.plate = plates;
+    protocol.support = plates;
+    let section = mesh::axisymmetric_section(4.0, 9.0, size, "m").unwrap();
+    let mut p = AxisymmetricPress::new_axisymmetric(section, vec![m], protocol).unwrap();
+    p.effects = effects;
+    p
+}
+
+/// Past the Saint Venant-Kirchhoff limit: the fungi-steak cylinder pushed to
+/// 50 % (the real first strokes, whose `finite-strain` candidate was not
+/// evaluated: "element 46 inverted" at t = 18.09 s, 46 %).
+///
+/// The blended kinematics' nominal stress in uniaxial compression, `E (1 + b
+/// eps)(eps + b eps^2/2)`, peaks at `eps = -(1 - 1/sqrt 3)/b` (42.3 % at b = 1,
+/// 84.5 % at b = 1/2) and falls beyond it.
+/// 1. Frictionless plates, elastic (E = 0.14 MPa, nu = 0.23), b = 1 and 1/2, to
+///    50 %: the homogeneous branch, past the b = 1 limit too, matches the closed
+///    form of `finite_strain_matches_the_large_strain_closed_form` at every step
+///    end to 1e-9 of the force (measured: 1.1e-12 at b = 1/2, 1.8e-12 at b = 1):
+///    the kinematics hold past the limit.
+/// 2. Glued plates, the real first strokes' baseline fit (five-element), b = 1/2
+///    (inside its limit), to 50 % at 0.225 mm/s: completes on 1, 0.5 and 0.25 mm
+///    meshes and the peak force converges (measured: 0.60328, 0.60029 and
+///    0.59856 N, order 0.79, last difference 2.9e-3 of the force); asserted: an
+///    order above 0.5 (the glued corner's singularity keeps it below 2) and the
+///    last difference below 1 %.
+/// 3. Glued plates, b = 1, 1 mm: the compression localises past the limit (in
+///    the bulk, not at a corner: the real first stroke's cell 51 of 72 at r = 1
+///    to 2 mm, y = 6 to 7 mm) and a cell inverts: a typed `PressError::Inverted`
+///    naming step, time and element, no panic (measured: step 65, t = 18.47 s,
+///    46 %, element 51, volume ratio -8.8e-10). No mesh or step cures it: on the real stroke at 2, 1, 0.5 and 0.25 mm
+///    it came at 47, 46, 40 and 32 % (earlier on finer meshes), after the
+///    stepper's quarter-step retries; so the diagnosis takes its finite-strain
+///    secant at a blend the trial supports (`calibrate::diagnosis::which`).
+///
+/// Not asserted, seen: elastic (E = 0.14 MPa) between glued plates at b = 1/2
+/// on 0.25 mm cells, the corner cell at the support (its free node 0.25 mm up
+/// the side) inverts at 47 % (t = 18.80 s): the side face folds onto the glued
+/// plate, which a model without contact between side and plate cannot follow.
+#[test]
+fn finite_strain_on_the_fungi_cylinder_at_half_height() {
+    let (e, depth, height) = (0.14, 4.5, 9.0);
+    let area = std::f64::consts::PI * 16.0;
+    for blend in [1.0, 0.5] {
+        let elastic = material(Rheology::Elastic { e_mpa: e }, 0.23);
+        let p = fungi_cylinder(elastic, 1.0, depth, Attachment::Frictionless, effect(EffectId::FiniteStrain, &[blend]));
+        let r = press::simulate(&p, &fixed(1.0), &mut |_| {}).unwrap();
+        let force = |d: f64| {
+            let eps = -d / height;
+            nominal(blend, eps, e * (eps + 0.5 * blend * eps * eps)) * area
+        };
+        let peak = force(depth);
+        let worst = r
+            .steps
+            .iter()
+            .map(|s| (s.plate_force_n - force(p.protocol.displacement(s.t_s))).abs() / peak)
+            .fold(0.0, f64::max);
+        let end = r.steps.last().unwrap().plate_force_n;
+        println!(
+            "frictionless, blend {blend}: {end:.6} N at 50 % (closed form {peak:.6} N), largest error {worst:.2e}"
+        );
+        assert!(worst < 1e-9, "frictionless, blend {blend}: {worst}");
+    }
+
+    // The real first strokes' baseline fit (VALIDATION.md, the gap diagnosis).
+    let fit = Material::new(
+        Rheology::FiveElement { e1_mpa: 0.1402, e2_mpa: 0.1253, c1_mpa_s: 1e-5, c2_mpa_s: 0.2702, c3_mpa_s: 1.0479 },
+        0.228,
+    )
+    .unwrap();
+    let sizes = [1.0, 0.5, 0.25];
+    let peaks: Vec<f64> = sizes
+        .iter()
+        .map(|&h| {
+            let p = fungi_cylinder(fit.clone(), h, depth, Attachment::Glued, effect(EffectId::FiniteStrain, &[0.5]));
+            press::simulate(&p, &Settings::default(), &mut |_| {}).unwrap().peak_force()
+        })
+        .collect();
+    let order = ((peaks[0] - peaks[1]) / (peaks[1] - peaks[2])).log2();
+    let last = (peaks[1] - peaks[2]).abs() / peaks[2];
+    println!("glued, blend 0.5: peak forces {peaks:?} N at {sizes:?} mm, order {order:.2}, last difference {last:.2e}");
+    assert!(order > 0.5 && last < 0.01, "{peaks:?}: order {order}, last difference {last}");
+
+    let p = fungi_cylinder(fit, 1.0, depth, Attachment::Glued, effect(EffectId::FiniteStrain, &[1.0]));
+    let err = press::simulate(&p, &Settings::default(), &mut |_| {}).unwrap_err();
+    println!("glued, blend 1: {err}");
+    assert!(matches!(err, PressError::Inverted { .. }), "{err}");
+}
+
 // ---------------------------------------------------------------------------------------------------------------
 // Refusals.
 

@@ -13,6 +13,15 @@
 //! `b w (G_a^T S G_b) I` (plus `b w hoop^2 S_tt` in the `r-r` entry), with `G_a` the
 //! reference gradient of shape function `a` ([`geometric_block`]). At `b = 0`
 //! every function returns the small-strain one's values exactly.
+//!
+//! **Limit in compression.** The chain is linear in `E_b` (Saint Venant-Kirchhoff
+//! at `b = 1`), so the nominal stress of uniaxial compression, `E (1 + b eps)
+//! (eps + b eps^2/2)`, peaks at `eps = -(1 - 1/sqrt 3)/b` (42.3 % at `b = 1`) and
+//! falls beyond. Between frictionless plates the homogeneous branch goes on past
+//! it; between glued plates the compression localises into a few cells, which
+//! invert (a typed `Inverted` error: the fungi-steak cylinder at 46 %, earlier on
+//! finer meshes), and no step or mesh size cures that (fem-core's test
+//! `finite_strain_on_the_fungi_cylinder_at_half_height`).
 
 use nalgebra::{SMatrix, SVector};
 
