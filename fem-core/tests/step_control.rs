@@ -244,3 +244,49 @@ fn blocked_dashpot_against_a_large_instantaneous_viscosity_keeps_steps_and_close
     assert!(ef < 1e-1, "{ef}");
     assert!((1.8..2.3).contains(&(ef1 / ef)), "{ef1} / {ef}");
 }
+
+/// (e) Regression (issue 6: the diagnosis hung on a `dual-viscosity` refit point,
+/// 1.6 million steps of 2.6e-12 s, each after one failed attempt): a step that
+/// fails at every length above a tiny one is retried at a quarter of its length
+/// only down to the least step `1e-10` of the trial (`press::stepper`,
+/// "Retries"); there the failure is the run's error. The case: the frictionless
+/// homogeneous press (uniaxial stress, so `|e|_C` is the axial strain) of a
+/// three-element chain with strain softening `a = -4` (the registry's bound),
+/// pushed to 40 % in 4 s and held 1 s. The tangent factor `1 + a |e|_C` falls below
+/// `MIN_STIFFENING_FACTOR` = 0.05 at the strain 0.95/4 = 0.2375, i.e. at
+/// `t* = 2.375 s`: every step across `t*` fails, the accepted steps before it grow
+/// fourfold and fail again, so they crowd against `t*`. Asserted: the run ends
+/// with `NotConverged` naming the softening, at `t*` within 1e-6 s, in at most
+/// 2000 steps (measured: t = 2.375000 s, 39 steps). Not run against the stepper
+/// before the fix (no time in session 18); the hang it guards against was measured
+/// on the diagnosis (BENCHMARKS.md, "Diagnosis", session 18).
+#[test]
+fn a_step_that_fails_at_every_length_ends_the_run_at_the_least_step() {
+    let (push, strain) = (4.0, 0.4);
+    let mut protocol = Protocol::ramp_hold_release(strain * H / push, push, push + 1.0, push + 1.0);
+    protocol.plate = Attachment::Frictionless;
+    protocol.support = Attachment::Frictionless;
+    let mut p = PlanePress::new_2d(
+        mesh::rectangle(W, H, 5.0, "m").unwrap(),
+        T,
+        vec![Material::new(chain(), 0.3).unwrap()],
+        protocol,
+    )
+    .unwrap();
+    p.effects = Effects::none().with(EffectId::StrainStiffening, &[-4.0]).unwrap();
+    let mut steps = 0;
+    let err = press::simulate(&p, &Settings::default(), &mut |progress| {
+        steps = progress.steps;
+        assert!(progress.steps <= 2000, "{} steps by t = {} s", progress.steps, progress.t_s)
+    })
+    .expect_err("strain softening past its last stiffness cannot run");
+    let t_star = 0.95 / 4.0 / strain * push;
+    println!("{err} (after {steps} steps; t* = {t_star} s)");
+    match err {
+        PressError::NotConverged { time_s, ref detail, .. } => {
+            assert!(detail.contains("strain softening"), "{detail}");
+            assert!((time_s - t_star).abs() < 1e-6, "{time_s} against {t_star}");
+        }
+        e => panic!("{e}"),
+    }
+}

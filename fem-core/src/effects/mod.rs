@@ -127,7 +127,8 @@
 //! residual by less than half, each Newton step line-searched on the step's convex
 //! potential; converged at 1e-12 of the step's force scale; not
 //! converged in 100 iterations: [`crate::press::PressError::NotConverged`], and the
-//! step is retried from its old state at a quarter of the step (three times). E4's
+//! step is retried from its old state at a quarter of the step (three times, never
+//! below the least step `1e-10` of the trial: the press stepper's "Retries"). E4's
 //! flags are frozen during the iteration and re-checked at convergence (at most
 //! three passes). With contact tools (and `plate-friction`, `adhesion`) every
 //! solve of the iteration is a settled contact solve and the iteration stays
