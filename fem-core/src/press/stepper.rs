@@ -49,8 +49,10 @@
 //! - *Steps not affine in `delta`* (contact; the material-point path and the
 //!   Mullins damage, on the plate or with tools): a scalar iteration around the
 //!   step's own solve ([`deflected_step`]): `r(delta) = delta - c F(delta)` is
-//!   increasing (the force does not grow as the tools back off), the last step's
-//!   deflection and `c F` of it bracket its root, and Illinois closes the bracket
+//!   increasing where the force does not grow as the tools back off (every law
+//!   but adhesion's softening branch, where the run stops with
+//!   [`PressError::NotConverged`]), the last step's deflection and `c F` of it
+//!   bracket its root, and Illinois closes the bracket
 //!   to `1e-11` of the displacement scale. Each evaluation is a whole step from
 //!   the old state (a settled contact solve, a converged material-point
 //!   iteration), so the accepted step's state is that of the step at the root.
@@ -1345,8 +1347,10 @@ const DEFLECTION_ITERATIONS: usize = 150;
 /// plate) held back by `delta`. `take(delta)` takes the step and returns it
 /// with that force.
 ///
-/// The force does not grow as the tools back off (`F' <= 0`), so `r' >= 1`: one
-/// root, and `delta_0` (the last step's deflection) and `delta_1 = c F(delta_0)`
+/// Where the force does not grow as the tools back off (`F' <= 0`; not on
+/// adhesion's softening branch, which pulls harder as the bond opens and ends
+/// here as [`PressError::NotConverged`], see `fem-core/tests/compliance.rs`),
+/// `r' >= 1`: one root, and `delta_0` (the last step's deflection) and `delta_1 = c F(delta_0)`
 /// bracket it (`r(delta_1) = c (F(delta_0) - F(delta_1))` has the sign opposite to
 /// `r(delta_0) = delta_0 - delta_1`). Illinois (regula falsi halving the weight of
 /// a side kept twice) then closes the bracket superlinearly: an affine step takes
