@@ -376,6 +376,19 @@ fn null_compliance_is_the_baseline_and_refusals_name_the_key() {
     fixed.effects = compliance(0.1);
     let err = press::simulate(&fixed, &Settings::default(), &mut |_| {}).unwrap_err();
     assert!(err.to_string().contains("machine_compliance_mm_per_N"), "{err}");
+    // Coulomb friction, on a tool or as `plate-friction`: refused (the deflection
+    // iteration does not converge on it yet), naming the key and the friction.
+    let frictional = ramp_hold_release(Attachment::Frictionless, Attachment::Glued);
+    let plane =
+        PlanePress::new_2d(mesh::rectangle(W, H, 5.0, "m").unwrap(), T, vec![elastic(0.05, 0.3)], frictional).unwrap();
+    let mut coulomb_tool = as_plane(with_plate_tool(&AnyPress::Plane(plane.clone()), ToolContact::Friction(0.3)));
+    coulomb_tool.effects = compliance(0.1);
+    let mut plate_friction = plane;
+    plate_friction.effects = compliance(0.1).with(EffectId::PlateFriction, &[0.3]).unwrap();
+    for (name, problem) in [("tool", coulomb_tool), ("plate_friction", plate_friction)] {
+        let err = press::simulate(&problem, &Settings::default(), &mut |_| {}).unwrap_err().to_string();
+        assert!(err.contains("machine_compliance_mm_per_N") && err.contains("Coulomb friction"), "{name}: {err}");
+    }
 }
 
 /// The plate force of the adhesive block behind the spring: the root `F` of

@@ -52,7 +52,7 @@
 //! solve, so every state variable is the exact step's, not a combination). The
 //! relation then holds at every step end to rounding; inside a step the plate
 //! moves linearly, as every prescribed displacement does. With contact tools
-//! (and `plate-friction`, `adhesion`, whose plate is a contact tool), and next to
+//! (and `adhesion`, whose plate is a contact tool), and next to
 //! a material-point effect or the Mullins damage, the step is not affine in `d`:
 //! a safeguarded scalar iteration (Illinois on a bracket, `press::stepper`,
 //! "Machine compliance") takes the step to the root of `delta - c F(delta)`,
@@ -60,7 +60,9 @@
 //! tools that are not floors, lifted together along +y, and `F` the sum of the y
 //! forces on them. Quasi-static integrator only (refused with the dynamic or the
 //! seed's scheme, and with sensitivities); with tools, refused when none of them
-//! moves (floors and fixed tools only).
+//! moves (floors and fixed tools only); refused with Coulomb friction
+//! (`plate-friction`, or a tool's friction), on which the deflection iteration
+//! does not converge yet (`fem-core/tests/compliance.rs`).
 //!
 //! **Sensitivities.** `force-offset` and `gravity` do not depend on the material
 //! parameters, so the forward sensitivities stay exact with them held at any

@@ -447,7 +447,7 @@ where
     /// frictionless constrained plate or on contact tools of which one presses and is
     /// not glued; `machine-compliance` with contact tools only when one of them
     /// moves and is not a floor (the crosshead's tools, `super::stepper`, "Machine
-    /// compliance"). The material-point effects and the damage run with contact
+    /// compliance"), and not with Coulomb friction (`plate-friction` or a tool's). The material-point effects and the damage run with contact
     /// tools too (`super::inelastic`, "With contact tools"), and next to
     /// `machine-compliance`.
     pub(crate) fn validate_effects(&self) -> Result<(), PressError> {
@@ -491,6 +491,16 @@ where
                     "acts on the pressing tools that are not glued; this trial has none (glued tools and floors only)",
                 );
             }
+        }
+        let coulomb = e.is_active(EffectId::PlateFriction)
+            || self.tools.iter().any(|t| matches!(t.contact, ToolContact::Friction(mu) if mu > 0.0));
+        if e.is_active(EffectId::MachineCompliance) && coulomb {
+            return conflict(
+                EffectId::MachineCompliance,
+                "cannot be combined with Coulomb friction yet (`plate_friction`, or a tool's friction): the \
+                 crosshead's deflection does not converge on it (a `plate_friction` run differed from its \
+                 deflected-path reference by 4.3e-2 of the peak); run it without one of the two",
+            );
         }
         if e.is_active(EffectId::MachineCompliance)
             && !self.tools.is_empty()
