@@ -152,6 +152,58 @@ fn main() {
             println!("  input vertex {i} at {:?}: {:.2e} diag", s.vertices[i], dist / diag);
         }
         if std::env::var("PROBE_WHERE").is_ok() {
+            // Where the boundary figure's two maxima are.
+            let tris: Vec<[P; 3]> = faces.iter().map(|f| f.map(|v| out.mesh.nodes[v as usize])).collect();
+            let b = meshing::distance::boundary_distance(&tris, &s, diag / 300.0);
+            println!(
+                "  boundary figure: out->in {:.2e} diag at {:?}; in->out {:.2e} diag at {:?}",
+                b.mesh_to_boundary_mm / diag,
+                b.mesh_to_boundary_at_mm,
+                b.boundary_to_mesh_mm / diag,
+                b.boundary_to_mesh_at_mm
+            );
+            // Around the input -> mesh maximum: the input there, the winding number
+            // along the way to the mesh, and the gaps on both sides along the normal.
+            let w = meshing::WindingNumber::new(&s);
+            let p = b.boundary_to_mesh_at_mm;
+            let (_, _, t) = in_tree.closest_point(p).unwrap();
+            let tri = s.triangles[t as usize].map(|v| s.vertices[v as usize]);
+            let nrm = {
+                let (u, v) = (sub(tri[1], tri[0]), sub(tri[2], tri[0]));
+                let c = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
+                let l = norm(c);
+                [c[0] / l, c[1] / l, c[2] / l]
+            };
+            let at = |a: f64| [p[0] + a * nrm[0], p[1] + a * nrm[1], p[2] + a * nrm[2]];
+            println!(
+                "  input triangle {t} {tri:?}, normal {nrm:?}: w at -1e-4 {:.3}, +1e-4 {:.3}",
+                w.at(at(-1e-4)),
+                w.at(at(1e-4))
+            );
+            for side in [1.0, -1.0] {
+                let hits = in_tree.segment_crossings(at(side * 1e-6), at(side * 5.0));
+                let first: Vec<String> = hits
+                    .iter()
+                    .take(4)
+                    .map(|&(u, k)| {
+                        format!(
+                            "{:.4} mm (tri {k}, w beyond {:.3})",
+                            1e-6 + u * (5.0 - 1e-6),
+                            w.at(at(side * (1e-6 + u * (5.0 - 1e-6) + 1e-4)))
+                        )
+                    })
+                    .collect();
+                println!("    along {side:+} n: {first:?}");
+            }
+            let (c, dc, _) = out_tree.closest_point(p).unwrap();
+            let line: Vec<String> = (0..=8)
+                .map(|k| {
+                    let f = k as f64 / 8.0;
+                    let q = [0, 1, 2].map(|j| p[j] + f * (c[j] - p[j]));
+                    format!("{:.4} (exact {:.4})", w.at(q), in_tree.winding_number_exact(q))
+                })
+                .collect();
+            println!("    nearest mesh boundary point {c:?} at {dc:.4} mm; w on the way: {line:?}");
             let (_, i) = d[0];
             let p = s.vertices[i];
             let (c, dist, t) = out_tree.closest_point(p).unwrap();

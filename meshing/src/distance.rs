@@ -101,6 +101,10 @@ pub struct BoundaryDistance {
     pub raw_mesh_to_surface_mm: f64,
     /// Raw: largest distance from any input triangle to the mesh boundary [mm].
     pub raw_surface_to_mesh_mm: f64,
+    /// Where [`Self::mesh_to_boundary_mm`] is reached: the mesh boundary's sample [mm].
+    pub mesh_to_boundary_at_mm: [f64; 3],
+    /// Where [`Self::boundary_to_mesh_mm`] is reached: the bounding input's sample [mm].
+    pub boundary_to_mesh_at_mm: [f64; 3],
 }
 
 /// How much of one input triangle bounds the solid.
@@ -118,42 +122,33 @@ pub fn boundary_distance(boundary: &[[P; 3]], surface: &Surface, spacing: f64) -
     let in_tris: Vec<[P; 3]> = surface.triangles.iter().map(|t| t.map(|v| surface.vertices[v as usize])).collect();
     let out_tree = TriangleTree::new(boundary.to_vec());
     let in_tree = TriangleTree::new(in_tris.clone());
-    let raw_mesh_to_surface_mm =
-        boundary.par_iter().map(|t| max_distance(t, spacing, &in_tree)).reduce(|| 0.0, f64::max);
-    let raw_surface_to_mesh_mm =
-        in_tris.par_iter().map(|t| max_distance(t, spacing, &out_tree)).reduce(|| 0.0, f64::max);
+    let samples = |t: &[P; 3]| grid_points(t, intervals(t, spacing, 24));
+    let raw_mesh_to_surface =
+        boundary.par_iter().map(|t| farthest(samples(t), &in_tree)).reduce(|| (0.0, [0.0; 3]), farther);
+    let raw_surface_to_mesh =
+        in_tris.par_iter().map(|t| farthest(samples(t), &out_tree)).reduce(|| (0.0, [0.0; 3]), farther);
+    let (raw_mesh_to_surface_mm, raw_surface_to_mesh_mm) = (raw_mesh_to_surface.0, raw_surface_to_mesh.0);
 
     // The bounding part of the input, and its distance to the mesh.
     let winding = WindingNumber::new(surface);
     let delta = 1e-7 * diag;
-    let parts: Vec<(Bounding, f64)> = in_tris
+    let parts: Vec<(Bounding, (f64, P))> = in_tris
         .par_iter()
         .map(|t| {
             let k = intervals(t, spacing, 24);
             let jumps = grid_jumps(t, k.div_ceil(2), &winding, delta);
             if jumps.iter().all(|&j| j) {
-                (Bounding::All, max_distance(t, spacing, &out_tree))
+                (Bounding::All, farthest(grid_points(t, k), &out_tree))
             } else if !jumps.iter().any(|&j| j) {
-                (Bounding::None, 0.0)
+                (Bounding::None, (0.0, [0.0; 3]))
             } else {
-                let k = 2 * k;
-                let jumps = grid_jumps(t, k, &winding, delta);
-                let points = grid_points(t, k);
-                let worst = points
-                    .iter()
-                    .zip(&jumps)
-                    .filter(|(_, &j)| j)
-                    .filter_map(|(&p, _)| out_tree.closest_point(p).map(|c| c.1))
-                    .fold(0.0, f64::max);
-                let subs = grid_triangles(k)
-                    .filter(|c| c.iter().filter(|&&i| jumps[i]).count() >= 2)
-                    .map(|c| c.map(|i| points[i]))
-                    .collect();
+                let subs = bounding_part(t, 2 * k, &winding, delta);
+                let worst = farthest(subs.iter().flatten().copied(), &out_tree);
                 (Bounding::Part(subs), worst)
             }
         })
         .collect();
-    let boundary_to_mesh_mm = parts.iter().map(|p| p.1).fold(0.0, f64::max);
+    let (boundary_to_mesh_mm, boundary_to_mesh_at_mm) = parts.iter().map(|p| p.1).fold((0.0, [0.0; 3]), farther);
     let mut items: Vec<[P; 3]> = Vec::new();
     let mut parent: Vec<u32> = Vec::new();
     let (mut num_interior, mut num_partly) = (0, 0);
@@ -174,12 +169,12 @@ pub fn boundary_distance(boundary: &[[P; 3]], surface: &Surface, spacing: f64) -
     let bounding_tree = TriangleTree::new(items);
 
     // Border edges, and the mesh's distance to the bounding input, caps apart.
-    let borders = border_edges(surface, 1e-6 * diag, (1e-3 * diag).powi(2));
+    let borders = hole_patches(surface, 1e-6 * diag, (1e-3 * diag).powi(2));
     let patch_tree = TriangleTree::new(borders.patches.clone());
-    let per_face: Vec<(f64, f64, usize, usize)> = boundary
+    let per_face: Vec<((f64, P), f64, usize, usize)> = boundary
         .par_iter()
         .map(|t| {
-            let (mut body, mut cap, mut num_cap) = (0.0f64, 0.0f64, 0);
+            let (mut body, mut cap, mut num_cap) = ((0.0f64, [0.0; 3]), 0.0f64, 0);
             let points = grid_points(t, intervals(t, spacing, 24));
             for &p in &points {
                 let Some((_, d, _)) = bounding_tree.closest_point(p) else { continue };
@@ -188,22 +183,23 @@ pub fn boundary_distance(boundary: &[[P; 3]], surface: &Surface, spacing: f64) -
                     cap = cap.max(d);
                     num_cap += 1;
                 } else {
-                    body = body.max(d);
+                    body = farther(body, (d, p));
                 }
             }
             (body, cap, num_cap, points.len())
         })
         .collect();
-    let mesh_to_boundary_mm = per_face.iter().map(|f| f.0).fold(0.0, f64::max);
+    let (mesh_to_boundary_mm, mesh_to_boundary_at_mm) = per_face.iter().map(|f| f.0).fold((0.0, [0.0; 3]), farther);
     let hole_cap_mm = per_face.iter().map(|f| f.1).fold(0.0, f64::max);
     let num_cap: usize = per_face.iter().map(|f| f.2).sum();
     let num_samples: usize = per_face.iter().map(|f| f.3).sum();
     // Nothing bounds the solid (no input triangle has a jump): only the raw figure means anything.
-    let (mesh_to_boundary_mm, boundary_to_mesh_mm) = if bounding_tree.num_triangles() == 0 {
-        (raw_mesh_to_surface_mm, raw_surface_to_mesh_mm)
-    } else {
-        (mesh_to_boundary_mm, boundary_to_mesh_mm)
-    };
+    let (mesh_to_boundary_mm, boundary_to_mesh_mm, mesh_to_boundary_at_mm, boundary_to_mesh_at_mm) =
+        if bounding_tree.num_triangles() == 0 {
+            (raw_mesh_to_surface.0, raw_surface_to_mesh.0, raw_mesh_to_surface.1, raw_surface_to_mesh.1)
+        } else {
+            (mesh_to_boundary_mm, boundary_to_mesh_mm, mesh_to_boundary_at_mm, boundary_to_mesh_at_mm)
+        };
     BoundaryDistance {
         hausdorff_mm: mesh_to_boundary_mm.max(boundary_to_mesh_mm),
         mesh_to_boundary_mm,
@@ -217,6 +213,8 @@ pub fn boundary_distance(boundary: &[[P; 3]], surface: &Surface, spacing: f64) -
         raw_hausdorff_mm: raw_mesh_to_surface_mm.max(raw_surface_to_mesh_mm),
         raw_mesh_to_surface_mm,
         raw_surface_to_mesh_mm,
+        mesh_to_boundary_at_mm,
+        boundary_to_mesh_at_mm,
     }
 }
 
@@ -280,22 +278,88 @@ fn grid_triangles(k: usize) -> impl Iterator<Item = [usize; 3]> {
 fn grid_jumps(t: &[P; 3], k: usize, winding: &WindingNumber, delta: f64) -> Vec<bool> {
     let points = grid_points(t, k);
     let Some(n) = unit_normal(t) else { return vec![false; points.len()] };
-    let c = [0, 1, 2].map(|d| (t[0][d] + t[1][d] + t[2][d]) / 3.0);
-    points
-        .iter()
-        .map(|p| {
-            let q = [0, 1, 2].map(|d| c[d] + (1.0 - 1e-3) * (p[d] - c[d]));
-            winding_jumps(winding, q, n, delta)
-        })
-        .collect()
+    points.iter().map(|&p| jumps_on(t, n, p, winding, delta)).collect()
 }
 
-/// The largest distance from the samples of triangle `t` (grid of about `spacing`) to `tree`.
-pub(crate) fn max_distance(t: &[P; 3], spacing: f64, tree: &TriangleTree) -> f64 {
-    grid_points(t, intervals(t, spacing, 24))
-        .into_iter()
-        .filter_map(|p| tree.closest_point(p).map(|c| c.1))
-        .fold(0.0, f64::max)
+/// Whether the winding number jumps at point `p` of triangle `t` (unit normal
+/// `n`), probed at offset `delta` on each side of `p` pulled towards the
+/// centroid by 1e-3 of their distance, at most `100 delta`.
+fn jumps_on(t: &[P; 3], n: P, p: P, winding: &WindingNumber, delta: f64) -> bool {
+    let c = [0, 1, 2].map(|d| (t[0][d] + t[1][d] + t[2][d]) / 3.0);
+    let pull = (1e-3 * norm(sub(p, c))).min(100.0 * delta);
+    let f = if pull > 0.0 { 1.0 - pull / norm(sub(p, c)) } else { 1.0 };
+    let q = [0, 1, 2].map(|d| c[d] + f * (p[d] - c[d]));
+    winding_jumps(winding, q, n, delta)
+}
+
+/// Bisection steps placing a jump curve on a grid edge (module docs): the
+/// crossing is found within 1/64 of the edge.
+const JUMP_BISECTIONS: usize = 6;
+
+/// The part of triangle `t` that bounds the solid, as triangles: the grid of `k`
+/// intervals classified per point; a sub-triangle all of whose corners jump is
+/// kept whole, one with some is clipped at the crossings of the jump curve with
+/// its edges (each found by [`JUMP_BISECTIONS`] bisections) and its jumping
+/// corners' side kept (a triangle or a quadrilateral, as two triangles).
+fn bounding_part(t: &[P; 3], k: usize, winding: &WindingNumber, delta: f64) -> Vec<[P; 3]> {
+    let Some(n) = unit_normal(t) else { return Vec::new() };
+    let points = grid_points(t, k);
+    let jumps: Vec<bool> = points.iter().map(|&p| jumps_on(t, n, p, winding, delta)).collect();
+    // Crossings per grid edge, each found once (shared by the two sub-triangles beside it).
+    let mut crossings: HashMap<(usize, usize), P> = HashMap::new();
+    let mut crossing = |a: usize, b: usize| -> P {
+        let (a, b) = if jumps[a] { (a, b) } else { (b, a) };
+        *crossings.entry((a, b)).or_insert_with(|| {
+            // Invariant: `inner` jumps, `outer` does not.
+            let (mut inner, mut outer) = (points[a], points[b]);
+            for _ in 0..JUMP_BISECTIONS {
+                let mid = [0, 1, 2].map(|d| 0.5 * (inner[d] + outer[d]));
+                if jumps_on(t, n, mid, winding, delta) {
+                    inner = mid;
+                } else {
+                    outer = mid;
+                }
+            }
+            [0, 1, 2].map(|d| 0.5 * (inner[d] + outer[d]))
+        })
+    };
+    let mut out = Vec::new();
+    for c in grid_triangles(k) {
+        let num = c.iter().filter(|&&i| jumps[i]).count();
+        if num == 3 {
+            out.push(c.map(|i| points[i]));
+        } else if num > 0 {
+            // The clipped polygon, around the sub-triangle: jumping corners and crossings.
+            let mut poly: Vec<P> = Vec::with_capacity(4);
+            for e in 0..3 {
+                let (a, b) = (c[e], c[(e + 1) % 3]);
+                if jumps[a] {
+                    poly.push(points[a]);
+                }
+                if jumps[a] != jumps[b] {
+                    poly.push(crossing(a, b));
+                }
+            }
+            out.extend((1..poly.len() - 1).map(|i| [poly[0], poly[i], poly[i + 1]]));
+        }
+    }
+    out
+}
+
+/// The largest distance from `points` to `tree`, and the point reaching it (the
+/// first in order on a tie); `(0, [0; 3])` without points.
+fn farthest(points: impl IntoIterator<Item = P>, tree: &TriangleTree) -> (f64, P) {
+    points.into_iter().filter_map(|p| tree.closest_point(p).map(|c| (c.1, p))).fold((0.0, [0.0; 3]), farther)
+}
+
+/// The larger of two (distance, point) pairs, the first on a tie (an
+/// associative reduction: the result does not depend on the thread count).
+fn farther(a: (f64, P), b: (f64, P)) -> (f64, P) {
+    if b.0 > a.0 {
+        b
+    } else {
+        a
+    }
 }
 
 /// The input's border edges after welding.
@@ -307,13 +371,14 @@ struct Borders {
     widest_mm: f64,
 }
 
-/// Edges used by one non-degenerate triangle once vertices within `tolerance`
-/// [mm] are welded, grouped in connected chains, each with a patch over it
-/// when the patch's area is at least `min_area` [mm^2].
-fn border_edges(surface: &Surface, tolerance: f64, min_area: f64) -> Borders {
+/// The edges used by exactly one non-degenerate triangle of `surface` once its
+/// vertices within `tolerance` [mm] are welded (to the smallest index of each
+/// cluster), sorted: each as `[a, b, c]` with `a < b` the edge's welded
+/// vertices and `c` the third (welded) vertex of its triangle.
+pub(crate) fn border_edges(surface: &Surface, tolerance: f64) -> Vec<[u32; 3]> {
     let used = vec![true; surface.vertices.len()];
     let reps = crate::validate::weld_representatives(&surface.vertices, &used, tolerance);
-    let mut uses: HashMap<(u32, u32), usize> = HashMap::new();
+    let mut uses: HashMap<(u32, u32), (usize, u32)> = HashMap::new();
     for tri in &surface.triangles {
         let r = tri.map(|v| reps[v as usize]);
         let p = r.map(|v| surface.vertices[v as usize]);
@@ -322,11 +387,20 @@ fn border_edges(surface: &Surface, tolerance: f64, min_area: f64) -> Borders {
         }
         for e in 0..3 {
             let (a, b) = (r[e], r[(e + 1) % 3]);
-            *uses.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+            uses.entry((a.min(b), a.max(b))).or_insert((0, r[(e + 2) % 3])).0 += 1;
         }
     }
-    let mut border: Vec<(u32, u32)> = uses.into_iter().filter(|&(_, c)| c == 1).map(|(e, _)| e).collect();
+    let mut border: Vec<[u32; 3]> =
+        uses.into_iter().filter(|&(_, (n, _))| n == 1).map(|((a, b), (_, c))| [a, b, c]).collect();
     border.sort_unstable();
+    border
+}
+
+/// The border edges of `surface` ([`border_edges`] with `tolerance` [mm])
+/// grouped in connected chains, each with a patch over it when the patch's
+/// area is at least `min_area` [mm^2].
+fn hole_patches(surface: &Surface, tolerance: f64, min_area: f64) -> Borders {
+    let border: Vec<(u32, u32)> = border_edges(surface, tolerance).into_iter().map(|[a, b, _]| (a, b)).collect();
     let mut uf = UnionFind::new(surface.vertices.len());
     for &(a, b) in &border {
         uf.union(a, b);

@@ -175,6 +175,14 @@ fn obj(name: &str) -> Surface {
     s
 }
 
+/// layered_bunny.json, and its regions' exact volumes [mm^3] in region order.
+fn layered_bunny_exact_volumes() -> (serde_json::Value, Vec<f64>) {
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(data("layered_bunny.json")).unwrap()).unwrap();
+    let exact = json["regions"].as_array().unwrap().iter().map(|r| r["exact_volume"].as_f64().unwrap()).collect();
+    (json, exact)
+}
+
 fn mesh_and_report(s: &Surface, h: f64) -> (meshing::envelope::EnvelopeMesh, QualityReport) {
     mesh_and_report_with(s, &EnvelopeOptions::new(h))
 }
@@ -547,10 +555,7 @@ fn raw_flipped_faces_on_the_graded_lattice_meet_the_angle_targets() {
 #[test]
 fn the_graded_layered_bunny_meets_the_angle_and_region_volume_targets() {
     let s = obj("layered_bunny.obj");
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(data("layered_bunny.json")).unwrap()).unwrap();
-    let exact: Vec<f64> =
-        json["regions"].as_array().unwrap().iter().map(|r| r["exact_volume"].as_f64().unwrap()).collect();
+    let (_, exact) = layered_bunny_exact_volumes();
     let options = EnvelopeOptions { grade_levels: 2, ..EnvelopeOptions::new(0.3) };
     let (out, q) = mesh_and_report_with(&s, &options);
     assert_eq!(q.num_inverted, 0);
@@ -655,6 +660,81 @@ fn the_boundary_distance_of_overlapping_spheres_has_its_closed_form() {
     assert!((g.hausdorff_mm - crease).abs() < sagitta, "{g:?} against {crease}");
     assert!(g.hausdorff_mm > eps + 4e-3, "{g:?}");
     assert!((g.mesh_to_boundary_mm - eps).abs() < sagitta, "{g:?}");
+}
+
+/// The faces of the box `lo..hi` outside the box `other_lo..other_hi`, as
+/// triangles: each face cut into the rectangles between the coordinates
+/// `breaks` (which must hold both boxes' bounds), those whose centre is outside
+/// the other box kept (two triangles each). With no coplanar faces, the union
+/// of two boxes' boundaries is exactly this for each box against the other.
+fn box_faces_outside(
+    lo: [f64; 3],
+    hi: [f64; 3],
+    other_lo: [f64; 3],
+    other_hi: [f64; 3],
+    breaks: &[f64],
+) -> Vec<[[f64; 3]; 3]> {
+    let inside = |p: [f64; 3]| (0..3).all(|k| p[k] > other_lo[k] && p[k] < other_hi[k]);
+    let mut out = Vec::new();
+    for axis in 0..3 {
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        let cuts = |k: usize| -> Vec<f64> { breaks.iter().copied().filter(|&x| x >= lo[k] && x <= hi[k]).collect() };
+        let (cu, cv) = (cuts(u), cuts(v));
+        for plane in [lo[axis], hi[axis]] {
+            for a in cu.windows(2) {
+                for b in cv.windows(2) {
+                    let at = |x: f64, y: f64| {
+                        let mut p = [0.0; 3];
+                        (p[axis], p[u], p[v]) = (plane, x, y);
+                        p
+                    };
+                    if !inside(at(0.5 * (a[0] + a[1]), 0.5 * (b[0] + b[1]))) {
+                        out.push([at(a[0], b[0]), at(a[1], b[0]), at(a[1], b[1])]);
+                        out.push([at(a[0], b[0]), at(a[1], b[1]), at(a[0], b[1])]);
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The distance's jump curves placed on the curve (session 19): two boxes given
+/// whole as one soup, A = [0, 1]^3 and B = [0.5, 1.5] x [0.25, 0.75]^2, 12
+/// triangles each, so the jump curves (where each box's faces enter the other)
+/// cross the input triangles inside. "Mesh" = the exact union's boundary: the
+/// boundary figure is 0 but for the placement of those curves, within 1/128 of
+/// a refined grid edge (the hypotenuse, sqrt 2 / 48) plus the probes' pull
+/// (100 x 1e-7 of the diagonal): asserted <= 2.5e-4 mm, measured 1.1e-4 mm
+/// (session 18's whole-or-nothing sub-triangles: 1.47e-2 mm). The raw figure
+/// is B's inner face's centre, A's centre, 0.5 from A's faces (asserted within
+/// 1e-12).
+#[test]
+fn the_boundary_distance_places_jump_curves_inside_triangles() {
+    use meshing::distance::boundary_distance;
+    let (a_lo, a_hi) = ([0.0; 3], [1.0; 3]);
+    let (b_lo, b_hi) = ([0.5, 0.25, 0.25], [1.5, 0.75, 0.75]);
+    let input = soup(&[&Surface::cuboid(a_lo, a_hi, "a"), &Surface::cuboid(b_lo, b_hi, "b")]);
+    let breaks = [0.0, 0.25, 0.5, 0.75, 1.0, 1.5];
+    let mut union = box_faces_outside(a_lo, a_hi, b_lo, b_hi, &breaks);
+    union.extend(box_faces_outside(b_lo, b_hi, a_lo, a_hi, &breaks));
+    // The union's area: A's 6 minus the square B covers on x = 1, plus B's outside part.
+    let area: f64 = union
+        .iter()
+        .map(|t| {
+            let (u, v) = ([0, 1, 2].map(|k| t[1][k] - t[0][k]), [0, 1, 2].map(|k| t[2][k] - t[0][k]));
+            let c = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
+            0.5 * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
+        })
+        .sum();
+    assert!((area - (6.0 - 0.25 + 4.0 * 0.5 * 0.5 + 0.25)).abs() < 1e-12, "{area}");
+    let t0 = Instant::now();
+    let m = boundary_distance(&union, &input, input.diagonal() / 50.0);
+    eprintln!("overlapping boxes: {m:?} ({:.2} s)", t0.elapsed().as_secs_f64());
+    assert!(m.hausdorff_mm <= 2.5e-4, "{m:?}");
+    assert!((m.raw_hausdorff_mm - 0.5).abs() < 1e-12, "{m:?}");
+    assert!(m.num_interior_input_triangles > 0 && m.num_partly_interior_input_triangles > 0, "{m:?}");
+    assert_eq!((m.num_border_edges, m.hole_cap_mm), (0, 0.0));
 }
 
 /// An open scan: the unit sphere with a polar cap of angular radius alpha = 40 deg
@@ -771,10 +851,7 @@ fn the_teapot_meshes_with_the_proven_bounds() {
 #[test]
 fn the_layered_bunny_has_three_regions_of_the_right_volume() {
     let s = obj("layered_bunny.obj");
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(data("layered_bunny.json")).unwrap()).unwrap();
-    let exact: Vec<f64> =
-        json["regions"].as_array().unwrap().iter().map(|r| r["exact_volume"].as_f64().unwrap()).collect();
+    let (json, exact) = layered_bunny_exact_volumes();
     assert_eq!(exact.len(), 3);
     let (out, q) = mesh_and_report(&s, 0.15);
     // The cells cut by the sphere interfaces have no proven bound: the final

@@ -65,7 +65,7 @@
 use rayon::prelude::*;
 
 use super::stuffing::Grid;
-use super::tree::{cross, dot, norm, scale, sub, TriangleTree};
+use super::tree::{closest_on_segment, cross, dot, norm, scale, sub, TriangleTree};
 use crate::cells::CellStore;
 
 type P = [f64; 3];
@@ -109,10 +109,13 @@ pub(crate) struct GradeStats {
 impl GradedLattice {
     /// The base lattice (spacing `h` over the box `lo..hi` grown by `h`), refined
     /// down to `h / 2^levels` (at most [`MAX_LEVELS`]) where the chord-error
-    /// estimate of `surface` exceeds `tol` [mm]. Stops cutting (leaving the mesh
-    /// conforming) when it has `max_vertices` vertices.
+    /// estimate of `surface` exceeds `tol` [mm], or a border edge of the input
+    /// (the first edge of each of `rims`' triangles) passes. Stops cutting
+    /// (leaving the mesh conforming) when it has `max_vertices` vertices.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         surface: &TriangleTree,
+        rims: &TriangleTree,
         lo: P,
         hi: P,
         h: f64,
@@ -144,7 +147,7 @@ impl GradedLattice {
                 .map(|&k| {
                     let c = r.cells.cells[k as usize];
                     let (a, b) = r.longest(c);
-                    r.len2(a, b) > min_long2 && too_coarse(surface, &c.map(position), tol)
+                    r.len2(a, b) > min_long2 && too_coarse(surface, rims, &c.map(position), tol)
                 })
                 .collect();
             let marked: Vec<[u32; 4]> =
@@ -225,8 +228,9 @@ impl Grid for GradedLattice {
 }
 
 /// Whether a cell with corners `p` is coarser than the surface near it allows
-/// (see the module docs).
-fn too_coarse(surface: &TriangleTree, p: &[P; 4], tol: f64) -> bool {
+/// (see the module docs); `rims`: triangles whose first edge is a border edge of
+/// the input.
+fn too_coarse(surface: &TriangleTree, rims: &TriangleTree, p: &[P; 4], tol: f64) -> bool {
     let c = scale([0, 1, 2].map(|k| p[0][k] + p[1][k] + p[2][k] + p[3][k]), 0.25);
     let radius = p.iter().map(|&q| norm(sub(q, c))).fold(0.0, f64::max);
     let mut longest: f64 = 0.0;
@@ -234,6 +238,12 @@ fn too_coarse(surface: &TriangleTree, p: &[P; 4], tol: f64) -> bool {
         for j in i + 1..4 {
             longest = longest.max(norm(sub(p[i], p[j])));
         }
+    }
+    // A border edge in the ball: the crease where the solid leaves the input for the cap over a hole.
+    let mut on_rim = false;
+    rims.for_each_within(c, radius, |t| on_rim |= norm(sub(closest_on_segment(t[0], t[1], c), c)) <= radius);
+    if on_rim {
+        return 0.25 * longest > tol;
     }
     let mut normals: Vec<P> = Vec::new();
     let mut sum = [0.0; 3];
@@ -464,9 +474,10 @@ mod tests {
     #[test]
     fn bisection_keeps_the_lattice_conforming_with_few_shapes_and_fine_only_near_the_creases() {
         let tree = octahedron();
+        let no_rims = TriangleTree::new(Vec::new());
         let h = 0.5;
-        let (g0, _) = GradedLattice::new(&tree, [-1.0; 3], [1.0; 3], h, 0, 1e-3, usize::MAX);
-        let (g, stats) = GradedLattice::new(&tree, [-1.0; 3], [1.0; 3], h, 3, 1e-3, usize::MAX);
+        let (g0, _) = GradedLattice::new(&tree, &no_rims, [-1.0; 3], [1.0; 3], h, 0, 1e-3, usize::MAX);
+        let (g, stats) = GradedLattice::new(&tree, &no_rims, [-1.0; 3], [1.0; 3], h, 3, 1e-3, usize::MAX);
         assert_eq!(stats.base_tets, g0.num_tets());
         assert!(g.num_tets() > 4 * g0.num_tets(), "{} vs {}", g.num_tets(), g0.num_tets());
         check_conforming(&g, &g0);
@@ -508,20 +519,21 @@ mod tests {
             .count();
         assert!(corner_cells > 0);
         // Deterministic.
-        let (again, _) = GradedLattice::new(&tree, [-1.0; 3], [1.0; 3], h, 3, 1e-3, usize::MAX);
+        let (again, _) = GradedLattice::new(&tree, &no_rims, [-1.0; 3], [1.0; 3], h, 3, 1e-3, usize::MAX);
         assert_eq!(again.cells, g.cells);
         assert_eq!(again.coords, g.coords);
     }
 
     #[test]
     fn a_flat_face_is_not_refined_but_a_crease_is() {
+        let no_rims = TriangleTree::new(Vec::new());
         // One large square in z = 0.1 (two triangles): flat, nothing to refine.
         let flat = TriangleTree::new(vec![
             [[-5.0, -5.0, 0.1], [5.0, -5.0, 0.1], [5.0, 5.0, 0.1]],
             [[-5.0, -5.0, 0.1], [5.0, 5.0, 0.1], [-5.0, 5.0, 0.1]],
         ]);
-        let (g0, _) = GradedLattice::new(&flat, [-1.0; 3], [1.0; 3], 0.5, 0, 1e-3, usize::MAX);
-        let (g, s) = GradedLattice::new(&flat, [-1.0; 3], [1.0; 3], 0.5, 3, 1e-3, usize::MAX);
+        let (g0, _) = GradedLattice::new(&flat, &no_rims, [-1.0; 3], [1.0; 3], 0.5, 0, 1e-3, usize::MAX);
+        let (g, s) = GradedLattice::new(&flat, &no_rims, [-1.0; 3], [1.0; 3], 0.5, 3, 1e-3, usize::MAX);
         assert_eq!(g.num_tets(), g0.num_tets());
         assert_eq!(s.bisections, 0);
         // A crease along x at z = 0.1 (two half planes at 90°).
@@ -531,12 +543,51 @@ mod tests {
             [[-5.0, 0.0, 0.1], [5.0, 0.0, -4.9], [5.0, 0.0, 0.1]],
             [[-5.0, 0.0, 0.1], [-5.0, 0.0, -4.9], [5.0, 0.0, -4.9]],
         ]);
-        let (g, s) = GradedLattice::new(&crease, [-1.0; 3], [1.0; 3], 0.5, 3, 1e-3, usize::MAX);
+        let (g, s) = GradedLattice::new(&crease, &no_rims, [-1.0; 3], [1.0; 3], 0.5, 3, 1e-3, usize::MAX);
         assert!(s.bisections > 0 && g.num_tets() > g0.num_tets());
         // A vertex budget stops the cutting, leaving the mesh conforming.
-        let (small, _) = GradedLattice::new(&crease, [-1.0; 3], [1.0; 3], 0.5, 3, 1e-3, g0.coords.len() + 10);
+        let (small, _) = GradedLattice::new(&crease, &no_rims, [-1.0; 3], [1.0; 3], 0.5, 3, 1e-3, g0.coords.len() + 10);
         assert!(small.coords.len() > g0.coords.len() && small.coords.len() < g.coords.len());
         check_conforming(&small, &g0);
         check_conforming(&g, &g0);
+    }
+
+    /// An open flat square (side 1 in z = 0.1): flat, but its border edges (the
+    /// rims) are where the solid turns onto the cap over the opening: the cells
+    /// they pass through are refined to the smallest size (h / 8), cells farther
+    /// than 2 h from them keep the base size, and the lattice stays conforming.
+    #[test]
+    fn a_border_edge_is_refined_like_a_crease() {
+        let [a, b, c, d] = [[-0.5, -0.5, 0.1], [0.5, -0.5, 0.1], [0.5, 0.5, 0.1], [-0.5, 0.5, 0.1]];
+        let square = TriangleTree::new(vec![[a, b, c], [a, c, d]]);
+        // Each border edge first, with a third corner of its triangle.
+        let rims = TriangleTree::new(vec![[a, b, c], [b, c, a], [c, d, a], [d, a, c]]);
+        let h = 0.5;
+        let (g0, _) =
+            GradedLattice::new(&square, &TriangleTree::new(Vec::new()), [-1.0; 3], [1.0; 3], h, 0, 1e-3, usize::MAX);
+        let (g, s) = GradedLattice::new(&square, &rims, [-1.0; 3], [1.0; 3], h, 3, 1e-3, usize::MAX);
+        assert!(s.bisections > 0);
+        check_conforming(&g, &g0);
+        let to_rim = |q: P| {
+            [(a, b), (b, c), (c, d), (d, a)]
+                .iter()
+                .map(|&(x, y)| norm(sub(closest_on_segment(x, y, q), q)))
+                .fold(f64::INFINITY, f64::min)
+        };
+        let mut finest_near_rim = 0;
+        for t in &g.cells {
+            let p = t.map(|x| g.position(x));
+            let c = scale([0, 1, 2].map(|k| p[0][k] + p[1][k] + p[2][k] + p[3][k]), 0.25);
+            let longest = (0..4)
+                .flat_map(|i| (i + 1..4).map(move |j| (i, j)))
+                .map(|(i, j)| norm(sub(p[i], p[j])))
+                .fold(0.0, f64::max);
+            assert!(longest > h / 8.0 * (1.0 - 1e-9), "finer than the smallest size: {longest}");
+            if to_rim(c) > 2.0 * h {
+                assert!(longest >= h * (1.0 - 1e-9), "refined far from the rim: {longest} at {c:?}");
+            }
+            finest_near_rim += usize::from(longest < h / 4.0 && to_rim(c) < 0.1);
+        }
+        assert!(finest_near_rim > 0);
     }
 }

@@ -466,8 +466,16 @@ pub fn envelope_mesh_with_progress(
     let eps = 1e-9 * diag.max(f64::MIN_POSITIVE);
     let (stuffed, grade_bisections) = if options.grade_levels > 0 {
         progress("grading", 0.0);
+        // The input's border edges (hole rims), each with its triangle's third corner.
+        let rims = TriangleTree::new(
+            crate::distance::border_edges(surface, 1e-6 * diag)
+                .into_iter()
+                .map(|t| t.map(|v| surface.vertices[v as usize]))
+                .collect(),
+        );
         let (g, gs) = graded::GradedLattice::new(
             winding.tree(),
+            &rims,
             lo,
             hi,
             h,

@@ -142,7 +142,8 @@ pub(crate) fn closest_on_triangle(tri: &[P; 3], p: P) -> P {
     add(a, add(scale(ab, v), scale(ac, w)))
 }
 
-fn closest_on_segment(a: P, b: P, p: P) -> P {
+/// The point of segment `a..b` closest to `p` (`a` when the segment is a point).
+pub(crate) fn closest_on_segment(a: P, b: P, p: P) -> P {
     let ab = sub(b, a);
     let l2 = dot(ab, ab);
     if !(l2 > 0.0) {
