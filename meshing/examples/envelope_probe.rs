@@ -204,6 +204,22 @@ fn main() {
                 })
                 .collect();
             println!("    nearest mesh boundary point {c:?} at {dc:.4} mm; w on the way: {line:?}");
+            // Is the input point inside the mesh (winding number of its boundary), and what is beside that face?
+            let (_, _, f) = out_tree.closest_point(c).unwrap();
+            let ft = faces[f as usize].map(|v| out.mesh.nodes[v as usize]);
+            let (u, v) = (sub(ft[1], ft[0]), sub(ft[2], ft[0]));
+            let fc = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
+            let fl = norm(fc);
+            let fnrm = [fc[0] / fl, fc[1] / fl, fc[2] / fl];
+            let side = |a: f64| [c[0] + a * fnrm[0], c[1] + a * fnrm[1], c[2] + a * fnrm[2]];
+            println!(
+                "    mesh winding at the input point {:.3}; the face {ft:?}, normal {fnrm:?}: input w at +-0.02 mm {:.4} / {:.4}, mesh w {:.3} / {:.3}",
+                out_tree.winding_number_exact(p),
+                w.at(side(0.02)),
+                w.at(side(-0.02)),
+                out_tree.winding_number_exact(side(0.02)),
+                out_tree.winding_number_exact(side(-0.02))
+            );
             let (_, i) = d[0];
             let p = s.vertices[i];
             let (c, dist, t) = out_tree.closest_point(p).unwrap();

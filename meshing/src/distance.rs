@@ -219,10 +219,11 @@ pub fn boundary_distance(boundary: &[[P; 3]], surface: &Surface, spacing: f64) -
 }
 
 /// Whether the winding number is on different sides of 1/2 at `p ± offset n`
-/// (`n` a unit normal): the surface at `p` bounds the solid `w > 1/2`.
+/// (`n` a unit normal; exact near 1/2: [`WindingNumber::is_inside_checked`]):
+/// the surface at `p` bounds the solid `w > 1/2`.
 pub(crate) fn winding_jumps(winding: &WindingNumber, p: P, n: P, offset: f64) -> bool {
-    let front = winding.is_inside([p[0] + offset * n[0], p[1] + offset * n[1], p[2] + offset * n[2]]);
-    let back = winding.is_inside([p[0] - offset * n[0], p[1] - offset * n[1], p[2] - offset * n[2]]);
+    let front = winding.is_inside_checked([p[0] + offset * n[0], p[1] + offset * n[1], p[2] + offset * n[2]]);
+    let back = winding.is_inside_checked([p[0] - offset * n[0], p[1] - offset * n[1], p[2] - offset * n[2]]);
     front != back
 }
 

@@ -705,8 +705,8 @@ fn box_faces_outside(
 /// cross the input triangles inside. "Mesh" = the exact union's boundary: the
 /// boundary figure is 0 but for the placement of those curves, within 1/128 of
 /// a refined grid edge (the hypotenuse, sqrt 2 / 48) plus the probes' pull
-/// (100 x 1e-7 of the diagonal): asserted <= 2.5e-4 mm, measured 1.1e-4 mm
-/// (session 18's whole-or-nothing sub-triangles: 1.47e-2 mm). The raw figure
+/// (100 x 1e-7 of the diagonal): asserted <= 2.5e-4 mm, measured 1.63e-4 mm
+/// (1/128 of an axis-parallel grid edge of 1/48). The raw figure
 /// is B's inner face's centre, A's centre, 0.5 from A's faces (asserted within
 /// 1e-12).
 #[test]
@@ -765,6 +765,34 @@ fn the_cap_over_an_open_scans_hole_is_measured_apart() {
     assert!((m.widest_hole_mm - 2.0 * 2f64.sqrt() * alpha.sin()).abs() < 1e-9, "{m:?}");
     assert!(m.hole_cap_fraction > 0.0 && m.hole_cap_fraction < 0.5, "{m:?}");
     assert_eq!(m.num_interior_input_triangles, 0);
+}
+
+/// An open scan on the graded lattice (session 19): the unit sphere with a
+/// polar cap of angular radius 40 deg cut off (as above). Where the solid leaves
+/// the input for the cap over the hole, its boundary has a crease along the rim
+/// that no input triangle shows; the grading refines the cells the rim passes
+/// to the smallest size, as at a crease of the input. Measured (h = 0.25 mm, 3
+/// levels, 83k tets, 3.6 s): boundary figure (caps apart) 2.19e-3 of the
+/// diagonal, its input -> mesh maximum at the midpoint of a rim chord (without
+/// the rim's refinement: 3.65e-3, at the same place); asserted <= 2.5e-3: a
+/// **miss** of the issue's 1e-3 (the fitting does not reach the rim between its
+/// vertices). The cap over the hole is reported apart (1.9e-1).
+#[test]
+fn an_open_scans_rim_is_refined_on_the_graded_lattice() {
+    let alpha = 40f64.to_radians();
+    let scan = sphere_zone(0.0, 1.0, &angles(alpha, std::f64::consts::PI, 28), 64);
+    let options = EnvelopeOptions { grade_levels: 3, ..EnvelopeOptions::new(0.25) };
+    let (out, q) = mesh_and_report_with(&scan, &options);
+    eprintln!(
+        "open scan, graded: boundary {:.3e} (out->in {:.3e}, in->out {:.3e} mm), caps {:.3e}, {} border edges",
+        q.hausdorff_relative, q.mesh_to_surface_mm, q.surface_to_mesh_mm, q.hole_cap_relative, q.num_border_edges
+    );
+    assert_eq!(q.num_inverted, 0);
+    assert_issue_angles(&q);
+    assert_conforming(&out.mesh);
+    assert_eq!(q.num_border_edges, 64);
+    assert!(q.hole_cap_relative > q.hausdorff_relative, "{q:?}");
+    assert!(q.hausdorff_relative <= 2.5e-3, "{q:?}");
 }
 
 /// Two boxes sharing an edge (non-manifold): both, volume 2.
