@@ -40,22 +40,34 @@
 //! least one), and each sample's exact distance to the other surface is found
 //! with a BVH: a sampled maximum is below the true one by at most the sample
 //! spacing. The jump of `w` is tested at grid points pulled towards the
-//! triangle's centroid by 1e-3 of their distance (so that points on sharp
-//! creases are probed inside their own triangle), at an offset of 1e-7 of the
-//! diagonal on each side, first on a grid of twice the sample spacing (to keep
-//! the report's time in check: each test is two winding-number evaluations). A
-//! triangle whose grid points all jump bounds the solid whole; one whose grid
-//! points all do not is interior (so a jump curve enclosing less than about two
-//! sample spacings inside one triangle is missed); a mixed one (a jump curve
-//! crosses it) is resampled at half the sample spacing and its sub-triangles
-//! with at least two jumping corners stand for its bounding part, which places
-//! the jump curve within about one such finer spacing (1/600 of the diagonal in
-//! the report). Near a jump curve the mesh -> input distance can so be
-//! overestimated by about that much: measured on the thin fin (a 1e-4 mm fin
-//! through a unit box) meshed on the graded lattice, 2.7e-3 of the diagonal
-//! where the raw figure is 5.8e-5 (the fin's junction with the box is a jump
-//! curve). The closed forms this is tested against (two overlapping spheres, an
-//! open scan's cap) are in `meshing/tests/envelope.rs`.
+//! triangle's centroid by 1e-3 of their distance, at most 1e-5 of the diagonal
+//! (so that points on sharp creases are probed inside their own triangle), at
+//! an offset of 1e-7 of the diagonal on each side, first on a grid of twice the
+//! sample spacing (to keep the report's time in check: each test is two
+//! winding-number evaluations). Where the fast winding number is within 0.1 of
+//! 1/2 (its far field errs by up to a few hundredths), the test sums it exactly
+//! over every triangle ([`WindingNumber::is_inside_checked`]): in the teapot
+//! handle's open mouth, where `w` is 0.50 to 0.51 beside the body, the fast
+//! value alone put the body's surface on the wrong side. A triangle whose grid
+//! points all jump bounds the solid whole; one whose grid points all do not is
+//! interior (so a jump curve enclosing less than about two sample spacings
+//! inside one triangle is missed); a mixed one (a jump curve crosses it) is
+//! resampled at half the sample spacing, and each sub-triangle of that grid is
+//! kept whole when its three corners jump, clipped when one or two do: the
+//! crossing of the jump curve with each of its mixed edges is found by 6
+//! bisections (within 1/128 of the edge), and the jumping corners' side of the
+//! segment between the crossings is kept (marching triangles). So the jump curve
+//! is placed within 1/128 of a fine grid edge (plus the pull, and the curve's
+//! bending inside one sub-triangle): on two overlapping boxes (closed form, test
+//! `the_boundary_distance_places_jump_curves_inside_triangles`), 1.6e-4 mm for
+//! grid edges of 1/48 mm. Session 18 kept sub-triangles with two or more jumping
+//! corners whole, which placed the curve within one fine spacing only: on the
+//! thin fin (a 1e-4 mm fin through a unit box) on the graded lattice its
+//! boundary figure was 2.41e-3 of the diagonal where the raw one is 5.8e-5; now
+//! 4.0e-5. The closed forms this is tested against (two overlapping spheres, two
+//! overlapping boxes, an open scan's cap) are in `meshing/tests/envelope.rs`.
+//! The maxima's places are returned ([`BoundaryDistance::mesh_to_boundary_at_mm`],
+//! [`BoundaryDistance::boundary_to_mesh_at_mm`]) to find where a miss comes from.
 
 #![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > 0.0)` also refuses NaN, deliberately.
 

@@ -18,7 +18,7 @@
 //!    (`graded.rs`): the BCC lattice refined by conforming longest-edge
 //!    bisection down to `size_mm / 2^levels` where the input's chord error at the
 //!    cell's size exceeds [`EnvelopeOptions::grade_tolerance`] (creases, curved
-//!    parts, thin parts), coarse elsewhere; the same stuffing per tet, with
+//!    parts, thin parts, the rims of holes), coarse elsewhere; the same stuffing per tet, with
 //!    measured (not proven) warping thresholds, then boundary slivers peeled.
 //! 3. **Regions**: with several input regions (OBJ objects or groups, glTF meshes),
 //!    each region's shell is cut into the mesh as a conforming interface
@@ -76,7 +76,7 @@
 //! silently. Cells cut by region interfaces and layer planes have no proven angle
 //! bound; the quality report measures them, and the final guard refuses what it
 //! cannot bring into [12°, 155°] (measured: the uniform lattice on the open teapot
-//! at 0.25 mm, 2 tets at 158° beside its opening, is refused).
+//! at 0.25 mm, 2 tets at 158° at the stem of the lid's knob, is refused).
 
 //! ## Example
 //!
