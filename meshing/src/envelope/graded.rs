@@ -477,6 +477,16 @@ mod tests {
         assert!((a - a0).abs() < 1e-9 * a0, "boundary area {a} vs {a0}");
     }
 
+    /// The centroid of the tet `p` and its longest edge's length [mm].
+    fn centroid_and_longest(p: &[P; 4]) -> (P, f64) {
+        let c = scale([0, 1, 2].map(|k| p[0][k] + p[1][k] + p[2][k] + p[3][k]), 0.25);
+        let longest = (0..4)
+            .flat_map(|i| (i + 1..4).map(move |j| (i, j)))
+            .map(|(i, j)| norm(sub(p[i], p[j])))
+            .fold(0.0, f64::max);
+        (c, longest)
+    }
+
     #[test]
     fn bisection_keeps_the_lattice_conforming_with_few_shapes_and_fine_only_near_the_creases() {
         let tree = octahedron();
@@ -502,12 +512,7 @@ mod tests {
         // far from the surface, the base size.
         let pos = |v: u32| g.position(v);
         for t in &g.cells {
-            let p = t.map(pos);
-            let c = scale([0, 1, 2].map(|k| p[0][k] + p[1][k] + p[2][k] + p[3][k]), 0.25);
-            let longest = (0..4)
-                .flat_map(|i| (i + 1..4).map(move |j| (i, j)))
-                .map(|(i, j)| norm(sub(p[i], p[j])))
-                .fold(0.0, f64::max);
+            let (c, longest) = centroid_and_longest(&t.map(pos));
             assert!(longest > h / 8.0 * (1.0 - 1e-9), "finer than the smallest size: {longest}");
             let d = tree.closest_point(c).map_or(f64::INFINITY, |x| x.1);
             if d > 2.0 * h {
@@ -582,12 +587,7 @@ mod tests {
         };
         let mut finest_near_rim = 0;
         for t in &g.cells {
-            let p = t.map(|x| g.position(x));
-            let c = scale([0, 1, 2].map(|k| p[0][k] + p[1][k] + p[2][k] + p[3][k]), 0.25);
-            let longest = (0..4)
-                .flat_map(|i| (i + 1..4).map(move |j| (i, j)))
-                .map(|(i, j)| norm(sub(p[i], p[j])))
-                .fold(0.0, f64::max);
+            let (c, longest) = centroid_and_longest(&t.map(|x| g.position(x)));
             assert!(longest > h / 8.0 * (1.0 - 1e-9), "finer than the smallest size: {longest}");
             if to_rim(c) > 2.0 * h {
                 assert!(longest >= h * (1.0 - 1e-9), "refined far from the rim: {longest} at {c:?}");
