@@ -137,8 +137,9 @@ pub fn boundary_distance(boundary: &[[P; 3]], surface: &Surface, spacing: f64) -
     let samples = |t: &[P; 3]| grid_points(t, intervals(t, spacing, 24));
     let raw_mesh_to_surface =
         boundary.par_iter().map(|t| farthest(samples(t), &in_tree)).reduce(|| (0.0, [0.0; 3]), farther);
-    let raw_surface_to_mesh =
-        in_tris.par_iter().map(|t| farthest(samples(t), &out_tree)).reduce(|| (0.0, [0.0; 3]), farther);
+    // Per input triangle (reused below for the triangles that bound the solid whole).
+    let per_input: Vec<(f64, P)> = in_tris.par_iter().map(|t| farthest(samples(t), &out_tree)).collect();
+    let raw_surface_to_mesh = per_input.iter().copied().fold((0.0, [0.0; 3]), farther);
     let (raw_mesh_to_surface_mm, raw_surface_to_mesh_mm) = (raw_mesh_to_surface.0, raw_surface_to_mesh.0);
 
     // The bounding part of the input, and its distance to the mesh.
@@ -146,11 +147,12 @@ pub fn boundary_distance(boundary: &[[P; 3]], surface: &Surface, spacing: f64) -
     let delta = 1e-7 * diag;
     let parts: Vec<(Bounding, (f64, P))> = in_tris
         .par_iter()
-        .map(|t| {
+        .zip(&per_input)
+        .map(|(t, &whole)| {
             let k = intervals(t, spacing, 24);
             let jumps = grid_jumps(t, k.div_ceil(2), &winding, delta);
             if jumps.iter().all(|&j| j) {
-                (Bounding::All, farthest(grid_points(t, k), &out_tree))
+                (Bounding::All, whole)
             } else if !jumps.iter().any(|&j| j) {
                 (Bounding::None, (0.0, [0.0; 3]))
             } else {
