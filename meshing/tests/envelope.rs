@@ -852,6 +852,39 @@ fn a_thin_fin_is_reported_not_dropped_silently() {
     assert!(lo[0] > 0.49 && hi[0] < 0.51, "{lo:?}..{hi:?}");
 }
 
+/// Two unit boxes 0.01 mm apart (session 19): the gap between them, narrower
+/// than half the lattice spacing (0.05 mm at h = 0.1 mm), is reported as a thin
+/// gap on the two facing faces (x = 1 and x = 1.01), its width the boxes'
+/// distance: measured 1.0e-2 mm (the ray's start offset, 1e-7 of the
+/// diagonal, aside), asserted within 1e-6 mm; no thin part is reported.
+#[test]
+fn a_thin_gap_is_reported_not_closed_silently() {
+    let g = 0.01;
+    let s = soup(&[
+        &Surface::cuboid([0.0; 3], [1.0; 3], "a"),
+        &Surface::cuboid([1.0 + g, 0.0, 0.0], [2.0 + g, 1.0, 1.0], "b"),
+    ]);
+    let (out, q) = mesh_and_report(&s, 0.1);
+    assert_eq!(q.num_inverted, 0);
+    assert_conforming(&out.mesh);
+    let gaps: Vec<_> = out
+        .warnings
+        .iter()
+        .filter_map(|w| match w {
+            EnvelopeWarning::ThinGap { min_width_mm, lo_mm, hi_mm, num_triangles, .. } => {
+                Some((*min_width_mm, *lo_mm, *hi_mm, *num_triangles))
+            }
+            _ => None,
+        })
+        .collect();
+    assert_eq!(gaps.len(), 1, "{:?}", out.warnings);
+    let (width, lo, hi, num) = gaps[0];
+    assert!((width - g).abs() < 1e-6, "narrowest {width}");
+    assert_eq!(num, 4, "the two facing faces, two triangles each");
+    assert!((lo[0] - 1.0).abs() < 1e-12 && (hi[0] - 1.0 - g).abs() < 1e-12, "{lo:?}..{hi:?}");
+    assert!(!out.warnings.iter().any(|w| matches!(w, EnvelopeWarning::ThinFeature { .. })), "{:?}", out.warnings);
+}
+
 /// The Utah teapot: open (64 border edges), four parts, self-intersecting.
 #[test]
 fn the_teapot_meshes_with_the_proven_bounds() {
