@@ -562,9 +562,9 @@ mod tie_rule {
     /// band, as `gravity` against `force-offset` at lambda = 100 in session 18
     /// (margin 2942 against 2 SE = 233, cosine 0.93). The document's rule is
     /// "margin < 2 SE, **or** cosine > 0.9": a tie, with both named. Measured:
-    /// margin 285.0 against 2 SE = 70.2, cosine 0.949. Asserted: the margin is
-    /// over 3 SE (the large-margin premise), the cosine over 0.9, and the
-    /// label `tie`.
+    /// margin 297.9 against SE 33.4 (8.9 SE), cosine 0.950. Asserted: the
+    /// margin over 6 SE (the large-margin premise), the cosine over 0.9, and
+    /// the label `tie`.
     #[test]
     fn collinear_corrections_tie_even_with_a_large_margin() {
         let v = verdict(3000.0, 0.95, 3);
@@ -577,7 +577,7 @@ mod tie_rule {
 
     /// The same strength with corrections at cosine 0.6: the margin is outside
     /// its SE band and the signatures are not collinear, so the leader is
-    /// named. Measured: margin 1918.6 against 2 SE = 174.8, cosine 0.600.
+    /// named. Measured: margin 1871.4 against 2 SE = 172.9, cosine 0.600.
     #[test]
     fn a_large_margin_between_distinct_corrections_names_the_leader() {
         let v = verdict(3000.0, 0.6, 3);
@@ -591,7 +591,7 @@ mod tie_rule {
     /// plus `a + b` at 40 noise units squared each, so the margin is noise
     /// (`N(0, 4 * 80)` about 0). Over 50 seeds the rule gives a tie in at
     /// least 45 (nominal 95 % two-sided: the leader is the better of the two);
-    /// measured 50/50.
+    /// measured 47/50.
     #[test]
     fn a_margin_within_its_se_band_ties() {
         let (segments, n) = segments();
