@@ -271,6 +271,7 @@ pub fn diagnosis_json(d: &Diagnosis) -> Value {
                 "significant": c.significant,
                 "heldout_gain": c.heldout.as_ref().map(|h| h.gain),
                 "heldout_gain_se": c.heldout.as_ref().map(|h| h.gain_se),
+                "heldout_gain_se_segments": c.heldout.as_ref().map(|h| h.gain_se_segments),
                 "eligible": c.eligible,
                 "combined": c.combined,
                 "gap_closure": closure,

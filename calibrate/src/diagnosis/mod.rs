@@ -68,7 +68,8 @@
 //!    crossed); `LR = 2 (Phi0 - Phi_j)` against the
 //!    chi-bar-square with Holm over the candidates at `alpha_which` (0.01) and
 //!    the Bonferroni critical value reported; held-out non-inferiority
-//!    (`Delta_ho > -2 SE`, [`heldout`]); ranking `C_j = LR_j + Delta_ho_j - 2 d_j`.
+//!    (`Delta_ho > -2 SE`, the SE of a paired block bootstrap,
+//!    [`HeldOut::non_inferior`]); ranking `C_j = LR_j + Delta_ho_j - 2 d_j`.
 //! 5. **HOW FAR** (step 4, [`heldout`]): gap closure on smooth-projected
 //!    held-out residuals with a 90 % paired-bootstrap interval (fixed seed).
 //!
@@ -91,8 +92,13 @@
 //! the best `C_j` is named, as `tie` (with the runner-up and the experiment
 //! that separates them, diagnosis-details.md §4.3 and §5.7) when
 //! `C_1 - C_2 < 2 SE` or when the two refits change the residuals in nearly
-//! the same way (cosine > 0.9), and as `partial: <id>` when a cell stays
-//! flagged after its refit. No gap: `none`. The SE is that of a paired block
+//! the same way (cosine > 0.9; either condition alone, as §5.4 writes it:
+//! [`is_tie`]), and as `partial: <id>` when a cell stays
+//! flagged after its refit. No gap: `none`. Eligible means significant and
+//! non-inferior on held-out data, `Delta_ho > -2 SE` with the SE of the same
+//! paired block bootstrap on the held-out residuals ([`HeldOut::non_inferior`];
+//! until session 18 a whole-segment bootstrap, which let a candidate that
+//! makes the held-out trials far worse pass). The tie rule's SE is that of a paired block
 //! bootstrap (diagnosis-details.md §5.4, "over trials and blocks"): blocks of
 //! `round(n^(1/3))` whitened samples redrawn inside every segment, stratified
 //! by trial and segment, around the segment's smooth trend, on the calibration
@@ -686,7 +692,7 @@ pub fn diagnose(
             _ => None,
         };
         let gain = e.report.heldout.as_ref().map_or(0.0, |h| h.gain);
-        e.report.eligible = sig && e.report.heldout.as_ref().is_none_or(|h| h.gain > -2.0 * h.gain_se);
+        e.report.eligible = sig && e.report.heldout.as_ref().is_none_or(HeldOut::non_inferior);
         e.report.combined = e.report.lr + gain - 2.0 * d as f64;
     }
 
@@ -957,7 +963,7 @@ fn decide(
             se_segments: seg2.sqrt(),
             cosine: cos,
         });
-        if margin < 2.0 * se2.sqrt() || cos > 0.9 {
+        if is_tie(margin, se2.sqrt(), cos) {
             let other = second.report.effect;
             let experiment = separating_experiment(id, other);
             return Verdict {
@@ -1011,6 +1017,30 @@ fn decide(
         remaining_cells: Vec::new(),
         tie_test,
     }
+}
+
+/// The cosine above which two candidates' corrections count as collinear
+/// (diagnosis-details.md §5.4.4).
+pub const TIE_COSINE: f64 = 0.9;
+
+/// The tie rule between the two best eligible candidates, as
+/// diagnosis-details.md §5.4.4 writes it: "if C_(1) - C_(2) < 2 SE_C, or
+/// cos(J~_1, J~_2) > 0.9, report both and propose the discriminating
+/// experiment". Either condition alone makes a tie: a margin within its SE
+/// band (the data do not separate the two), or collinear corrections however
+/// large the margin (the two signatures are the same to within 1 - cos^2 of
+/// their energy, so the part that decides between them is small next to what
+/// either explains, and the separating experiment is what §5.7 prescribes).
+/// `cosine` is that of the two refits' residual changes `r0 - r_j`: for a
+/// one-parameter candidate in a model linear in its parameters the change is
+/// the projection of `r0` on `J~_j`, so its cosine is `cos(J~_1, J~_2)` up to
+/// sign, and it extends to multi-parameter candidates (the fitted directions)
+/// and to non-linear refits. Session 19 checked the rule against the document
+/// and kept it (unit test `collinear_corrections_tie_even_with_a_large_margin`);
+/// requiring the margin within its SE band for collinear pairs as well would
+/// depart from §5.4.
+pub fn is_tie(margin: f64, se: f64, cosine: f64) -> bool {
+    margin < 2.0 * se || cosine > TIE_COSINE
 }
 
 /// What data separates `effect` from others (diagnosis-details.md §4.2, last column).
