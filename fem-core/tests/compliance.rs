@@ -16,7 +16,7 @@
 //!   changes.
 //! - Adhesion in tension, bonded, follows the series closed form with the
 //!   spring; pulled on into the softening branch the run stops with a typed
-//!   `NotConverged` at the knee (the deflection's bracket assumes a force that
+//!   `DeflectionNotConverged` at the knee (the deflection's bracket assumes a force that
 //!   does not grow as the plate backs off).
 //! - The null is the baseline bit for bit; tools that cannot carry the
 //!   compliance are refused naming the key.
@@ -414,9 +414,12 @@ fn adhesive_series(k: f64, s: f64, dc: f64, c: f64, d_cmd: f64) -> f64 {
 ///   has one root (`k - S - c k S = k/2 > 0`: `F = -k (s + S d_cmd)/(k - S - c k
 ///   S)`), but the force grows as the plate backs off there, which the
 ///   deflection's bracket (`press::stepper`, "Machine compliance") assumes it does
-///   not: the run stops with a typed `NotConverged` naming the machine compliance
-///   at the knee's step (t = 2.818 s), not a panic. Asserted as such: when the
-///   bracket learns this branch, this part becomes the closed-form check.
+///   not: the run stops with the typed `DeflectionNotConverged` (its own message:
+///   the step, the time, "the machine-compliance deflection did not converge" and
+///   the two deflections whose residuals have one sign; not the material-point
+///   iteration's) at the knee's step (t = 2.818 s), not a panic. Asserted as
+///   such: when the bracket learns this branch, this part becomes the
+///   closed-form check.
 #[test]
 fn adhesion_behind_the_spring_follows_the_series_closed_form_until_the_softening() {
     let area = W * T;
@@ -465,10 +468,16 @@ fn adhesion_behind_the_spring_follows_the_series_closed_form_until_the_softening
     assert!(worst <= 1e-9, "{worst:.3e} of the strength");
     assert!(worst_reference <= 1e-9, "deflected reference {worst_reference:.3e} of the peak");
     match err {
-        PressError::NotConverged { time_s, ref detail, .. } => {
-            assert!(detail.starts_with("machine compliance:"), "{err}");
+        PressError::DeflectionNotConverged { time_s, ref detail, .. } => {
+            assert!(detail.starts_with("the measured force grows as the tools back off"), "{err}");
+            let message = err.to_string();
+            assert!(
+                message.contains("the machine-compliance deflection did not converge")
+                    && !message.contains("material-point"),
+                "{message}"
+            );
             assert!((time_s - peak_t).abs() <= 0.05 + 1e-9, "{err}");
         }
-        _ => panic!("expected NotConverged at the knee, got {err:?}"),
+        _ => panic!("expected DeflectionNotConverged at the knee, got {err:?}"),
     }
 }

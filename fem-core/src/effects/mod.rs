@@ -127,7 +127,9 @@
 //! with the step's own linear factor (no new factorization), switching to full
 //! Newton with the assembled consistent tangent when an iteration reduces the
 //! residual by less than half, each Newton step line-searched on the step's convex
-//! potential; converged at 1e-12 of the step's force scale; not
+//! potential; converged at 1e-12 of the force scale (the larger of the step's
+//! own and the run's largest force so far: `press::inelastic`, "The force
+//! scale"); not
 //! converged in 100 iterations: [`crate::press::PressError::NotConverged`], and the
 //! step is retried from its old state at a quarter of the step (three times, never
 //! below the least step `1e-10` of the trial: the press stepper's "Retries"). E4's

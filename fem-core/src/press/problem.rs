@@ -325,6 +325,12 @@ pub enum PressError {
     /// had no solution), even at a smaller step.
     #[error("step {step} at t = {time_s:.6} s: the material-point iteration did not converge: {detail}")]
     NotConverged { step: usize, time_s: f64, detail: String },
+    /// The machine's deflection (the `machine-compliance` effect) did not settle
+    /// in a step (its scalar iteration found no bracket, or did not close it),
+    /// even at a smaller step; `detail` says which, with the deflections [mm] and
+    /// the residuals `delta - c F` [mm] it reached.
+    #[error("step {step} at t = {time_s:.6} s: the machine-compliance deflection did not converge: {detail}")]
+    DeflectionNotConverged { step: usize, time_s: f64, detail: String },
     /// Effect values refused, or an effect that does not fit the problem.
     #[error("effects: {0}")]
     Effect(EffectError),
