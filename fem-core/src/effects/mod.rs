@@ -60,9 +60,11 @@
 //! tools that are not floors, lifted together along +y, and `F` the sum of the y
 //! forces on them. Quasi-static integrator only (refused with the dynamic or the
 //! seed's scheme, and with sensitivities); with tools, refused when none of them
-//! moves (floors and fixed tools only); refused with Coulomb friction
-//! (`plate-friction`, or a tool's friction), on which the deflection iteration
-//! does not converge yet (`fem-core/tests/compliance.rs`).
+//! moves (floors and fixed tools only); refused with a Coulomb floor
+//! (`plate-friction` over a frictionless support, or a floor tool's friction),
+//! whose contact does not settle at the push's first step once the deflection
+//! lifts the plate; a Coulomb plate (a tool's friction, or `plate-friction` over
+//! a glued support) runs (`fem-core/tests/compliance.rs`).
 //!
 //! **Sensitivities.** `force-offset` and `gravity` do not depend on the material
 //! parameters, so the forward sensitivities stay exact with them held at any

@@ -453,7 +453,8 @@ where
     /// frictionless constrained plate or on contact tools of which one presses and is
     /// not glued; `machine-compliance` with contact tools only when one of them
     /// moves and is not a floor (the crosshead's tools, `super::stepper`, "Machine
-    /// compliance"), and not with Coulomb friction (`plate-friction` or a tool's). The material-point effects and the damage run with contact
+    /// compliance"), and not with a Coulomb floor (`plate-friction` over a
+    /// frictionless support, or a floor tool's friction). The material-point effects and the damage run with contact
     /// tools too (`super::inelastic`, "With contact tools"), and next to
     /// `machine-compliance`.
     pub(crate) fn validate_effects(&self) -> Result<(), PressError> {
@@ -498,14 +499,17 @@ where
                 );
             }
         }
-        let coulomb = e.is_active(EffectId::PlateFriction)
-            || self.tools.iter().any(|t| matches!(t.contact, ToolContact::Friction(mu) if mu > 0.0));
-        if e.is_active(EffectId::MachineCompliance) && coulomb {
+        // A floor with Coulomb friction: a floor tool's, or the one `plate-friction`
+        // makes of a frictionless support (`super::effects_applied`).
+        let coulomb_floor = (e.is_active(EffectId::PlateFriction) && self.protocol.support == Attachment::Frictionless)
+            || self.tools.iter().any(|t| t.floor && matches!(t.contact, ToolContact::Friction(mu) if mu > 0.0));
+        if e.is_active(EffectId::MachineCompliance) && coulomb_floor {
             return conflict(
                 EffectId::MachineCompliance,
-                "cannot be combined with Coulomb friction yet (`plate_friction`, or a tool's friction): the \
-                 crosshead's deflection does not converge on it (a `plate_friction` run differed from its \
-                 deflected-path reference by 4.3e-2 of the peak); run it without one of the two",
+                "cannot be combined with a Coulomb floor yet (`plate_friction` over a frictionless support, or a \
+                 floor tool's friction): the floor's contact does not settle at the push's first step once the \
+                 crosshead's deflection lifts the plate, nor at any shorter retry; run it without one of the two \
+                 (a Coulomb plate over a glued floor runs)",
             );
         }
         if e.is_active(EffectId::MachineCompliance)
