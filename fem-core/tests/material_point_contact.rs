@@ -249,6 +249,11 @@ fn adaptive_punch_dent_agrees_with_fixed_steps() {
 /// steps of the first stroke, with the step retries at the turnaround, the two
 /// runs drift apart by up to 2.1e-10 of the peak (measured, axisymmetric; a
 /// tolerance set for this new test, not loosened after a failure of an old one).
+/// Not derived yet: the deciding run, `press::inelastic::TOLERANCE` at 1e-13
+/// (session 19, temporarily), does not reach the comparison: the iteration stops
+/// after the second press's release (t = 30.12 s) at 1.8e-13 of its force scale
+/// (axisymmetric: its rounding floor) and at 1.3e-6 (plane, t = 30.13 s), so
+/// whether the 2.1e-10 is the tolerance's growth is still open.
 const STIFF_BOTTOM_TOL: f64 = 1e-9;
 
 /// Strong strain stiffening: `a` at its upper bound 50.
