@@ -249,6 +249,11 @@ fn adaptive_punch_dent_agrees_with_fixed_steps() {
 /// steps of the first stroke, with the step retries at the turnaround, the two
 /// runs drift apart by up to 2.1e-10 of the peak (measured, axisymmetric; a
 /// tolerance set for this new test, not loosened after a failure of an old one).
+/// Not derived yet: the deciding run, `press::inelastic::TOLERANCE` at 1e-13
+/// (session 19, temporarily), does not reach the comparison: the iteration stops
+/// after the second press's release (t = 30.12 s) at 1.8e-13 of its force scale
+/// (axisymmetric: its rounding floor) and at 1.3e-6 (plane, t = 30.13 s), so
+/// whether the 2.1e-10 is the tolerance's growth is still open.
 const STIFF_BOTTOM_TOL: f64 = 1e-9;
 
 /// Strong strain stiffening: `a` at its upper bound 50.
@@ -267,6 +272,11 @@ fn strong_stiffening() -> Effects {
 /// frictionless: bottom force 1.8e-11 of the peak, tool force 3.8e-11 to 6.2e-11,
 /// shape 9.7e-12 mm (570 steps); glued: bottom force 8e-13 to 3.6e-12, tool force
 /// 1.3e-11 to 9.3e-11, shape 6.9e-13 mm (66 steps); plane, axisymmetric, solid.
+/// Session 19, with the run's largest force as the floor of the iteration's
+/// scale (`press::inelastic`, "The force scale"; the recovery after the release
+/// is unloaded): frictionless bottom force 1.5e-11 to 3.8e-11, tool force 4.6e-11
+/// to 9.2e-11, shape 4.0e-12 to 6.0e-11 mm (342 to 712 steps); glued bottom force
+/// 1.8e-12 to 3.6e-12, tool force 1.9e-11 to 9.3e-11, shape 4.9e-12 to 2.3e-11 mm.
 #[test]
 fn plate_tools_with_strong_strain_stiffening_reproduce_the_plates_at_half_compression() {
     for (attachment, contact) in
@@ -290,7 +300,10 @@ fn plate_tools_with_strong_strain_stiffening_reproduce_the_plates_at_half_compre
 /// lift-off at 14.13 / 14.18 / 14.09 s, contact again at 23.27 s, second peaks
 /// 0.98 of the first; tool force 1.3e-10 / 9.8e-11 / 2.4e-11, bottom force
 /// 3.1e-11 / 2.1e-10 / 1.2e-10 of the peak (plane / axisymmetric / solid; 783,
-/// 735 and 360 steps).
+/// 735 and 360 steps). Session 19 (the iteration's force scale with the run's
+/// largest force as its floor): lift-off at 14.10 / 14.27 / 14.16 s, tool force
+/// 1.6e-10 / 9.6e-11 / 2.8e-11, bottom force 3.0e-11 / 2.1e-10 / 1.2e-10 (912,
+/// 584 and 658 steps).
 #[test]
 fn strong_stiffening_with_a_plate_tool_runs_press_release_press() {
     let mut protocol = Protocol::ramp_hold_release(0.75, 10.0, 30.0, 40.0);

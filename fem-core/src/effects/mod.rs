@@ -60,9 +60,11 @@
 //! tools that are not floors, lifted together along +y, and `F` the sum of the y
 //! forces on them. Quasi-static integrator only (refused with the dynamic or the
 //! seed's scheme, and with sensitivities); with tools, refused when none of them
-//! moves (floors and fixed tools only); refused with Coulomb friction
-//! (`plate-friction`, or a tool's friction), on which the deflection iteration
-//! does not converge yet (`fem-core/tests/compliance.rs`).
+//! moves (floors and fixed tools only); refused with a Coulomb floor
+//! (`plate-friction` over a frictionless support, or a floor tool's friction),
+//! whose contact does not settle at the push's first step once the deflection
+//! lifts the plate; a Coulomb plate (a tool's friction, or `plate-friction` over
+//! a glued support) runs (`fem-core/tests/compliance.rs`).
 //!
 //! **Sensitivities.** `force-offset` and `gravity` do not depend on the material
 //! parameters, so the forward sensitivities stay exact with them held at any
@@ -127,7 +129,9 @@
 //! with the step's own linear factor (no new factorization), switching to full
 //! Newton with the assembled consistent tangent when an iteration reduces the
 //! residual by less than half, each Newton step line-searched on the step's convex
-//! potential; converged at 1e-12 of the step's force scale; not
+//! potential; converged at 1e-12 of the force scale (the larger of the step's
+//! own and the run's largest force so far: `press::inelastic`, "The force
+//! scale"); not
 //! converged in 100 iterations: [`crate::press::PressError::NotConverged`], and the
 //! step is retried from its old state at a quarter of the step (three times, never
 //! below the least step `1e-10` of the trial: the press stepper's "Retries"). E4's

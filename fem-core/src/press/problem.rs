@@ -325,6 +325,12 @@ pub enum PressError {
     /// had no solution), even at a smaller step.
     #[error("step {step} at t = {time_s:.6} s: the material-point iteration did not converge: {detail}")]
     NotConverged { step: usize, time_s: f64, detail: String },
+    /// The machine's deflection (the `machine-compliance` effect) did not settle
+    /// in a step (its scalar iteration found no bracket, or did not close it),
+    /// even at a smaller step; `detail` says which, with the deflections [mm] and
+    /// the residuals `delta - c F` [mm] it reached.
+    #[error("step {step} at t = {time_s:.6} s: the machine-compliance deflection did not converge: {detail}")]
+    DeflectionNotConverged { step: usize, time_s: f64, detail: String },
     /// Effect values refused, or an effect that does not fit the problem.
     #[error("effects: {0}")]
     Effect(EffectError),
@@ -447,7 +453,8 @@ where
     /// frictionless constrained plate or on contact tools of which one presses and is
     /// not glued; `machine-compliance` with contact tools only when one of them
     /// moves and is not a floor (the crosshead's tools, `super::stepper`, "Machine
-    /// compliance"), and not with Coulomb friction (`plate-friction` or a tool's). The material-point effects and the damage run with contact
+    /// compliance"), and not with a Coulomb floor (`plate-friction` over a
+    /// frictionless support, or a floor tool's friction). The material-point effects and the damage run with contact
     /// tools too (`super::inelastic`, "With contact tools"), and next to
     /// `machine-compliance`.
     pub(crate) fn validate_effects(&self) -> Result<(), PressError> {
@@ -492,14 +499,17 @@ where
                 );
             }
         }
-        let coulomb = e.is_active(EffectId::PlateFriction)
-            || self.tools.iter().any(|t| matches!(t.contact, ToolContact::Friction(mu) if mu > 0.0));
-        if e.is_active(EffectId::MachineCompliance) && coulomb {
+        // A floor with Coulomb friction: a floor tool's, or the one `plate-friction`
+        // makes of a frictionless support (`super::effects_applied`).
+        let coulomb_floor = (e.is_active(EffectId::PlateFriction) && self.protocol.support == Attachment::Frictionless)
+            || self.tools.iter().any(|t| t.floor && matches!(t.contact, ToolContact::Friction(mu) if mu > 0.0));
+        if e.is_active(EffectId::MachineCompliance) && coulomb_floor {
             return conflict(
                 EffectId::MachineCompliance,
-                "cannot be combined with Coulomb friction yet (`plate_friction`, or a tool's friction): the \
-                 crosshead's deflection does not converge on it (a `plate_friction` run differed from its \
-                 deflected-path reference by 4.3e-2 of the peak); run it without one of the two",
+                "cannot be combined with a Coulomb floor yet (`plate_friction` over a frictionless support, or a \
+                 floor tool's friction): the floor's contact does not settle at the push's first step once the \
+                 crosshead's deflection lifts the plate, nor at any shorter retry; run it without one of the two \
+                 (a Coulomb plate over a glued floor runs)",
             );
         }
         if e.is_active(EffectId::MachineCompliance)

@@ -51,7 +51,7 @@
 //!   step's own solve ([`deflected_step`]): `r(delta) = delta - c F(delta)` is
 //!   increasing where the force does not grow as the tools back off (every law
 //!   but adhesion's softening branch, where the run stops with
-//!   [`PressError::NotConverged`]), the last step's deflection and `c F` of it
+//!   [`PressError::DeflectionNotConverged`]), the last step's deflection and `c F` of it
 //!   bracket its root, and Illinois closes the bracket
 //!   to `1e-11` of the displacement scale. Each evaluation is a whole step from
 //!   the old state (a settled contact solve, a converged material-point
@@ -114,16 +114,16 @@
 //!
 //! *Retries.* A step that fails (a material-point iteration that does not
 //! converge, an inverted cell on the material-point path, contact that does not
-//! settle) is retried from its old state at a quarter of its length, at most
+//! settle, a machine deflection that does not settle) is retried from its old state at a quarter of its length, at most
 //! three times in a row, but never below the least step `1e-10` of the trial
 //! (the error control's own floor): there the failure is returned as the run's
-//! error. The step that lands on the trial's end is the exception: its retries
-//! leave a remainder three quarters as long each time, and the loop stops once
-//! it is under `1e-13` of the trial (the Mullins cycle of
+//! error, on every step, the one that lands on the trial's end included. (That
+//! last step was an exception in session 18: the Mullins cycle of
 //! `fem-core/tests/mullins.rs` ends unloaded, where the material-point
-//! iteration cannot meet its tolerance because the step's force scale
-//! vanishes: about 40 such retries, as before the floor existed). Without that floor a step that failed at every length above some tiny
-//! one ran at that length for ever: each accepted step grew fourfold (its error
+//! iteration's own force scale is round-off and its tolerance cannot be met at
+//! any length; the tolerance's scale now has the run's largest as its floor,
+//! [`super::inelastic`], "The force scale".) Without that floor a step that
+//! failed at every length above some tiny one ran at that length for ever: each accepted step grew fourfold (its error
 //! ratio negligible), failed and was retried at a quarter (measured: a
 //! `dual-viscosity` refit point of the fungi-steak diagnosis, `psi` = -7.13,
 //! Poisson ratio 0.4988, steps of 2.6e-12 s at the load peak, every accepted
@@ -229,6 +229,11 @@ struct State<const S: usize> {
     unloading: Vec<bool>,
     /// The Mullins-type damage's largest equivalent strain per cell (empty otherwise).
     damage_history: Vec<f64>,
+    /// The largest force measured so far [N]: the magnitude of the plate or bottom
+    /// force at the accepted step ends up to this state's (0 at rest). The floor of
+    /// the material-point iteration's tolerance scale ([`super::inelastic`], "The
+    /// force scale").
+    force_scale: f64,
 }
 
 /// Per-region scalars of one step size.
@@ -415,6 +420,7 @@ where
             Some(laws) if laws.iter().any(|l| l.needs_history()) => vec![0.0; ncell],
             _ => Vec::new(),
         },
+        force_scale: 0.0,
     };
     let ga = if dynamic { GeneralizedAlpha::new(settings.rho_inf) } else { GeneralizedAlpha::QUASI_STATIC };
     // Displacements one and two steps back in this segment, with the inelastic
@@ -719,10 +725,8 @@ where
             .map(|(o, lift)| (o, refactored, None, lift))
         };
         // A failed step is retried from its old state at a quarter of its length,
-        // never below the least step (module doc, "Retries"): there the failure is the run's error,
-        // except on the step that lands on the trial's end, whose remainder shrinks by a quarter
-        // per retry until the loop's end tolerance stops it.
-        let retry = settings.step_ends_s.is_none() && (h / 4.0 >= dt_min || t1 == end);
+        // never below the least step (module doc, "Retries"): there the failure is the run's error.
+        let retry = settings.step_ends_s.is_none() && h / 4.0 >= dt_min;
         let (mut outcome, refactored, settled, lift) = match stepped {
             Ok(x) => x,
             Err(PressError::ContactNotSettled { .. }) if contact_retries < 3 && retry => {
@@ -731,7 +735,9 @@ where
                 dt = h / 4.0;
                 continue;
             }
-            Err(PressError::NotConverged { .. }) if point_retries < 3 && retry => {
+            Err(PressError::NotConverged { .. } | PressError::DeflectionNotConverged { .. })
+                if point_retries < 3 && retry =>
+            {
                 // Retry from the old state at a quarter of the step.
                 point_retries += 1;
                 dt = h / 4.0;
@@ -849,6 +855,7 @@ where
         step_index += 1;
         deflection = lift;
         let [bottom_force_n, plate_force_n] = outcome.segment.eval_end();
+        outcome.state.force_scale = state.force_scale.max(bottom_force_n.abs()).max(plate_force_n.abs());
         steps.push(StepRecord {
             t_s: t1,
             dt_s: h,
@@ -1134,6 +1141,7 @@ where
                 history0: &s0.damage_history,
                 base: &base,
                 scale,
+                run_scale: s0.force_scale,
                 dt,
                 t1,
                 step: step_index,
@@ -1306,6 +1314,8 @@ where
             inelastic,
             unloading,
             damage_history,
+            // The stepper raises it to this step's forces once the step is accepted.
+            force_scale: s0.force_scale,
         },
         stress,
         segment,
@@ -1356,7 +1366,7 @@ const DEFLECTION_ITERATIONS: usize = 150;
 ///
 /// Where the force does not grow as the tools back off (`F' <= 0`; not on
 /// adhesion's softening branch, which pulls harder as the bond opens and ends
-/// here as [`PressError::NotConverged`], see `fem-core/tests/compliance.rs`),
+/// here as [`PressError::DeflectionNotConverged`], see `fem-core/tests/compliance.rs`),
 /// `r' >= 1`: one root, and `delta_0` (the last step's deflection) and `delta_1 = c F(delta_0)`
 /// bracket it (`r(delta_1) = c (F(delta_0) - F(delta_1))` has the sign opposite to
 /// `r(delta_0) = delta_0 - delta_1`). Illinois (regula falsi halving the weight of
@@ -1369,8 +1379,9 @@ const DEFLECTION_ITERATIONS: usize = 150;
 /// Converged at `|r| <= tol`, or when the bracket cannot shrink further in
 /// floating point (the end with the smaller residual). A force that grows as the
 /// tools back off (no sign change), or no convergence in
-/// [`DEFLECTION_ITERATIONS`] evaluations, is [`PressError::NotConverged`] (the
-/// step is then retried shorter). Every state variable is that of the step
+/// [`DEFLECTION_ITERATIONS`] evaluations, is [`PressError::DeflectionNotConverged`]
+/// (the step is then retried shorter; a step's own failure inside an evaluation
+/// is returned as it is, e.g. the material-point iteration's `NotConverged`). Every state variable is that of the step
 /// taken at the returned deflection.
 fn deflected_step<T>(
     take: &mut dyn FnMut(f64) -> Result<(T, f64), PressError>,
@@ -1380,8 +1391,7 @@ fn deflected_step<T>(
     step: usize,
     t1: f64,
 ) -> Result<(T, f64), PressError> {
-    let not_converged =
-        |detail: String| PressError::NotConverged { step, time_s: t1, detail: format!("machine compliance: {detail}") };
+    let not_converged = |detail: String| PressError::DeflectionNotConverged { step, time_s: t1, detail };
     let (outcome, force) = take(guess)?;
     let r = guess - c * force;
     if r.abs() <= tol {
