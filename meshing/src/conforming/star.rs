@@ -74,7 +74,7 @@ use super::delaunay::FACE;
 use super::flip::FaceSet;
 use super::perturb::insphere;
 use super::smooth::{angle_quality, tet_angle_quality as quality, within};
-use crate::cells::CellStore;
+use crate::cells::{improve_in_rounds, CellStore, LocalEdit};
 use crate::predicates::{cross, dot, orient3d, sub, Point};
 use crate::quality::dihedral_range_deg;
 
@@ -115,6 +115,8 @@ struct Work<'a> {
     nodes: Vec<Point>,
     cells: CellStore,
     constrained: &'a FaceSet,
+    /// No new tet may be larger [mm^3].
+    max_volume: f64,
 }
 
 /// A face of a cell (inner normal) and the cell across it (`None`: a
@@ -350,13 +352,44 @@ impl Work<'_> {
         }
         s.faces.iter().map(|f| self.cells.add([f[0], f[1], f[2], v], region)).collect()
     }
+}
 
-    /// The number of live caps under `bound`.
-    fn bad_caps(&self, bound: f64) -> usize {
-        let s = &self.cells;
-        (0..s.cells.len() as u32)
-            .filter(|&k| s.alive[k as usize] && quality(&self.nodes, s.cells[k as usize]) < bound && self.cap(k))
-            .count()
+impl LocalEdit for Work<'_> {
+    type Stats = StarStats;
+
+    fn store(&self) -> &CellStore {
+        &self.cells
+    }
+
+    fn quality(&self, cell: [u32; 4]) -> f64 {
+        quality(&self.nodes, cell)
+    }
+
+    fn cap(&self, k: u32) -> bool {
+        Work::cap(self, k)
+    }
+
+    /// The best acceptable star of a candidate point for `t`.
+    fn improve(&mut self, t: u32, bound: f64, stats: &mut StarStats) -> Option<Vec<u32>> {
+        let mut chosen: Option<Insertion> = None;
+        for p in self.candidates(t) {
+            for circumballs in [false, true] {
+                let Some(s) = self.insertion(t, p, self.max_volume, circumballs, bound) else { continue };
+                if s.improves() && chosen.as_ref().is_none_or(|c| s.quality > c.quality) {
+                    chosen = Some(s);
+                }
+            }
+        }
+        let Some(s) = chosen else {
+            stats.refused += 1;
+            return None;
+        };
+        if self.cap(t) {
+            stats.caps_inserted += 1;
+        }
+        stats.tets_removed += s.cavity.len();
+        stats.tets_made += s.faces.len();
+        Some(self.apply(&s))
     }
 }
 
@@ -392,46 +425,9 @@ pub fn insert_stars(
 ) -> StarStats {
     let mut stats = StarStats::default();
     let cells_in = CellStore::new(nodes.len(), std::mem::take(cells), std::mem::take(regions));
-    let mut w = Work { nodes: std::mem::take(nodes), cells: cells_in, constrained };
+    let mut w = Work { nodes: std::mem::take(nodes), cells: cells_in, constrained, max_volume };
     stats.caps_before = w.bad_caps(sliver_deg);
-    for _ in 0..STAR_ROUNDS {
-        stats.rounds += 1;
-        let mut queue = w.cells.bad_queue(|c| quality(&w.nodes, c), |k| w.cap(k), sliver_deg);
-        let mut made = 0;
-        while let Some(t) = queue.pop_front() {
-            if !w.cells.alive[t as usize] || quality(&w.nodes, w.cells.cells[t as usize]) >= sliver_deg {
-                continue;
-            }
-            let mut chosen: Option<Insertion> = None;
-            for p in w.candidates(t) {
-                for circumballs in [false, true] {
-                    let Some(s) = w.insertion(t, p, max_volume, circumballs, sliver_deg) else { continue };
-                    if s.improves() && chosen.as_ref().is_none_or(|c| s.quality > c.quality) {
-                        chosen = Some(s);
-                    }
-                }
-            }
-            let Some(s) = chosen else {
-                stats.refused += 1;
-                continue;
-            };
-            if w.cap(t) {
-                stats.caps_inserted += 1;
-            }
-            stats.tets_removed += s.cavity.len();
-            stats.tets_made += s.faces.len();
-            made += 1;
-            for k in w.apply(&s) {
-                if quality(&w.nodes, w.cells.cells[k as usize]) < sliver_deg {
-                    queue.push_back(k);
-                }
-            }
-        }
-        stats.inserted += made;
-        if made == 0 {
-            break;
-        }
-    }
+    (stats.rounds, stats.inserted) = improve_in_rounds(&mut w, &mut stats, STAR_ROUNDS, sliver_deg);
     stats.caps_after = w.bad_caps(sliver_deg);
     *nodes = w.nodes;
     (*cells, *regions) = w.cells.into_live();
@@ -537,6 +533,7 @@ mod tests {
             nodes: nodes.clone(),
             cells: CellStore::new(nodes.len(), cells.clone(), vec![0; cells.len()]),
             constrained,
+            max_volume: f64::INFINITY,
         };
         let open = work(&free).insertion(0, p, f64::INFINITY, true, 10.0).expect("star of p without the subfacet");
         assert_eq!(open.cavity.len(), 5);
