@@ -492,6 +492,7 @@ fn classify_shapes(
     let mut by: std::collections::BTreeMap<(&str, usize, bool), (usize, f64)> = Default::default();
     let mut hinge = [0usize; 7];
     let mut worst_at_hinge_opposite = 0;
+    let mut shortest_at = [0usize; 3];
     for c in &mesh.cells {
         let q = c.map(|v| mesh.nodes[v as usize]);
         let t = meshing::quality::tet_quality(&q);
@@ -533,6 +534,19 @@ fn classify_shapes(
                 _ => 6,
             };
             hinge[bin] += 1;
+            // Where the shortest edge is: the hinge, the free edge (the two
+            // corners off the hinge) or a side.
+            let len = |u: usize, v: usize| dot(sub(q[u], q[v]), sub(q[u], q[v])).sqrt();
+            let pairs = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
+            let (su, sv) = pairs.into_iter().min_by(|x, y| len(x.0, x.1).total_cmp(&len(y.0, y.1))).unwrap_or((0, 1));
+            let k = if [su, sv] == [others[0], others[1]] {
+                0
+            } else if [su, sv] == [i.min(j), i.max(j)] {
+                1
+            } else {
+                2
+            };
+            shortest_at[k] += 1;
             if t.max_dihedral_deg >= angle - 1e-9 {
                 worst_at_hinge_opposite += 1;
             }
@@ -544,6 +558,7 @@ fn classify_shapes(
     }
     println!(
         "two boundary faces, dihedral at their common edge <150/150-160/160-165/165-170/170-175/175-178/>=178 deg: {hinge:?}; \
-         the tet's largest angle there: {worst_at_hinge_opposite}"
+         the tet's largest angle there: {worst_at_hinge_opposite}; shortest edge on the hinge/free edge/a side: \
+         {shortest_at:?}"
     );
 }

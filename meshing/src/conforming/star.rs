@@ -81,6 +81,15 @@ use crate::quality::dihedral_range_deg;
 /// Rounds of insertions at most.
 pub const STAR_ROUNDS: usize = 4;
 
+/// Depths of the candidates under a short boundary edge, in edge lengths
+/// (`Work::under_short_edges`): the equilateral triangle's apex over it
+/// (`sqrt(3) / 2`) and half that.
+const UNDER_EDGE: [f64; 2] = [0.866_025_403_784_438_6, 0.433_012_701_892_219_3];
+
+/// Steps from each candidate to the point for the patch its star covers
+/// (`Work::patch_point`): each step's point is tried too.
+const PATCH_STEPS: usize = 1;
+
 /// The most tets a cavity may have.
 pub const MAX_CAVITY: usize = 64;
 
@@ -189,18 +198,9 @@ impl Work<'_> {
                 continue;
             }
             let q = f.map(|v| self.point(v));
-            // FACE's orientation: the normal points into the tet.
-            let normal = cross(sub(q[1], q[0]), sub(q[2], q[0]));
-            let l = dot(normal, normal).sqrt();
-            if l <= 0.0 {
-                continue;
-            }
-            let mean =
-                (0..3).map(|i| dot(sub(q[(i + 1) % 3], q[i]), sub(q[(i + 1) % 3], q[i])).sqrt()).sum::<f64>() / 3.0;
-            let height = mean * (2.0f64 / 3.0).sqrt();
-            let centroid = [0, 1, 2].map(|k| (q[0][k] + q[1][k] + q[2][k]) / 3.0);
+            let Some((centroid, offset)) = regular_offset(q) else { continue };
             for s in [1.0, 0.7, 0.45] {
-                out.push([0, 1, 2].map(|k| centroid[k] + normal[k] / l * height * s));
+                out.push([0, 1, 2].map(|k| centroid[k] + offset[k] * s));
             }
             apexes.push(out[out.len() - 3]);
         }
@@ -208,17 +208,74 @@ impl Work<'_> {
             out.push([0, 1, 2].map(|k| (apexes[0][k] + apexes[1][k]) / 2.0));
         }
         let q = self.cells.cells[t as usize].map(|v| self.point(v));
+        let longest = (0..4)
+            .flat_map(|i| (i + 1..4).map(move |j| (i, j)))
+            .map(|(i, j)| dot(sub(q[i], q[j]), sub(q[i], q[j])))
+            .fold(0.0, f64::max)
+            .sqrt();
         if let Some(c) = circumcentre(q) {
-            let longest = (0..4)
-                .flat_map(|i| (i + 1..4).map(move |j| (i, j)))
-                .map(|(i, j)| dot(sub(q[i], q[j]), sub(q[i], q[j])))
-                .fold(0.0, f64::max)
-                .sqrt();
             if dot(sub(c, q[0]), sub(c, q[0])).sqrt() <= 2.0 * longest {
                 out.push(c);
             }
         }
+        out.extend(self.under_short_edges(t, longest));
         out
+    }
+
+    /// Points under the short boundary edges of cell `t` (module docs): for
+    /// each edge of `t` on one of its boundary faces that is shared by two of
+    /// them (a hinge) or shorter than half `longest` (`t`'s longest edge),
+    /// the points under its midpoint, along the mean of those faces' inner
+    /// unit normals, at [`UNDER_EDGE`] times its length: where a point sees
+    /// the two faces of a short hinge as an equilateral triangle's apex sees
+    /// its base, rather than from over the faces' far corners.
+    fn under_short_edges(&self, t: u32, longest: f64) -> Vec<Point> {
+        let c = self.cells.cells[t as usize];
+        let boundary: Vec<[u32; 3]> = self.faces(t).into_iter().filter(|(_, n)| n.is_none()).map(|(f, _)| f).collect();
+        let mut out = Vec::new();
+        for i in 0..4 {
+            for j in i + 1..4 {
+                let (a, b) = (self.point(c[i]), self.point(c[j]));
+                let on: Vec<&[u32; 3]> = boundary.iter().filter(|f| f.contains(&c[i]) && f.contains(&c[j])).collect();
+                let length = dot(sub(b, a), sub(b, a)).sqrt();
+                if on.is_empty() || (on.len() < 2 && length > 0.5 * longest) {
+                    continue;
+                }
+                let mut normal = [0.0; 3];
+                for f in on {
+                    let q = f.map(|v| self.point(v));
+                    let n = cross(sub(q[1], q[0]), sub(q[2], q[0]));
+                    let l = dot(n, n).sqrt();
+                    if l > 0.0 {
+                        normal = [0, 1, 2].map(|k| normal[k] + n[k] / l);
+                    }
+                }
+                let l = dot(normal, normal).sqrt();
+                if l <= 0.0 {
+                    continue;
+                }
+                for depth in UNDER_EDGE {
+                    out.push([0, 1, 2].map(|k| (a[k] + b[k]) / 2.0 + normal[k] / l * length * depth));
+                }
+            }
+        }
+        out
+    }
+
+    /// The point for the whole patch a star covers: the mean of the apexes
+    /// of the regular tets over its boundary faces `faces` (each oriented with
+    /// its normal into the cavity), so that the point sits at a regular tet's
+    /// height over the surface faces and the other faces around it at once,
+    /// rather than over the bad tet's own faces alone (module docs). `None`
+    /// for a degenerate face.
+    fn patch_point(&self, faces: &[[u32; 3]]) -> Option<Point> {
+        let mut sum = [0.0; 3];
+        for f in faces {
+            let q = f.map(|v| self.point(v));
+            let (centroid, offset) = regular_offset(q)?;
+            sum = [0, 1, 2].map(|k| sum[k] + centroid[k] + offset[k]);
+        }
+        Some(sum.map(|x| x / faces.len() as f64))
     }
 
     /// The insertion of `p` for the bad cell `t` (module docs), when `p`'s
@@ -374,9 +431,17 @@ impl LocalEdit for Work<'_> {
         let mut chosen: Option<Insertion> = None;
         for p in self.candidates(t) {
             for circumballs in [false, true] {
-                let Some(s) = self.insertion(t, p, self.max_volume, circumballs, bound) else { continue };
-                if s.improves() && chosen.as_ref().is_none_or(|c| s.quality > c.quality) {
-                    chosen = Some(s);
+                let mut p = p;
+                for _ in 0..=PATCH_STEPS {
+                    let Some(s) = self.insertion(t, p, self.max_volume, circumballs, bound) else { break };
+                    let next = self.patch_point(&s.faces);
+                    if s.improves() && chosen.as_ref().is_none_or(|c| s.quality > c.quality) {
+                        chosen = Some(s);
+                    }
+                    match next {
+                        Some(q) => p = q,
+                        None => break,
+                    }
                 }
             }
         }
@@ -391,6 +456,22 @@ impl LocalEdit for Work<'_> {
         stats.tets_made += s.faces.len();
         Some(self.apply(&s))
     }
+}
+
+/// The centroid of the triangle `q` and the offset from it to the apex of the
+/// regular tet over `q` on the side its normal (`(q1 - q0) x (q2 - q0)`, into
+/// the cell in [`FACE`]'s order) points to: `sqrt(2/3)` times the mean edge
+/// length along the unit normal. `None` for a degenerate triangle.
+fn regular_offset(q: [Point; 3]) -> Option<(Point, Point)> {
+    let normal = cross(sub(q[1], q[0]), sub(q[2], q[0]));
+    let l = dot(normal, normal).sqrt();
+    if l <= 0.0 {
+        return None;
+    }
+    let mean = (0..3).map(|i| dot(sub(q[(i + 1) % 3], q[i]), sub(q[(i + 1) % 3], q[i])).sqrt()).sum::<f64>() / 3.0;
+    let height = mean * (2.0f64 / 3.0).sqrt();
+    let centroid = [0, 1, 2].map(|k| (q[0][k] + q[1][k] + q[2][k]) / 3.0);
+    Some((centroid, [0, 1, 2].map(|k| normal[k] / l * height)))
 }
 
 /// The centre of the sphere through the corners of `q`, if they are not coplanar.
@@ -507,6 +588,38 @@ mod tests {
         assert!(lo >= 17.0, "{lo}");
         let (lo_after, hi_after) = range(&nodes, &cells);
         assert!(lo_after >= lo_before && hi_after <= hi_before, "{lo_before}..{hi_before} -> {lo_after}..{hi_after}");
+    }
+
+    /// The point for a patch is the mean of the regular tets' apexes over its
+    /// faces: over each face of a regular tet of edge 2, oriented into it, the
+    /// apex is the opposite corner (the orientation of `FACE` points into the
+    /// cell), so the point for the four is the tet's centroid (closed form;
+    /// asserted within 1e-14 mm).
+    #[test]
+    fn the_patch_point_of_a_regular_tet_is_its_centroid() {
+        let s = 2.0f64.sqrt();
+        let nodes = vec![[1.0, 0.0, -1.0 / s], [-1.0, 0.0, -1.0 / s], [0.0, 1.0, 1.0 / s], [0.0, -1.0, 1.0 / s]];
+        let t = positive(&nodes, [0, 1, 2, 3]);
+        let faces = FACE.map(|f| f.map(|j| t[j]));
+        let constrained = FaceSet::default();
+        let w = Work {
+            nodes: nodes.clone(),
+            cells: CellStore::new(nodes.len(), vec![t], vec![0]),
+            constrained: &constrained,
+            max_volume: f64::INFINITY,
+        };
+        for (i, f) in faces.iter().enumerate() {
+            let (centroid, offset) = regular_offset(f.map(|v| nodes[v as usize])).expect("regular face");
+            let apex = [0, 1, 2].map(|k| centroid[k] + offset[k]);
+            let corner = nodes[t[i] as usize];
+            assert!(dot(sub(apex, corner), sub(apex, corner)).sqrt() < 1e-14, "face {i}: {apex:?} vs {corner:?}");
+        }
+        let p = w.patch_point(&faces).expect("regular faces");
+        let centroid = [0, 1, 2].map(|k| nodes.iter().map(|q| q[k]).sum::<f64>() / 4.0);
+        let err = dot(sub(p, centroid), sub(p, centroid)).sqrt();
+        assert!(err < 1e-14, "{p:?} vs {centroid:?}: {err:e}");
+        let flat = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]];
+        assert!(regular_offset(flat).is_none());
     }
 
     /// The smallest and largest dihedral angle of `cells` [deg].
