@@ -429,7 +429,13 @@ impl Recovery {
         };
         let (u, w) = (perp(c), perp(d));
         let angle = (dot(u, w) / (dot(u, u) * dot(w, w)).sqrt()).clamp(-1.0, 1.0).acos().to_degrees();
-        (angle > CAP_HINGE_DEG).then_some((a, b))
+        // Only the longest edge of both subfacets (Rivara's longest-edge
+        // bisection, which keeps the subfacets' angles bounded): splitting a
+        // shorter hinge makes skinnier subfacets, and the caps over their
+        // halves are wedges over still shorter hinges (module docs).
+        let sq = |x: u32, y: u32| dot(sub(p(x), p(y)), sub(p(x), p(y)));
+        let longest = [sq(a, c), sq(b, c), sq(a, d), sq(b, d)].into_iter().fold(0.0, f64::max);
+        (angle > CAP_HINGE_DEG && ee >= longest).then_some((a, b))
     }
 
     /// Whether `p` may be inserted (module docs): its star's smallest dihedral
