@@ -45,8 +45,17 @@
 //! For each boundary face of `t`, the apex of the regular tet over it on the
 //! inside (height `sqrt(2/3)` times its mean edge length) at three heights
 //! (1, 0.7 and 0.45 of that); for a cap, the mean of its two faces' apexes;
-//! and `t`'s circumcentre when its circumradius is at most twice its longest
-//! edge. The candidate whose star has the best worst tet wins, and the
+//! `t`'s circumcentre when its circumradius is at most twice its longest
+//! edge; and, for each edge of `t` on its boundary faces that is a hinge
+//! (on two of them) or shorter than half `t`'s longest edge, the points
+//! under the edge's midpoint along the mean inner normal of those faces at
+//! [`UNDER_EDGE`] times its length (a wedge over a short hinge is seen from
+//! there as an equilateral triangle's apex sees its base; the face apexes
+//! lie over the far corners). From each candidate, [`PATCH_STEPS`] more:
+//! the mean of the regular tets' apexes over the faces of the star it made
+//! (`Work::patch_point`), placed for the whole patch the cavity covers
+//! rather than for `t`'s own faces. The candidate whose star has the best
+//! worst tet wins, and the
 //! insertion is made only when that worst tet is better than the cavity's
 //! worst, the star has fewer tets under the sliver bound than the cavity,
 //! its dihedral angles lie within the range of the cavity's (neither a
