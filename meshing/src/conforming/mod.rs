@@ -197,7 +197,7 @@
 //! 3-2 flips of stage 5 come after it.
 
 //! **What was not done: a coarse, bent scan (CGAL's armadillo) kept
-//! thousands of flat caps** (sessions 15 to 18). At h = 8 mm 15 188 of its
+//! thousands of flat caps** (sessions 15 to 18). At h = 8 mm 15 190 of its
 //! 16 458 tets under 10 deg had two faces on the boundary and four corners
 //! on the surface (down to 0.004 deg, which also made its p99.9 radius-edge
 //! ratio 3e4), and edge removal, star insertion and smoothing removed few

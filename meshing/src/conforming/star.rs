@@ -585,13 +585,7 @@ mod tests {
         assert_eq!(nodes.len(), input.len() + 1);
         assert_eq!(&nodes[..input.len()], &input[..]);
         assert_eq!(regions.len(), cells.len());
-        assert_eq!(outer_faces(&cells), outer);
-        let after: f64 = cells.iter().map(|&t| volume_of(&nodes, t)).sum();
-        assert!((after - before).abs() < 1e-12, "{before} -> {after}");
-        for &t in &cells {
-            let q = t.map(|v| nodes[v as usize]);
-            assert_eq!(orient3d(q[0], q[1], q[2], q[3]), 1, "{t:?}");
-        }
+        assert_kept(&nodes, &cells, &outer, before);
         assert!(cells.iter().all(|t| !(t.contains(&0) && t.contains(&1) && t.contains(&2) && t.contains(&3))));
         let lo = worst(&nodes, &cells);
         assert!(lo >= 17.0, "{lo}");
@@ -684,15 +678,21 @@ mod tests {
         let mut regions = vec![0u16; cells.len()];
         let stats = insert_stars(&mut nodes, &mut cells, &mut regions, &hinge_faces(), 10.0, f64::INFINITY);
         assert_eq!((stats.caps_after, stats.inserted), (0, 1), "{stats:?}");
-        assert_eq!(outer_faces(&cells), outer);
-        let after: f64 = cells.iter().map(|&t| volume_of(&nodes, t)).sum();
+        assert_kept(&nodes, &cells, &outer, before);
+        let lo = worst(&nodes, &cells);
+        assert!(lo >= 28.0, "worst quality {lo} deg, {:?}", range(&nodes, &cells));
+    }
+
+    /// What a star keeps: the outer faces `outer`, the volume `before`
+    /// (within 1e-12) and every tet positive (exact `orient3d`).
+    fn assert_kept(nodes: &[Point], cells: &[[u32; 4]], outer: &[[u32; 3]], before: f64) {
+        assert_eq!(outer_faces(cells), outer);
+        let after: f64 = cells.iter().map(|&t| volume_of(nodes, t)).sum();
         assert!((after - before).abs() < 1e-12, "{before} -> {after}");
-        for &t in &cells {
+        for &t in cells {
             let q = t.map(|v| nodes[v as usize]);
             assert_eq!(orient3d(q[0], q[1], q[2], q[3]), 1, "{t:?}");
         }
-        let lo = worst(&nodes, &cells);
-        assert!(lo >= 28.0, "worst quality {lo} deg, {:?}", range(&nodes, &cells));
     }
 
     /// The smallest and largest dihedral angle of `cells` [deg].
