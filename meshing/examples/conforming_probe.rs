@@ -16,7 +16,9 @@
 //! V inside) and of their shortest edge's ends.
 //! `PROBE_CLASSIFY=1` counts the tets under 10 deg by how many of their
 //! corners are input vertices and other boundary points and how many of their
-//! faces lie on the boundary (`classify`).
+//! faces lie on the boundary (`classify`), and by shape (needle, wedge, cap,
+//! sliver), with the angle at the hinge of those with two boundary faces and
+//! where their shortest edge lies (`classify_shapes`).
 //! The mesh's fingerprints (hashes of its nodes and cells, with the cells
 //! sorted and as output) tell identical meshes apart from merely similar ones.
 //!
