@@ -16,7 +16,9 @@
 //! V inside) and of their shortest edge's ends.
 //! `PROBE_CLASSIFY=1` counts the tets under 10 deg by how many of their
 //! corners are input vertices and other boundary points and how many of their
-//! faces lie on the boundary (`classify`).
+//! faces lie on the boundary (`classify`), and by shape (needle, wedge, cap,
+//! sliver), with the angle at the hinge of those with two boundary faces and
+//! where their shortest edge lies (`classify_shapes`).
 //! The mesh's fingerprints (hashes of its nodes and cells, with the cells
 //! sorted and as output) tell identical meshes apart from merely similar ones.
 //!
@@ -451,4 +453,114 @@ fn classify(mesh: &fem_core::mesh::TetMesh, s: &Surface) {
     for (k, (n, d)) in classes {
         println!("  {k:?}: {n} ({d:.3} deg)");
     }
+    classify_shapes(mesh, &boundary, &faces);
+}
+
+/// The shape of a flat tet (smallest dihedral angle under 10 deg): a *needle*
+/// (two or more edges under a third of the longest: three or four corners
+/// close together), a *wedge* (one such edge: two corners close together),
+/// else a *cap* (a corner whose projection on the plane of the opposite face
+/// lies inside that face) or a *sliver* (the four corners near a plane in
+/// convex position, two opposite edges crossing).
+fn shape(q: &[[f64; 3]; 4]) -> &'static str {
+    let pairs = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
+    let len: Vec<f64> = pairs.iter().map(|&(a, b)| dot(sub(q[a], q[b]), sub(q[a], q[b])).sqrt()).collect();
+    let longest = len.iter().copied().fold(0.0, f64::max);
+    match len.iter().filter(|&&l| l < longest / 3.0).count() {
+        0 => {}
+        1 => return "wedge",
+        _ => return "needle",
+    }
+    for i in 0..4 {
+        let f = [q[(i + 1) % 4], q[(i + 2) % 4], q[(i + 3) % 4]];
+        let n = cross(sub(f[1], f[0]), sub(f[2], f[0]));
+        if (0..3).all(|k| dot(cross(sub(f[(k + 1) % 3], f[k]), sub(q[i], f[k])), n) > 0.0) {
+            return "cap";
+        }
+    }
+    "sliver"
+}
+
+/// The tets under 10 deg by shape (`shape`), by how many faces they have on
+/// the boundary and whether all four corners lie on the surface (such a tet
+/// has no interior point that Delaunay refinement inside could move or
+/// remove); for those with two boundary faces, the dihedral angle at their
+/// common edge (the hinge: 180 deg minus the surface's bend there).
+fn classify_shapes(
+    mesh: &fem_core::mesh::TetMesh,
+    boundary: &std::collections::HashSet<u32>,
+    faces: &std::collections::HashSet<[u32; 3]>,
+) {
+    let mut by: std::collections::BTreeMap<(&str, usize, bool), (usize, f64)> = Default::default();
+    let mut hinge = [0usize; 7];
+    let mut worst_at_hinge_opposite = 0;
+    let mut shortest_at = [0usize; 3];
+    for c in &mesh.cells {
+        let q = c.map(|v| mesh.nodes[v as usize]);
+        let t = meshing::quality::tet_quality(&q);
+        if t.min_dihedral_deg >= 10.0 {
+            continue;
+        }
+        let on_face: Vec<usize> = (0..4)
+            .filter(|&i| {
+                let mut k = [c[(i + 1) % 4], c[(i + 2) % 4], c[(i + 3) % 4]];
+                k.sort_unstable();
+                faces.contains(&k)
+            })
+            .collect();
+        let all_surface = c.iter().all(|v| boundary.contains(v));
+        let e = by.entry((shape(&q), on_face.len(), all_surface)).or_insert((0, f64::INFINITY));
+        e.0 += 1;
+        e.1 = e.1.min(t.min_dihedral_deg);
+        if on_face.len() == 2 {
+            // Faces opposite corners i and j share the edge of the other two corners.
+            let (i, j) = (on_face[0], on_face[1]);
+            let others: Vec<usize> = (0..4).filter(|&k| k != i && k != j).collect();
+            let (a, b) = (q[others[0]], q[others[1]]);
+            let d = sub(b, a);
+            let dd = dot(d, d);
+            let perp = |p: [f64; 3]| {
+                let u = sub(p, a);
+                let s = dot(u, d) / dd;
+                sub(u, [s * d[0], s * d[1], s * d[2]])
+            };
+            let (u, v) = (perp(q[i]), perp(q[j]));
+            let angle = (dot(u, v) / (dot(u, u) * dot(v, v)).sqrt()).clamp(-1.0, 1.0).acos().to_degrees();
+            let bin = match angle {
+                x if x < 150.0 => 0,
+                x if x < 160.0 => 1,
+                x if x < 165.0 => 2,
+                x if x < 170.0 => 3,
+                x if x < 175.0 => 4,
+                x if x < 178.0 => 5,
+                _ => 6,
+            };
+            hinge[bin] += 1;
+            // Where the shortest edge is: the hinge, the free edge (the two
+            // corners off the hinge) or a side.
+            let len = |u: usize, v: usize| dot(sub(q[u], q[v]), sub(q[u], q[v])).sqrt();
+            let pairs = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)];
+            let (su, sv) = pairs.into_iter().min_by(|x, y| len(x.0, x.1).total_cmp(&len(y.0, y.1))).unwrap_or((0, 1));
+            let k = if [su, sv] == [others[0], others[1]] {
+                0
+            } else if [su, sv] == [i.min(j), i.max(j)] {
+                1
+            } else {
+                2
+            };
+            shortest_at[k] += 1;
+            if t.max_dihedral_deg >= angle - 1e-9 {
+                worst_at_hinge_opposite += 1;
+            }
+        }
+    }
+    println!("tets under 10 deg by (shape, boundary faces, all four corners on the surface): count, min deg");
+    for (k, (n, d)) in by {
+        println!("  {k:?}: {n} ({d:.3} deg)");
+    }
+    println!(
+        "two boundary faces, dihedral at their common edge <150/150-160/160-165/165-170/170-175/175-178/>=178 deg: {hinge:?}; \
+         the tet's largest angle there: {worst_at_hinge_opposite}; shortest edge on the hinge/free edge/a side: \
+         {shortest_at:?}"
+    );
 }

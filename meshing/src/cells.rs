@@ -130,6 +130,68 @@ impl<R: Copy> CellStore<R> {
     }
 }
 
+/// A local edit that improves bad cells a few at a time (edge removal, star
+/// insertion): what [`improve_in_rounds`] needs of it.
+pub(crate) trait LocalEdit {
+    /// What the edit counts (its refusals and sizes).
+    type Stats;
+    /// The cells under edit.
+    fn store(&self) -> &CellStore;
+    /// The quality of a cell with corners `cell` (bad: under the bound).
+    fn quality(&self, cell: [u32; 4]) -> f64;
+    /// Whether the live cell `k` is a cap (two or more boundary faces): caps
+    /// are visited first.
+    fn cap(&self, k: u32) -> bool;
+    /// Tries to replace the bad live cell `k` and the cells around it by
+    /// better ones, counting in `stats`; the new cells when it did.
+    fn improve(&mut self, k: u32, bound: f64, stats: &mut Self::Stats) -> Option<Vec<u32>>;
+
+    /// The number of live caps of quality under `bound`.
+    fn bad_caps(&self, bound: f64) -> usize {
+        let s = self.store();
+        (0..s.cells.len() as u32)
+            .filter(|&k| s.alive[k as usize] && self.quality(s.cells[k as usize]) < bound && self.cap(k))
+            .count()
+    }
+}
+
+/// Runs `edit` over the cells of quality under `bound`, in rounds of at most
+/// `max_rounds`: each round visits them in [`CellStore::bad_queue`]'s order,
+/// skipping those gone or no longer bad, and queues the bad cells each edit
+/// makes behind them; the rounds stop after one that made no edit. The
+/// rounds run and the edits made.
+pub(crate) fn improve_in_rounds<E: LocalEdit>(
+    edit: &mut E,
+    stats: &mut E::Stats,
+    max_rounds: usize,
+    bound: f64,
+) -> (usize, usize) {
+    let (mut rounds, mut edits) = (0, 0);
+    for _ in 0..max_rounds {
+        rounds += 1;
+        let mut queue = edit.store().bad_queue(|c| edit.quality(c), |k| edit.cap(k), bound);
+        let mut made = 0;
+        while let Some(k) = queue.pop_front() {
+            let s = edit.store();
+            if !s.alive[k as usize] || edit.quality(s.cells[k as usize]) >= bound {
+                continue;
+            }
+            let Some(new) = edit.improve(k, bound, stats) else { continue };
+            made += 1;
+            for j in new {
+                if edit.quality(edit.store().cells[j as usize]) < bound {
+                    queue.push_back(j);
+                }
+            }
+        }
+        edits += made;
+        if made == 0 {
+            break;
+        }
+    }
+    (rounds, edits)
+}
+
 /// The faces (sorted corners) of `cells`, four a cell, in cell order.
 #[cfg(test)]
 pub(crate) fn sorted_faces(cells: &[[u32; 4]]) -> Vec<[u32; 3]> {

@@ -137,27 +137,18 @@ const MODELS: [Model; 6] = [
     // CGAL's armadillo scan (libcgal-demo, 26 002 vertices, 52 000 triangles,
     // 127 x 151 x 115 mm, input edges 1.33 mm median): the counts are set by
     // the surface, not by h (TetGen: 956 704 tets at 4 mm, 891 693 at 8 mm),
-    // so 8 mm, the cheaper. Count, orientation, volume and Hausdorff hold
-    // (measured with star insertion, session 17: 482 960 tets, volume error
-    // 8e-14, Hausdorff 9e-15); the quality gates miss by far (0.00..179.23
-    // deg against TetGen's 1.82..174.72, 3.40 % under 10 deg against 1.03 %,
-    // p99.9 radius-edge 3e4 against 4.32; with edge removal alone, session
-    // 16: 0.00..176.25, 3.44 %, 3e4): most of the tets under 10 deg are flat
-    // caps over the scan's bent input edges, which conforming Delaunay
-    // refinement, edge removal (rings up to 12 tets) and star insertion
-    // (15 199 of 15 290 caps left) do not remove (module docs of
-    // `meshing::conforming`, "What is not done").
-    // Ours takes 3 to 5.5 min of CPU on it (178 s user in session 16; 5 to
-    // 5.5 min read with `ps` with star insertion at load 12, session 17; 366
-    // s wall in this test at load 8 to 12, session 16), TetGen 19 s: over the 2 min a model may take in
-    // CI, so only TetGen's figures are checked here (`gates: None`); with
-    // `gates: Some(&[Gate::Count])` the test runs ours and asserts count,
-    // orientation, volume and Hausdorff (passed, session 15).
+    // so 8 mm, the cheaper. All gates hold since a cap's hinge is split only
+    // when it is the longest edge of both its subfacets (session 19,
+    // measured with `conforming_probe`: 383 881 tets, 7.64..161.62 deg,
+    // 0.004 % under 10 deg, p99.9 radius-edge 3.13, volume error 2e-14,
+    // Hausdorff 3e-16, 61 s user). Before, splitting any cap's hinge made
+    // wedges over ever shorter hinges (0.00..176.18 deg, 3.41 % under 10
+    // deg, p99.9 3e4, 4.5 to 6 min of CPU; BENCHMARKS.md, sessions 15 to 19).
     Model {
         name: "armadillo",
         source: Source::Debian { package: "libcgal-demo", path: CGAL_DATA, member: Some("data/meshes/armadillo.off") },
         size_mm: 8.0,
-        gates: None,
+        gates: Some(ALL),
         forced_radius_edge: false,
     },
 ];

@@ -53,7 +53,7 @@
 use rustc_hash::FxHashSet;
 
 use super::smooth::tet_angle_quality as quality;
-use crate::cells::CellStore;
+use crate::cells::{improve_in_rounds, CellStore, LocalEdit};
 use crate::predicates::{orient3d, Point};
 
 /// Rounds of removals at most.
@@ -265,13 +265,47 @@ impl Work<'_> {
         }
         made
     }
+}
 
-    /// The number of live caps under `bound`.
-    fn bad_caps(&self, bound: f64) -> usize {
-        let s = &self.cells;
-        (0..s.cells.len() as u32)
-            .filter(|&k| s.alive[k as usize] && quality(self.nodes, s.cells[k as usize]) < bound && self.cap(k))
-            .count()
+impl LocalEdit for Work<'_> {
+    type Stats = FlipStats;
+
+    fn store(&self) -> &CellStore {
+        &self.cells
+    }
+
+    fn quality(&self, cell: [u32; 4]) -> f64 {
+        quality(self.nodes, cell)
+    }
+
+    fn cap(&self, k: u32) -> bool {
+        Work::cap(self, k)
+    }
+
+    /// The best removal of an edge of `t` that raises its ring's worst quality.
+    fn improve(&mut self, t: u32, _bound: f64, stats: &mut FlipStats) -> Option<Vec<u32>> {
+        let cell = self.cells.cells[t as usize];
+        let own = quality(self.nodes, cell);
+        let mut chosen: Option<Removal> = None;
+        let mut furthest = 0;
+        for a in 0..4 {
+            for b in a + 1..4 {
+                let floor = chosen.as_ref().map_or(own, |r| r.quality);
+                match self.removal(t, cell[a], cell[b], own) {
+                    Ok(r) if r.quality > floor => chosen = Some(r),
+                    Ok(_) => {}
+                    Err(why) => furthest = furthest.max(why),
+                }
+            }
+        }
+        let Some(r) = chosen else {
+            if self.cap(t) {
+                stats.cap_refusals[furthest] += 1;
+            }
+            return None;
+        };
+        stats.by_ring_size[r.tets.len()] += 1;
+        Some(self.apply(&r))
     }
 }
 
@@ -290,51 +324,7 @@ pub fn remove_edges(
     let cells_in = CellStore::new(nodes.len(), std::mem::take(cells), std::mem::take(regions));
     let mut w = Work { nodes, cells: cells_in, constrained };
     stats.caps_before = w.bad_caps(sliver_deg);
-    for _ in 0..FLIP_ROUNDS {
-        stats.rounds += 1;
-        // Caps first, then the worst, then by index.
-        let mut queue = w.cells.bad_queue(|c| quality(nodes, c), |k| w.cap(k), sliver_deg);
-        let mut made = 0;
-        while let Some(t) = queue.pop_front() {
-            if !w.cells.alive[t as usize] {
-                continue;
-            }
-            let cell = w.cells.cells[t as usize];
-            let own = quality(nodes, cell);
-            if own >= sliver_deg {
-                continue;
-            }
-            let mut chosen: Option<Removal> = None;
-            let mut furthest = 0;
-            for a in 0..4 {
-                for b in a + 1..4 {
-                    let floor = chosen.as_ref().map_or(own, |r| r.quality);
-                    match w.removal(t, cell[a], cell[b], own) {
-                        Ok(r) if r.quality > floor => chosen = Some(r),
-                        Ok(_) => {}
-                        Err(why) => furthest = furthest.max(why),
-                    }
-                }
-            }
-            let Some(r) = chosen else {
-                if w.cap(t) {
-                    stats.cap_refusals[furthest] += 1;
-                }
-                continue;
-            };
-            stats.by_ring_size[r.tets.len()] += 1;
-            made += 1;
-            for k in w.apply(&r) {
-                if quality(nodes, w.cells.cells[k as usize]) < sliver_deg {
-                    queue.push_back(k);
-                }
-            }
-        }
-        stats.flips += made;
-        if made == 0 {
-            break;
-        }
-    }
+    (stats.rounds, stats.flips) = improve_in_rounds(&mut w, &mut stats, FLIP_ROUNDS, sliver_deg);
     stats.caps_after = w.bad_caps(sliver_deg);
     (*cells, *regions) = w.cells.into_live();
     stats

@@ -81,8 +81,13 @@
 //!      point encroaches);
 //!    - a sliver *cap*, two of whose faces lie on two input triangles meeting
 //!      at a nearly flat hinge (the tet's angle there over 150 deg), gets that
-//!      hinge's subsegment split; that is what removes most slivers of a
-//!      curved surface (on the bunny 643 of 749 slivers were caps);
+//!      hinge's subsegment split when the hinge is the longest edge of both
+//!      subfacets (longest-edge bisection, which keeps their angles
+//!      bounded); that is what removes most slivers of a curved surface (on
+//!      the bunny 643 of 749 slivers were caps). Splitting a shorter hinge
+//!      made skinnier subfacets and, over their halves, wedges over ever
+//!      shorter hinges: on the armadillo ("What was not done") the splits
+//!      ran to their bound and left 15 000 tets under 10 deg;
 //!    - a tet on four input vertices (which smoothing cannot move) refines the
 //!      subfacet its circumcentre encroaches: on fandisk those were slivers
 //!      under a curved strip of the surface, spanning two rows of its grid,
@@ -108,8 +113,7 @@
 //!    (exact `orient3d`) and the worst is better; the boundary does not
 //!    change and no point moves. Measured on the final meshes: bunny at
 //!    0.3 mm 6.21..167.84 deg to 10.00..159.99 deg, 0.007 % under 10 deg to
-//!    0 (115 removals, 12 on rings of 4; the 3-2 flip alone made 38); the
-//!    armadillo's caps mostly stay ("What is not done"; BENCHMARKS.md).
+//!    0 (115 removals, 12 on rings of 4; the 3-2 flip alone made 38).
 //! 6. **Star insertion** (`star.rs`): for a tet still under the sliver bound
 //!    (caps first), a new interior point replaces a cavity of tets with its
 //!    star: the cavity grows from the tet into the neighbours whose
@@ -119,7 +123,9 @@
 //!    are positive and fill the cavity exactly; the boundary, the interfaces
 //!    and every existing point stay as they were. Candidates: the apexes of
 //!    regular tets over the tet's boundary faces (three heights), their mean
-//!    for a cap, its circumcentre; the best star is taken when its worst tet
+//!    for a cap, its circumcentre, points under its short boundary edges and
+//!    hinges, and from each the mean of the regular apexes over the faces of
+//!    the star it makes (the whole patch); the best star is taken when its worst tet
 //!    beats the cavity's, its dihedral angles stay within the cavity's range
 //!    and no tet exceeds the volume bound. This is the
 //!    constrained insertion the Delaunay stages cannot make on a bent scan
@@ -190,35 +196,25 @@
 //! the tetrahedralization Delaunay, which boundary recovery relies on; the
 //! 3-2 flips of stage 5 come after it.
 
-//! **A coarse, bent scan (CGAL's armadillo) keeps thousands of flat caps.**
-//! Measured at h = 8 mm (`conforming_probe` with `PROBE_CLASSIFY=1`): 85 % of
-//! its 17 636 tets under 10 deg have two faces on the boundary and four
-//! corners on the surface (down to 0.004 deg; they also make its p99.9
-//! radius-edge ratio 3e4). Its input bends by 10.4 deg across the median
-//! input edge (the bunny's far less), and a cap's hinge is an input edge:
-//! splitting it keeps the hinge's angle and makes caps on the halves, so the
-//! cap splits run until their bound (30 171, the points present when
-//! refinement starts) and the caps made after are left. Points inside a
-//! cap's circumball but beyond the equatorial balls of its subfacets (tried
-//! for slivers no boundary rule refines) were all blocked (62 212 candidates
-//! of 15 553 caps): the outside of a conforming Delaunay tetrahedralization
-//! has flat tets over the same hinges, whose circumballs reach under the
-//! surface, so such a point would remove a subfacet (not kept: 3.55 % under
-//! 10 deg instead of 3.63 %). What would remove them is not Delaunay, and
-//! edge removal (stage 5) does not either: 15 487 caps under 10 deg before
-//! it, 15 290 after (rings up to 12 tets; the same mesh with rings up to
-//! 24). Of 122 285 visits of a cap that removed nothing, 121 482 stopped at
-//! an edge whose ring of tets was over the bound or open (counted before the
-//! two were told apart: `FlipStats::cap_refusals`), 208 found no positive
-//! triangulation and 593 none better. Star insertion (stage 6: cavities
-//! of interior points bounded by the subfacets) removes few of them (session
-//! 17, BENCHMARKS.md): accepted whenever the star's worst tet beat the
-//! cavity's, it cut the caps under 10 deg from 15 290 to 4 998 but each star
-//! joined its point to neighbouring surface faces at grazing angles, and the
-//! fraction under 10 deg rose from 3.44 % to 7.11 %; accepted only with fewer
-//! slivers than the cavity (kept), 290 insertions (68 for caps) leave 15 199
-//! caps and 3.40 %. Candidates placed for the cavity's whole surface patch
-//! rather than the cap's two faces are the next thing to try.
+//! **What was not done: a coarse, bent scan (CGAL's armadillo) kept
+//! thousands of flat caps** (sessions 15 to 18). At h = 8 mm 15 190 of its
+//! 16 458 tets under 10 deg had two faces on the boundary and four corners
+//! on the surface (down to 0.004 deg, which also made its p99.9 radius-edge
+//! ratio 3e4), and edge removal, star insertion and smoothing removed few
+//! (BENCHMARKS.md). Classified by shape (session 19: a corner over the
+//! opposite face is a cap, corners in convex position a sliver, one edge
+//! under a third of the longest a wedge, more a needle) they were no caps:
+//! 9 247 wedges and 5 934 needles, their largest angle at the hinge (mostly
+//! 160 to 170 deg). The cap rule of stage 3 made them (inferred from the
+//! fix's effect; where their short edge lay was not counted): it split each
+//! cap's hinge, whichever edge of its subfacets that was, until its bound
+//! (30 171 splits), and a split of a hinge shorter than the subfacets' other
+//! edges makes skinnier subfacets whose caps are wedges over shorter hinges
+//! again. Splitting only a hinge that is the longest edge of both subfacets
+//! ends the cascade (9 324 splits; 3 tets with two boundary faces left
+//! under 10 deg at the end): 383 881 tets, 7.64..161.62 deg, 0.004 % under
+//! 10 deg, p99.9 ratio 3.13, every gate against TetGen held, in a fifth of
+//! the time.
 //!
 //! Quality refinement runs on a copy of the state, each boundary recovery it
 //! triggers bounded (20 000 points) and its cap splits bounded (as many as the

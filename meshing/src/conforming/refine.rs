@@ -26,7 +26,9 @@
 //! bound refines the subfacet that `c` encroaches most deeply (see
 //! `Recovery::refine_subfacet`); a *cap* (two faces on input triangles meeting
 //! at a hinge flatter than [`CAP_HINGE_DEG`]) gets the hinge's subsegment
-//! split; a tet on four input vertices refines the subfacet its circumcentre
+//! split when the hinge is the longest edge of both subfacets (longest-edge
+//! bisection; a shorter hinge's splits cascaded on the armadillo, module docs
+//! of `conforming`); a tet on four input vertices refines the subfacet its circumcentre
 //! blocks on (smoothing cannot move its corners, so nothing else would fix it);
 //! a tet of ratio over [`PLANE_RADIUS_EDGE`] refines the subfacet of a merged
 //! plane its circumcentre blocks on; any other tet is left (module docs of
@@ -429,7 +431,14 @@ impl Recovery {
         };
         let (u, w) = (perp(c), perp(d));
         let angle = (dot(u, w) / (dot(u, u) * dot(w, w)).sqrt()).clamp(-1.0, 1.0).acos().to_degrees();
-        (angle > CAP_HINGE_DEG).then_some((a, b))
+        // Only the longest edge of both subfacets (Rivara's longest-edge
+        // bisection, which keeps the subfacets' angles bounded): splitting a
+        // shorter hinge makes skinnier subfacets, and the caps over their
+        // halves are wedges over still shorter hinges (module docs of
+        // `conforming`, "What was not done").
+        let sq = |x: u32, y: u32| dot(sub(p(x), p(y)), sub(p(x), p(y)));
+        let longest = [sq(a, c), sq(b, c), sq(a, d), sq(b, d)].into_iter().fold(0.0, f64::max);
+        (angle > CAP_HINGE_DEG && ee >= longest).then_some((a, b))
     }
 
     /// Whether `p` may be inserted (module docs): its star's smallest dihedral
