@@ -114,14 +114,18 @@
 //! with the step factor `g` and the history part `q`. Every law is radial, so one
 //! scalar equation: the slider's return `dl = (|x_trial|_C - sigma_y)/(g + H)` with
 //! `x = tau - H e_p` (linear kinematic hardening with the uniaxial modulus `H`);
-//! Bingham's `|tau1|_C = |tau_trial|_C + k sigma_B` above the threshold and
-//! `tau1 = tau_trial/(1 - k)` below it, `k = g dt/c3` (the dashpot laws add the
-//! correction `(psi - 1) tau/c3` of the flow to the chain's own `c3`, by backward
-//! Euler, `psi` the law's flow factor); Cross's `r (1 + k (r/sigma_c)^m) =
+//! Bingham's `|tau_m|_C = |tau_m,trial|_C + k_m sigma_B` above the threshold and
+//! `tau_m = tau_m,trial/(1 - k_m)` below it on the chain's mean stress over the
+//! step, `tau_m = g_m (e1 - e_in1) - q_m`, `k_m = g_m dt/c3 < 1` at every step
+//! (the dashpot laws add the correction `(psi - 1) tau/c3` of the flow to the
+//! chain's own `c3`, `psi` the law's flow factor; Bingham's on the mean stress,
+//! with which the chain's own dashpot flows over the step, so that below the
+//! threshold the net flow is exactly zero: [`crate::material::StepMean`]; the
+//! others by backward Euler, `k = g dt/c3`); Cross's `r (1 + k (r/sigma_c)^m) =
 //! |tau_trial|_C` by safeguarded Newton; the dual law's
 //! `tau1 = tau_trial/(1 + k (exp(-psi) - 1))` in unloading cells. A step with
-//! `g dt/c3` (or the dual denominator) too close to the singular value is refused
-//! locally and retried shorter ([`crate::material::MAX_DASHPOT_RATIO`]).
+//! the dual denominator too close to the singular value is refused locally and
+//! retried shorter ([`crate::material::MAX_DASHPOT_RATIO`]).
 //!
 //! **Global iteration.** `g K u1 = f_body + f_hist + f_in(e_in1)`: modified Newton
 //! with the step's own linear factor (no new factorization), switching to full
