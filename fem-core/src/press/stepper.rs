@@ -156,7 +156,11 @@
 //! parasitic root would exceed [`PARASITIC_ROOT`] takes BDF1 (first order in the
 //! viscous term, as the corrections themselves are). Chains with a small `B2`
 //! (`b` about 1e-5 for the real materials' fits) and laws that block nothing keep
-//! BDF2, bit for bit.
+//! BDF2, bit for bit. Since session 19 Bingham's correction acts on the step's
+//! mean stress, whose viscous part is the exact `B2 de/dt` of the step (no value
+//! two steps back: `crate::material::point`), so the root above no longer
+//! arises from it; the switch is kept for it all the same (BDF2 with a blocked
+//! Bingham chain at `b = 1/2` was not tested).
 
 use std::cell::{Cell, RefCell};
 use std::time::Instant;
