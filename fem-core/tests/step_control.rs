@@ -182,29 +182,36 @@ fn hold_steps_follow_the_force_and_stay_few() {
     assert!(a.steps.len() < 200, "{}", a.steps.len());
 }
 
-/// (d) Regression (issue 6: the diagnosis hung on a `bingham-dashpot` candidate):
-/// Bingham below its threshold blocks `c3`, and with the chain's instantaneous
-/// viscosity `B2 = c1 c3/(c1 + c3)` at half of `c3` (here `c1 = c3`: `b = 1/2`)
-/// BDF2's parasitic root is -1 at constant steps, an undamped saw-tooth of the
-/// inelastic strain that no step shrinks (`press::stepper`, "Blocking
-/// corrections"). The case: the frictionless homogeneous press (10 % in 0.5 s, held
-/// to 1 s) of a three-element chain with `c1 = c3 = 1e-4 MPa s` (as the candidate's
-/// fast dashpots) and a Bingham threshold of 1 MPa, never reached, so the blocked
-/// chain is the Voigt solid `(E1, c1)`: the force is `A s(t)` with `s` the closed
-/// form of a chain whose `c3` is 1e12 MPa s. The blocking's backward Euler needs
-/// `k = g dt/c3 < 0.95`, i.e. steps under `0.45 c3/E1` = 9e-4 s (with `b = 1/2`):
-/// at least 1100 steps. Before the fix the run did not end (the test's bound
-/// stopped it at 2000 steps by t = 0.139 s); now 1353 steps. The errors against
-/// the closed form, of the peak, at the step ends and every 5 ms: 5.1e-2 adaptive,
-/// 1.35e-1 and 6.5e-2 at fixed 1 and 0.5 ms steps (first order: the blocking is
-/// backward Euler and the steps are a third of the Voigt time `c1/E1` = 2 ms).
-/// Asserted: at most 2000 steps, adaptive under 8e-2, fixed 0.5 ms under 1e-1,
-/// and halving the fixed step divides the error by 1.8 to 2.3 (measured 2.07).
+/// (d) Regression (issue 6: the diagnosis hung on a `bingham-dashpot` candidate,
+/// and then took 117 s of CPU on it): Bingham below its threshold blocks `c3`,
+/// and with the chain's instantaneous viscosity `B2 = c1 c3/(c1 + c3)` at half of
+/// `c3` (here `c1 = c3`: `b = 1/2`) BDF2's parasitic root is -1 at constant steps
+/// (`press::stepper`, "Blocking corrections"). The case: the frictionless
+/// homogeneous press (10 % in 0.5 s, held to 1 s) of a three-element chain with
+/// `c1 = c3 = 1e-4 MPa s` (as the candidate's fast dashpots) and a Bingham
+/// threshold of 1 MPa, never reached, so the blocked chain is the Voigt solid
+/// `(E1, c1)`: the force is `A s(t)` with `s` the closed form of a chain whose
+/// `c3` is 1e6 MPa s (relaxation time 2e7 s; at 1e12 MPa s the closed form's
+/// exponential term cancels to 5e-3 of the peak in double precision).
+///
+/// History: the run did not end at first (2000 steps by t = 0.139 s); with BDF1
+/// and backward Euler on the step's end stress (`k = g dt/c3 < 0.95`, steps
+/// under 9e-4 s) it took 1353 steps, errors against the closed form 5.1e-2
+/// adaptive, 1.35e-1 and 6.5e-2 at fixed 1 and 0.5 ms steps. Now the correction
+/// acts on the step's mean stress (`material::point`, module doc) and the step
+/// control measures the net dashpot flow, zero here: 38 steps; errors 7.28e-2
+/// adaptive (the end stress lags the blocked chain's by about half a step, and
+/// nothing measures that lag while the net flow is zero: a miss against the
+/// 5.1e-2 before), 4.77e-4 and 2.44e-4 at fixed 1 and 0.5 ms (first order,
+/// measured ratio 1.96; as the 1D model of the scheme gives). Errors of the
+/// peak, at the step ends and every 5 ms. Asserted: at most 100 steps, adaptive
+/// under 8e-2, fixed 0.5 ms under 5e-4, and halving the fixed step divides the
+/// error by 1.8 to 2.3.
 #[test]
 fn blocked_dashpot_against_a_large_instantaneous_viscosity_keeps_steps_and_closed_form() {
     let (push, end, c) = (0.5, 1.0, 1e-4);
     let chain = Rheology::ThreeElement { e1_mpa: 0.05, c1_mpa_s: c, c3_mpa_s: c };
-    let voigt = Rheology::ThreeElement { e1_mpa: 0.05, c1_mpa_s: c, c3_mpa_s: 1e12 };
+    let voigt = Rheology::ThreeElement { e1_mpa: 0.05, c1_mpa_s: c, c3_mpa_s: 1e6 };
     let mut protocol = Protocol::ramp_hold_release(0.1 * H / push, push, end, end);
     protocol.plate = Attachment::Frictionless;
     protocol.support = Attachment::Frictionless;
@@ -239,9 +246,9 @@ fn blocked_dashpot_against_a_large_instantaneous_viscosity_keeps_steps_and_close
         "adaptive: {} steps, error {ea:.2e} of the peak; fixed 1 ms: {ef1:.2e}, 0.5 ms: {ef:.2e}",
         adaptive.steps.len()
     );
-    assert!(adaptive.steps.len() <= 2000, "{} steps", adaptive.steps.len());
+    assert!(adaptive.steps.len() <= 100, "{} steps", adaptive.steps.len());
     assert!(ea < 8e-2, "{ea}");
-    assert!(ef < 1e-1, "{ef}");
+    assert!(ef < 5e-4, "{ef}");
     assert!((1.8..2.3).contains(&(ef1 / ef)), "{ef1} / {ef}");
 }
 

@@ -50,9 +50,10 @@ mod point;
 mod rheology;
 
 pub use point::{
-    energy_norm, InelasticLaw, PointFailure, PointUpdate, MAX_DASHPOT_RATIO, MIN_STIFFENING_FACTOR, TANGENT_HARDENING,
+    energy_norm, InelasticLaw, PointFailure, PointUpdate, StepMean, MAX_DASHPOT_RATIO, MAX_MEAN_DASHPOT_RATIO,
+    MIN_STIFFENING_FACTOR, TANGENT_HARDENING,
 };
-pub use rheology::{phi1, phi1_derivative, ChainElement, MaterialError, RelaxationKernel, Rheology};
+pub use rheology::{phi1, phi1_derivative, phi2, ChainElement, MaterialError, RelaxationKernel, Rheology};
 
 /// The largest `d_inf` of [`MullinsDamage`] (module docs: the virgin tangent
 /// factor stays above 0.09).

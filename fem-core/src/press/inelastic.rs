@@ -152,7 +152,7 @@ use crate::assembly::{assemble_blocks, assemble_stiffness, assemble_vector};
 use crate::element::{
     cell_strain, displacement_gradient, geometric_block, green_lagrange_block, nodal_force, ReferenceSimplex, Simplex,
 };
-use crate::material::{energy_norm, PointFailure, PointUpdate};
+use crate::material::{energy_norm, PointFailure, PointUpdate, StepMean};
 use crate::parallel::map_collect;
 use crate::solve::ReducedSystem;
 
@@ -203,6 +203,12 @@ pub(crate) struct PointInput<'a, const S: usize> {
     pub g: &'a [f64],
     /// History part of the stress image per cell.
     pub q: &'a [SVector<f64, S>],
+    /// The step's mean factor per region (empty unless a law corrects the dashpot on
+    /// the step's mean stress: [`crate::material::InelasticLaw::mean_corrected_c3`]).
+    pub g_mean: &'a [f64],
+    /// The history part of the mean stress image per cell, `tau_mean = g_mean (e1 -
+    /// e_in1) - q_mean` (empty as `g_mean`).
+    pub q_mean: &'a [SVector<f64, S>],
     /// The chain's strain at the step's start, per cell.
     pub chain0: &'a [SVector<f64, S>],
     /// The inelastic strain at the step's start, per cell.
@@ -555,6 +561,11 @@ where
                 let trial = (e1 - input.inelastic0[e]) * input.g[r] - input.q[e];
                 let unload = directional && flags[e];
                 let history0 = if historied { input.history0[e] } else { 0.0 };
+                // The chain's mean stress over the step (Bingham's correction).
+                let mean = laws[r].mean_corrected_c3().map(|_| StepMean {
+                    trial: (e1 - input.inelastic0[e]) * input.g_mean[r] - input.q_mean[e],
+                    g: input.g_mean[r],
+                });
                 laws[r]
                     .update(
                         &model.region_c1[r],
@@ -565,6 +576,7 @@ where
                         unload,
                         &e1,
                         history0,
+                        mean.as_ref(),
                     )
                     .map(|p| (e1, p))
             });
@@ -572,8 +584,10 @@ where
         };
         let failure = |(e, f): (usize, PointFailure)| match f {
             PointFailure::StepTooLong { ratio } => not_converged(format!(
-                "element {e}: the dashpot correction needs g dt / c3 < {} (it is {ratio:.3}); a shorter step",
-                crate::material::MAX_DASHPOT_RATIO
+                "element {e}: the dashpot correction needs g dt / c3 < {} (Bingham's g_m dt / c3 < {}; it is \
+                 {ratio:.3}); a shorter step",
+                crate::material::MAX_DASHPOT_RATIO,
+                crate::material::MAX_MEAN_DASHPOT_RATIO
             )),
             PointFailure::NoStiffness { strain } => not_converged(format!(
                 "element {e}: strain softening leaves no stiffness at the strain |e|_C = {strain:.4} \

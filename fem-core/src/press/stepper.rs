@@ -102,6 +102,17 @@
 //! `h h0`, so the difference did not shrink with the step (measured: rejections
 //! down to a sixteenth of the step and a saw-tooth of step sizes).
 //!
+//! *Bingham's net flow.* Bingham's correction takes back the chain's own dashpot
+//! flow on the step's mean stress (`crate::material::point`, module doc), so below
+//! its threshold the inelastic strain is minus the chain's dashpot strain, whose
+//! rate `tau/c3` changes on the loading's time scale over `c3`: with a small `c3`
+//! its second difference would set steps of 1e-4 s where the dashpot does not
+//! move at all. For such a cell the measure is the *net* dashpot flow, the
+//! inelastic strain plus the chain's own flow `int tau/c3 dt` (`dt tau_mean/c3` a
+//! step, exact for the chain's strain linear in time; `State::chain_flow`): zero
+//! below the threshold, the Bingham flow `(|tau|_C - sigma_B)/|tau|_C tau/c3`
+//! above it. The other laws' corrections are measured as before.
+//!
 //! *The default* `flow_rtol = FLOW_RTOL_FACTOR rtol` (a tenth): with a first-order
 //! corrector under local control the global error falls only as the square root
 //! of the tolerance, and a tenth brings the hold force to the displacements'
@@ -145,7 +156,11 @@
 //! parasitic root would exceed [`PARASITIC_ROOT`] takes BDF1 (first order in the
 //! viscous term, as the corrections themselves are). Chains with a small `B2`
 //! (`b` about 1e-5 for the real materials' fits) and laws that block nothing keep
-//! BDF2, bit for bit.
+//! BDF2, bit for bit. Since session 19 Bingham's correction acts on the step's
+//! mean stress, whose viscous part is the exact `B2 de/dt` of the step (no value
+//! two steps back: `crate::material::point`), so the root above no longer
+//! arises from it; the switch is kept for it all the same (BDF2 with a blocked
+//! Bingham chain at `b = 1/2` was not tested).
 
 use std::cell::{Cell, RefCell};
 use std::time::Instant;
@@ -234,11 +249,40 @@ struct State<const S: usize> {
     /// the material-point iteration's tolerance scale ([`super::inelastic`], "The
     /// force scale").
     force_scale: f64,
+    /// The chain's own dashpot flow per cell, `int tau/c3 dt` from the start, where
+    /// the region's law corrects the dashpot on the step's mean stress (Bingham's:
+    /// [`crate::material::InelasticLaw::mean_corrected_c3`]; zero elsewhere; empty
+    /// without such a law). The step control measures `inelastic + chain_flow`.
+    chain_flow: Vec<SVector<f64, S>>,
+}
+
+impl<const S: usize> State<S> {
+    /// The flow the step control measures in cell `c` (module doc, "Step control"):
+    /// the inelastic strain, plus the chain's own dashpot flow where the law
+    /// corrects the dashpot on the step's mean stress (then the net dashpot flow).
+    fn measured_flow(&self, c: usize) -> SVector<f64, S> {
+        match self.chain_flow.get(c) {
+            Some(f) => self.inelastic[c] + f,
+            None => self.inelastic[c],
+        }
+    }
+
+    /// [`Self::measured_flow`] of every cell (the inelastic strains themselves
+    /// without a mean-corrected law).
+    fn measured_flows(self) -> Vec<SVector<f64, S>> {
+        if self.chain_flow.is_empty() {
+            self.inelastic
+        } else {
+            (0..self.inelastic.len()).map(|c| self.measured_flow(c)).collect()
+        }
+    }
 }
 
 /// Per-region scalars of one step size.
 struct StepFactors {
     g: f64,
+    /// The mean factor ([`crate::material::RelaxationKernel::mean_factor`]).
+    g_mean: f64,
     decay: [f64; 2],
     phi: [f64; 2],
 }
@@ -421,6 +465,10 @@ where
             _ => Vec::new(),
         },
         force_scale: 0.0,
+        chain_flow: match model.point.as_ref() {
+            Some(laws) if laws.iter().any(|l| l.mean_corrected_c3().is_some()) => vec![SVector::zeros(); ncell],
+            _ => Vec::new(),
+        },
     };
     let ga = if dynamic { GeneralizedAlpha::new(settings.rho_inf) } else { GeneralizedAlpha::QUASI_STATIC };
     // Displacements one and two steps back in this segment, with the inelastic
@@ -832,8 +880,9 @@ where
                 for (c, &weight) in flow_weight.iter().enumerate() {
                     if weight > 0.0 {
                         let c1 = &model.region_c1[problem.mesh.cell_regions[c] as usize];
-                        let pred = state.inelastic[c] + (state.inelastic[c] - i1b[c]) * w;
-                        let d = outcome.state.inelastic[c] - pred;
+                        let now = state.measured_flow(c);
+                        let pred = now + (now - i1b[c]) * w;
+                        let d = outcome.state.measured_flow(c) - pred;
                         sum += weight * d.dot(&(c1 * d)).max(0.0);
                     }
                 }
@@ -911,7 +960,7 @@ where
         let at_kink = physical_kinks.iter().any(|&k| (k - t1).abs() <= 1e-12 * end.max(1.0)) || instant_step;
         let releasing = (t1 - protocol.release_s).abs() <= 1e-12 * end.max(1.0) && t1 < end;
         instant_step = releasing && !instant_step && model.region_kernel.iter().any(|k| k.viscous == 0.0);
-        let old = std::mem::replace(&mut state, outcome.state);
+        let mut old = std::mem::replace(&mut state, outcome.state);
         if at_kink {
             back.clear();
             dt = if instant_step { INSTANT_STEP_FRACTION * end } else { first_dt(t1) };
@@ -926,8 +975,9 @@ where
                     h * (0.9 * error_ratio.max(1e-12).powf(-exponent)).clamp(0.2, cap)
                 }
             };
-            let inelastic = if flow_weight.is_empty() { Vec::new() } else { old.inelastic };
-            back.insert(0, (old.u, inelastic, h));
+            let u_old = std::mem::take(&mut old.u);
+            let flow = if flow_weight.is_empty() { Vec::new() } else { old.measured_flows() };
+            back.insert(0, (u_old, flow, h));
             back.truncate(2);
         }
         progress(Progress { t_s: state.t, end_s: end, steps: step_index });
@@ -1049,7 +1099,7 @@ where
                 decay[j] = (-k.rates[j] * dt).exp();
                 phi[j] = phi1(k.rates[j] * dt);
             }
-            StepFactors { g, decay, phi }
+            StepFactors { g, g_mean: k.mean_factor(dt), decay, phi }
         })
         .collect();
 
@@ -1119,6 +1169,23 @@ where
     let mut coupling = vec![0.0; ndof];
     apply(&u1, &mut coupling);
     let base: Vec<f64> = (0..ndof).map(|d| rhs[d] - coupling[d]).collect();
+    // The history part of the chain's mean stress over the step, where a law
+    // corrects the dashpot on it (`crate::material`'s module doc): `tau_mean =
+    // g_mean e1 - q_mean`, `q_mean = (g_mean - G_inf) e0 - sum_k a_k phi_k h_k`.
+    let q_mean: Vec<SVector<f64, S>> = if s0.chain_flow.is_empty() {
+        Vec::new()
+    } else {
+        map_collect(mesh.num_cells(), |e| {
+            let r = mesh.cell_regions[e] as usize;
+            let (k, f) = (&model.region_kernel[r], &factors[r]);
+            let mut q = s0.strain[e] * (f.g_mean - k.equilibrium);
+            for j in 0..k.num_terms {
+                q -= s0.history[e][j] * (f.phi[j] * k.amplitudes[j]);
+            }
+            q
+        })
+    };
+    let g_mean: Vec<f64> = if q_mean.is_empty() { Vec::new() } else { factors.iter().map(|f| f.g_mean).collect() };
     // The material-point path: the same step with an inelastic strain per cell,
     // solved by the iteration of `super::inelastic`.
     let mut point = match model.point.as_ref() {
@@ -1135,6 +1202,8 @@ where
             let input = PointInput {
                 g: &g,
                 q: &q,
+                g_mean: &g_mean,
+                q_mean: &q_mean,
                 chain0: &s0.strain,
                 inelastic0: &s0.inelastic,
                 unloading0: &s0.unloading,
@@ -1288,6 +1357,20 @@ where
         }
     }
 
+    // The chain's own dashpot flow over the step, `dt tau_mean/c3`, where the law
+    // corrects the dashpot on the mean stress (`State::chain_flow`).
+    let chain_flow: Vec<SVector<f64, S>> = match model.point.as_ref() {
+        Some(laws) if !q_mean.is_empty() => (0..mesh.num_cells())
+            .map(|e| {
+                let r = mesh.cell_regions[e] as usize;
+                match laws[r].mean_corrected_c3() {
+                    Some(c3) => s0.chain_flow[e] + (updated[e].0 * g_mean[r] - q_mean[e]) * (dt / c3),
+                    None => s0.chain_flow[e],
+                }
+            })
+            .collect(),
+        _ => Vec::new(),
+    };
     let mut strain = Vec::with_capacity(updated.len());
     let mut history = Vec::with_capacity(updated.len());
     let mut stress = Vec::with_capacity(updated.len());
@@ -1316,6 +1399,7 @@ where
             damage_history,
             // The stepper raises it to this step's forces once the step is accepted.
             force_scale: s0.force_scale,
+            chain_flow,
         },
         stress,
         segment,
