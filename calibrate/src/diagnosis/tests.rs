@@ -417,14 +417,16 @@ fn per_sample_scale_columns_match_finite_differences() {
 ///
 /// *Short holds* (the three trials of [`DESIGN`], holds of 5 to 20 s): over the
 /// stresses they visit a threshold dashpot mimics thinning, and the verdict is
-/// a `tie` (measured: LR 87.8 against 78.2, cosine of the corrections 0.94).
+/// a `tie` (measured in session 19: thinning's LR 83.4 against Bingham's 74.8,
+/// cosine of the corrections 0.95; session 16: 87.8 against 78.2, 0.94).
 ///
 /// *With a long hold* (the same three plus a 150 s hold at the middle speed):
 /// the stress relaxes to a few sigma_c, where thinning keeps decaying and a
 /// threshold stops. The refits tell them apart: thinning's recovers the truth
 /// (measured 1/sigma_c = 1602, m = 0.996 with the exponent freed) and leaves no
 /// cell flagged, Bingham's leaves the push and hold force flagged and its LR
-/// is lower (3.105e4 against 4.059e4); its held-out prediction is worse than
+/// is lower (session 19: 2.931e4 against 3.833e4; session 16: 3.105e4 against
+/// 4.059e4; measured 1/sigma_c 1603 in session 19); its held-out prediction is worse than
 /// the baseline's (closure -30) where thinning's closes the gap (1.00). The
 /// verdict is `stress-thinning` (session 16): the margin of C (8.47e5) against
 /// 2 SE = 3.2e4 of the block bootstrap inside segments (`heldout::block_se`).
@@ -432,7 +434,8 @@ fn per_sample_scale_columns_match_finite_differences() {
 /// was 1.6e6 (measured 1.7e6 before), because with force only the whole
 /// difference sits in one segment (the long trial's hold), which a bootstrap
 /// over segments reads as spread (VALIDATION.md). The short design stays a
-/// `tie` through the cosine (0.95; margin 83.9 against 2 SE = 7.1). Measured in
+/// `tie` through the cosine (0.95; margin 77.7 against 2 SE = 7.2 in session 19,
+/// 83.9 against 7.1 before). Measured in
 /// session 15, before the step control saw the inelastic flow: on the
 /// diagnoser's adaptive steps the same campaign gave 1/sigma_c = 2669 and the
 /// recovery force flagged, because the step control followed the displacements
