@@ -39,11 +39,13 @@
 //! refined down to the smallest size and flat parts stay coarse. A cell whose
 //! ball meets a **border edge** of the input (an edge of one triangle once
 //! vertices within 1e-6 of the diagonal are welded: the rim of a hole) is cut
-//! as at a crease (estimate `L / 4`), and **one level deeper**, down to
-//! `h / 2^(levels + 1)`: there the solid leaves the input for the cap `w = 1/2`
+//! as at a crease (estimate `L / 4`), and **below the smallest size** while
+//! that estimate exceeds the tolerance (down to `h / 2^MAX_LEVELS`; so at most
+//! until `L = 4 tol`, a cost set by the rims' length over the tolerance, not by
+//! `h`): there the solid leaves the input for the cap `w = 1/2`
 //! over the hole, a crease no input triangle shows (session 19: the holed
 //! bunny's rim at 3 levels, 1.08e-3 -> 9.98e-4 of the diagonal; an open
-//! sphere's rim, 3.65e-3 -> 2.19e-3). The extra level (session 20) is there
+//! sphere's rim, 3.65e-3 -> 2.19e-3). The deeper cut (session 20) is there
 //! because the fitting (`fit.rs`) cannot bring the boundary onto a rim as it
 //! does onto an input crease: the stuffing's boundary cuts the rim's corner
 //! between nodes on the input and nodes on the cap (both directions of the
@@ -56,11 +58,15 @@
 //! edge across the rim split (longest-edge propagation), which the fitting
 //! does not do (an end on the cap is fixed). Splitting the edges across the rim
 //! onto it (tried) makes tets of 6°..169° (the rim lies 0.2 to 0.3 of the
-//! edge off its midpoint: the corner's height), which the guard refuses. With
-//! the extra level: 2.19e-3 -> 8.42e-4 of the diagonal (82.5k -> 99.1k tets;
-//! the fitting then has nothing to do); the holed bunny (0.2 mm) and the open
-//! teapot (0.5 mm) do not change: at the smallest size their rims' estimate
-//! `L / 4` is under the tolerance already (6.3e-3 < 7.9e-3 mm, 1.6e-2 < 2.1e-2 mm).
+//! edge off its midpoint: the corner's height), which the guard refuses. The
+//! distance left at the rim is about `0.18 L` (measured: rim cells of 0.05,
+//! 0.031, 0.025, 0.016 mm leave 7.9e-3, 7.3e-3, 4.4e-3, 2.8e-3 mm), under
+//! the estimate. With the deeper cut: 2.19e-3 -> 7.43e-4 of the diagonal
+//! (82.5k -> 156k tets; the maximum leaves the rim, the fitting has nothing
+//! to do; one level deeper only: 99k tets, 8.42e-4 at h = 0.25 mm but 1.32e-3
+//! at 0.4 mm); the holed bunny (0.2 mm) and the open teapot (0.5 mm) do not
+//! change: at the smallest size their rims' estimate `L / 4` is under the
+//! tolerance already (6.3e-3 < 7.9e-3 mm, 1.6e-2 < 2.1e-2 mm).
 //! Cells meeting no triangle are never cut by the sizing (only by the closure).
 //!
 //! Cells are visited in rounds: each round evaluates the sizing of the cells the
@@ -133,9 +139,9 @@ pub(crate) struct GradeStats {
 impl GradedLattice {
     /// The base lattice (spacing `h` over the box `lo..hi` grown by `h`), refined
     /// down to `h / 2^levels` (at most [`MAX_LEVELS`]) where the chord-error
-    /// estimate of `surface` exceeds `tol` [mm], and down to `h / 2^(levels + 1)`
-    /// where a border edge of the input (the first edge of each of `rims`'
-    /// triangles) passes and `L / 4` exceeds `tol`. Stops cutting
+    /// estimate of `surface` exceeds `tol` [mm], and where a border edge of the
+    /// input (the first edge of each of `rims`' triangles) passes, while `L / 4`
+    /// exceeds `tol`, down to `h / 2^MAX_LEVELS` (with `levels` > 0). Stops cutting
     /// (leaving the mesh conforming) when it has `max_vertices` vertices.
     #[allow(clippy::too_many_arguments)]
     pub fn new(
@@ -149,8 +155,8 @@ impl GradedLattice {
         max_vertices: usize,
     ) -> (Self, GradeStats) {
         let levels = levels.min(MAX_LEVELS);
-        // At the rims, one level deeper (module docs).
-        let rim_levels = if levels > 0 { levels + 1 } else { 0 };
+        // At the rims, as deep as the tolerance asks (module docs).
+        let rim_levels = if levels > 0 { MAX_LEVELS } else { 0 };
         let base = super::stuffing::uniform_lattice(lo, hi, h);
         let bits = BITS_PER_LEVEL * (rim_levels + 1);
         let unit = 0.5 * h / (1u64 << bits) as f64;
@@ -601,10 +607,11 @@ mod tests {
 
     /// An open flat square (side 1 in z = 0.1): flat, but its border edges (the
     /// rims) are where the solid turns onto the cap over the opening: the cells
-    /// they pass through are refined one level below the smallest size (h / 16 at
-    /// 3 levels; the centroids of the cells finer than h / 8 within h / 4 of the
-    /// rim), cells farther than 2 h from them keep the base size, and the
-    /// lattice stays conforming.
+    /// they pass through are refined below the smallest size while the crease
+    /// estimate `L / 4` exceeds the tolerance (1e-2 here: to h / 16 at 3 levels;
+    /// the centroids of the cells finer than h / 8 within h / 4 of the rim),
+    /// cells farther than 2 h from them keep the base size, and the lattice
+    /// stays conforming.
     #[test]
     fn a_border_edge_is_refined_like_a_crease() {
         let [a, b, c, d] = [[-0.5, -0.5, 0.1], [0.5, -0.5, 0.1], [0.5, 0.5, 0.1], [-0.5, 0.5, 0.1]];
@@ -614,7 +621,7 @@ mod tests {
         let h = 0.5;
         let (g0, _) =
             GradedLattice::new(&square, &TriangleTree::new(Vec::new()), [-1.0; 3], [1.0; 3], h, 0, 1e-3, usize::MAX);
-        let (g, s) = GradedLattice::new(&square, &rims, [-1.0; 3], [1.0; 3], h, 3, 1e-3, usize::MAX);
+        let (g, s) = GradedLattice::new(&square, &rims, [-1.0; 3], [1.0; 3], h, 3, 1e-2, usize::MAX);
         assert!(s.bisections > 0);
         check_conforming(&g, &g0);
         let to_rim = |q: P| {
@@ -625,8 +632,11 @@ mod tests {
         };
         let (mut finest_near_rim, mut deepest_off_rim) = (0, 0.0f64);
         for t in &g.cells {
-            let (c, longest) = centroid_and_longest(&t.map(|x| g.position(x)));
+            let p = t.map(|x| g.position(x));
+            let (c, longest) = centroid_and_longest(&p);
             assert!(longest > h / 16.0 * (1.0 - 1e-9), "finer than the rim's size: {longest}");
+            // Every cell the rim passes meets the tolerance.
+            assert!(!meets_rim(&rims, &p) || 0.25 * longest <= 1e-2, "{longest} at {c:?}");
             if to_rim(c) > 2.0 * h {
                 assert!(longest >= h * (1.0 - 1e-9), "refined far from the rim: {longest} at {c:?}");
             }
