@@ -768,16 +768,20 @@ fn the_cap_over_an_open_scans_hole_is_measured_apart() {
     assert_eq!(m.num_interior_input_triangles, 0);
 }
 
-/// An open scan on the graded lattice (session 19): the unit sphere with a
+/// An open scan on the graded lattice (sessions 19, 20): the unit sphere with a
 /// polar cap of angular radius 40 deg cut off (as above). Where the solid leaves
 /// the input for the cap over the hole, its boundary has a crease along the rim
-/// that no input triangle shows; the grading refines the cells the rim passes
-/// to the smallest size, as at a crease of the input. Measured (h = 0.25 mm, 3
-/// levels, 83k tets, 3.6 s): boundary figure (caps apart) 2.19e-3 of the
-/// diagonal, its input -> mesh maximum at the midpoint of a rim chord (without
-/// the rim's refinement: 3.65e-3, at the same place); asserted <= 2.5e-3: a
-/// **miss** of the 1e-3 (the fitting does not reach the rim between its
-/// vertices). The cap over the hole is reported apart (1.9e-1).
+/// that no input triangle shows, and the fitting cannot bring the boundary onto
+/// it (`graded.rs` module docs): the grading refines the cells the rim passes
+/// below the smallest size, until their crease estimate meets the grading
+/// tolerance. Measured (h = 0.25 mm, 3 levels, 156k tets, mesh 4 to 9 s,
+/// report 2 to 3 s, the machine shared with four other helpers): boundary
+/// figure (caps apart) 7.43e-4 of the diagonal, its maximum now off the rim
+/// (in -> out at an input vertex by the equator; out -> in 6.91e-4); before
+/// session 20 (rim at the smallest size, 83k tets) 2.19e-3 at the midpoint of
+/// a rim chord, without the rim's refinement 3.65e-3. Asserted <= 1e-3 (the
+/// issue's gate), angles in [12, 155] deg (measured [13.82, 150.89]). The cap
+/// over the hole is reported apart (1.9e-1).
 #[test]
 fn an_open_scans_rim_is_refined_on_the_graded_lattice() {
     let alpha = 40f64.to_radians();
@@ -793,7 +797,7 @@ fn an_open_scans_rim_is_refined_on_the_graded_lattice() {
     assert_conforming(&out.mesh);
     assert_eq!(q.num_border_edges, 64);
     assert!(q.hole_cap_relative > q.hausdorff_relative, "{q:?}");
-    assert!(q.hausdorff_relative <= 2.5e-3, "{q:?}");
+    assert!(q.hausdorff_relative <= 1e-3, "{q:?}");
 }
 
 /// Two boxes sharing an edge (non-manifold): both, volume 2.

@@ -18,7 +18,7 @@
 //!    (`graded.rs`): the BCC lattice refined by conforming longest-edge
 //!    bisection down to `size_mm / 2^levels` where the input's chord error at the
 //!    cell's size exceeds [`EnvelopeOptions::grade_tolerance`] (creases, curved
-//!    parts, thin parts, the rims of holes), coarse elsewhere; the same stuffing per tet, with
+//!    parts, thin parts, the rims of holes; rims deeper, as the tolerance asks), coarse elsewhere; the same stuffing per tet, with
 //!    measured (not proven) warping thresholds, then boundary slivers peeled.
 //! 3. **Regions**: with several input regions (OBJ objects or groups, glTF meshes),
 //!    each region's shell is cut into the mesh as a conforming interface
@@ -155,7 +155,9 @@ pub struct EnvelopeOptions {
     pub max_fit_rounds: usize,
     /// Grading (`graded.rs`): the lattice is refined by bisection down to
     /// `size_mm / 2^grade_levels` where the input is curved, creased or thin at
-    /// the scale of the cells; 0 (default): the uniform lattice. At most 8.
+    /// the scale of the cells, and at the rims of holes (the input's border
+    /// edges) deeper, as far as [`Self::grade_tolerance`] asks (to `size_mm /
+    /// 2^8` at most); 0 (default): the uniform lattice. At most 8.
     pub grade_levels: u32,
     /// The grading's chord-error tolerance, relative to the bounding-box diagonal
     /// (default 5e-4): a cell is cut while its estimated chord error exceeds it.
