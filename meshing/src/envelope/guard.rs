@@ -37,6 +37,8 @@ type P = [f64; 3];
 
 /// Repair rounds at most.
 pub(crate) const ROUNDS: usize = 8;
+/// Pattern-search steps at most per step size when placing a split point.
+const SEARCH_STEPS: usize = 8;
 
 /// What the guard did.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -84,6 +86,18 @@ fn height(p: &[P; 4]) -> f64 {
 pub(crate) fn bad_cells(nodes: &[P], cells: &[[u32; 4]]) -> Vec<usize> {
     use rayon::prelude::*;
     cells.par_iter().enumerate().filter(|(_, c)| score(&c.map(|v| nodes[v as usize])) < 1.0).map(|(k, _)| k).collect()
+}
+
+/// An edge split the guard may take.
+struct Split {
+    /// The worst score of the new tets.
+    worst: f64,
+    /// The edge.
+    edge: (u32, u32),
+    /// The cells around it.
+    around: Vec<u32>,
+    /// The new node [mm].
+    at: P,
 }
 
 struct Work<'a> {
@@ -173,43 +187,119 @@ impl Work<'_> {
         best
     }
 
-    /// The best midpoint split of an edge of cell `k` (every tet around the edge
-    /// cut in two, each half keeping its parent's region): (new worst score, the
-    /// edge, the cells around it), when the worst score around the edge rises and
-    /// fewer tets there are outside [12°, 155°].
-    fn best_split(&self, k: usize) -> Option<(f64, (u32, u32), Vec<u32>)> {
-        let c = self.cells[k];
-        let mut best: Option<(f64, (u32, u32), Vec<u32>)> = None;
-        for i in 0..4 {
-            for j in i + 1..4 {
-                let (a, b) = (c[i], c[j]);
-                let (pa, pb) = (self.nodes[a as usize], self.nodes[b as usize]);
-                let m = [0, 1, 2].map(|x| 0.5 * (pa[x] + pb[x]));
-                let around = self.holding(&[a, b]);
-                let olds: Vec<f64> = around.iter().map(|&o| score(&self.pts(self.cells[o as usize]))).collect();
-                let mut news = Vec::with_capacity(2 * around.len());
-                for &o in &around {
-                    let t = self.cells[o as usize];
-                    for end in [a, b] {
-                        news.push(score(&t.map(|v| if v == end { m } else { self.nodes[v as usize] })));
+    /// The scores of the tets that splitting edge `(a, b)` at the point `m` makes
+    /// of the cells `around` it (each cut in two, orientations kept).
+    fn split_scores(&self, a: u32, b: u32, around: &[u32], m: P) -> Vec<f64> {
+        let mut news = Vec::with_capacity(2 * around.len());
+        for &o in around {
+            let t = self.cells[o as usize];
+            for end in [a, b] {
+                news.push(score(&t.map(|v| if v == end { m } else { self.nodes[v as usize] })));
+            }
+        }
+        news
+    }
+
+    /// Whether the cells `around` edge `(a, b)` close a ring of one region (every
+    /// face through the edge in two of them): then the edge is inside one region,
+    /// on neither the boundary nor an interface, and a point splitting it may
+    /// leave the edge's line (the new cells tile the ring exactly when all are
+    /// positive).
+    fn closed_ring(&self, a: u32, b: u32, around: &[u32]) -> bool {
+        let Some(&first) = around.first() else { return false };
+        let region = self.regions[first as usize];
+        if around.len() < 3 || around.iter().any(|&o| self.regions[o as usize] != region) {
+            return false;
+        }
+        let mut count: std::collections::BTreeMap<u32, usize> = std::collections::BTreeMap::new();
+        for &o in around {
+            for v in self.cells[o as usize] {
+                if v != a && v != b {
+                    *count.entry(v).or_default() += 1;
+                }
+            }
+        }
+        count.values().all(|&c| c == 2)
+    }
+
+    /// Where to split the interior edge `(a, b)`: the point whose split leaves the
+    /// best worst score, among the midpoint, points from it towards the centroid of
+    /// the ring's vertices, then axis steps of a tenth and a fortieth of the mean
+    /// distance from the midpoint to the ring (pattern search, deterministic).
+    fn split_point(&self, a: u32, b: u32, around: &[u32], mid: P) -> (f64, P) {
+        let worst = |m: P| self.split_scores(a, b, around, m).into_iter().fold(f64::INFINITY, f64::min);
+        let mut ring: Vec<u32> =
+            around.iter().flat_map(|&o| self.cells[o as usize]).filter(|&v| v != a && v != b).collect();
+        ring.sort_unstable();
+        ring.dedup();
+        let centroid =
+            [0, 1, 2].map(|x| ring.iter().map(|&v| self.nodes[v as usize][x]).sum::<f64>() / ring.len() as f64);
+        let reach = ring.iter().map(|&v| norm(sub(self.nodes[v as usize], mid))).sum::<f64>() / ring.len() as f64;
+        let mut best = (worst(mid), mid);
+        for f in [0.25, 0.5, 0.75, 1.0] {
+            let q = [0, 1, 2].map(|x| mid[x] + f * (centroid[x] - mid[x]));
+            let s = worst(q);
+            if s > best.0 {
+                best = (s, q);
+            }
+        }
+        for step in [0.1 * reach, 0.025 * reach] {
+            for _ in 0..SEARCH_STEPS {
+                let here = best;
+                for x in 0..3 {
+                    for sign in [-1.0, 1.0] {
+                        let mut q = here.1;
+                        q[x] += sign * step;
+                        let s = worst(q);
+                        if s > best.0 {
+                            best = (s, q);
+                        }
                     }
                 }
-                let old_worst = olds.iter().copied().fold(f64::INFINITY, f64::min);
-                let new_worst = news.iter().copied().fold(f64::INFINITY, f64::min);
-                let bad = |x: &[f64]| x.iter().filter(|&&s| s < 1.0).count();
-                if new_worst > old_worst && bad(&news) < bad(&olds) && best.as_ref().is_none_or(|b| new_worst > b.0) {
-                    best = Some((new_worst, (a, b), around));
+                if best.1 == here.1 {
+                    break;
                 }
             }
         }
         best
     }
 
-    /// Splits edge `(a, b)` at its midpoint in the cells `around` it; returns the new cells.
-    fn split(&mut self, a: u32, b: u32, around: &[u32]) -> Vec<u32> {
-        let (pa, pb) = (self.nodes[a as usize], self.nodes[b as usize]);
-        let m = self.nodes.len() as u32;
-        self.nodes.push([0, 1, 2].map(|x| 0.5 * (pa[x] + pb[x])));
+    /// The best split of an edge of cell `k` (every tet around the edge cut in
+    /// two, each half keeping its parent's region), when the worst score around
+    /// the edge rises and fewer tets there are outside [12°, 155°]. The new
+    /// point is the edge's midpoint, or for an edge inside one region
+    /// ([`Self::closed_ring`]) the best of [`Self::split_point`]'s.
+    fn best_split(&self, k: usize) -> Option<Split> {
+        let c = self.cells[k];
+        let mut best: Option<Split> = None;
+        for i in 0..4 {
+            for j in i + 1..4 {
+                let (a, b) = (c[i], c[j]);
+                let (pa, pb) = (self.nodes[a as usize], self.nodes[b as usize]);
+                let mid = [0, 1, 2].map(|x| 0.5 * (pa[x] + pb[x]));
+                let around = self.holding(&[a, b]);
+                let m = if self.closed_ring(a, b, &around) { self.split_point(a, b, &around, mid).1 } else { mid };
+                let olds: Vec<f64> = around.iter().map(|&o| score(&self.pts(self.cells[o as usize]))).collect();
+                let news = self.split_scores(a, b, &around, m);
+                let old_worst = olds.iter().copied().fold(f64::INFINITY, f64::min);
+                let new_worst = news.iter().copied().fold(f64::INFINITY, f64::min);
+                let bad = |x: &[f64]| x.iter().filter(|&&s| s < 1.0).count();
+                if new_worst > old_worst
+                    && new_worst > 0.0
+                    && bad(&news) < bad(&olds)
+                    && best.as_ref().is_none_or(|b| new_worst > b.worst)
+                {
+                    best = Some(Split { worst: new_worst, edge: (a, b), around, at: m });
+                }
+            }
+        }
+        best
+    }
+
+    /// Splits edge `(a, b)` at the point `m` in the cells `around` it; returns the new cells.
+    fn split(&mut self, a: u32, b: u32, around: &[u32], m: P) -> Vec<u32> {
+        let new = self.nodes.len() as u32;
+        self.nodes.push(m);
         self.of_node.push(Vec::new());
         let mut made = Vec::new();
         for &o in around {
@@ -218,7 +308,7 @@ impl Work<'_> {
             self.alive[o as usize] = false;
             for end in [a, b] {
                 made.push(self.cells.len() as u32);
-                self.add(t.map(|v| if v == end { m } else { v }), region);
+                self.add(t.map(|v| if v == end { new } else { v }), region);
             }
         }
         made
@@ -305,11 +395,11 @@ pub(crate) fn repair(nodes: &mut Vec<P>, cells: &mut Vec<[u32; 4]>, regions: &mu
                 bad.remove(&(k as u32));
                 stats.peeled += 1;
                 changed = true;
-            } else if let Some((_, (a, b), around)) = w.best_split(k) {
+            } else if let Some(Split { edge: (a, b), around, at, .. }) = w.best_split(k) {
                 for &o in &around {
                     bad.remove(&o);
                 }
-                for id in w.split(a, b, &around) {
+                for id in w.split(a, b, &around, at) {
                     if score(&w.pts(w.cells[id as usize])) < 1.0 {
                         bad.insert(id);
                     }
