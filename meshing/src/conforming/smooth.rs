@@ -57,9 +57,31 @@ pub struct SmoothStats {
 /// Candidate positions tried per vertex (12 left fandisk's worst tet at 166 deg).
 const TRIES: usize = 24;
 
+/// `f` folded over the tets of `star` with `v` at `at`, from `init`; `None`
+/// when one of them would not be positively oriented or would be larger than
+/// `max_volume` [mm^3].
+fn fold_star<A>(
+    (nodes, cells, star): (&[Point], &[[u32; 4]], &[u32]),
+    v: u32,
+    at: Point,
+    max_volume: f64,
+    init: A,
+    mut f: impl FnMut(A, &[Point; 4]) -> A,
+) -> Option<A> {
+    let mut acc = init;
+    for &c in star {
+        let q = cells[c as usize].map(|u| if u == v { at } else { nodes[u as usize] });
+        // `tet_volume` is `tet_quality`'s `volume_mm3`, bit for bit.
+        if orient3d(q[0], q[1], q[2], q[3]) != 1 || tet_volume(&q) > max_volume {
+            return None;
+        }
+        acc = f(acc, &q);
+    }
+    Some(acc)
+}
+
 /// The smallest [`angle_quality`] of `star` with `v` at `at`, and its
-/// smallest and largest dihedral angle [deg]; `None` when a tet of it would
-/// not be positively oriented or would be larger than `max_volume`.
+/// smallest and largest dihedral angle [deg]; `None` as for [`fold_star`].
 fn star_min(
     nodes: &[Point],
     cells: &[[u32; 4]],
@@ -68,21 +90,11 @@ fn star_min(
     at: Point,
     max_volume: f64,
 ) -> Option<(f64, (f64, f64))> {
-    let mut worst = f64::INFINITY;
-    let mut range = (f64::INFINITY, f64::NEG_INFINITY);
-    for &c in star {
-        let q = cells[c as usize].map(|u| if u == v { at } else { nodes[u as usize] });
-        if orient3d(q[0], q[1], q[2], q[3]) != 1 {
-            return None;
-        }
-        if tet_volume(&q) > max_volume {
-            return None;
-        }
-        let (lo, hi) = dihedral_range_deg(&q);
-        range = (range.0.min(lo), range.1.max(hi));
-        worst = worst.min(angle_quality(lo, hi));
-    }
-    Some((worst, range))
+    let init = (f64::INFINITY, (f64::INFINITY, f64::NEG_INFINITY));
+    fold_star((nodes, cells, star), v, at, max_volume, init, |(worst, range), q| {
+        let (lo, hi) = dihedral_range_deg(q);
+        (worst.min(angle_quality(lo, hi)), (range.0.min(lo), range.1.max(hi)))
+    })
 }
 
 /// Whether the dihedral range `new` [deg] is within `old`: neither its
@@ -253,7 +265,7 @@ fn smooth_with<S>(
 }
 
 /// The largest radius-edge ratio and the smallest [`angle_quality`] of `star`
-/// with `v` at `at`; `None` as for [`star_min`].
+/// with `v` at `at`; `None` as for [`fold_star`].
 fn star_ratio(
     nodes: &[Point],
     cells: &[[u32; 4]],
@@ -262,21 +274,10 @@ fn star_ratio(
     at: Point,
     max_volume: f64,
 ) -> Option<(f64, f64)> {
-    let mut ratio: f64 = 0.0;
-    let mut angles = f64::INFINITY;
-    for &c in star {
-        let q = cells[c as usize].map(|u| if u == v { at } else { nodes[u as usize] });
-        if orient3d(q[0], q[1], q[2], q[3]) != 1 {
-            return None;
-        }
-        let t = tet_quality(&q);
-        if t.volume_mm3 > max_volume {
-            return None;
-        }
-        ratio = ratio.max(t.radius_edge);
-        angles = angles.min(angle_quality(t.min_dihedral_deg, t.max_dihedral_deg));
-    }
-    Some((ratio, angles))
+    fold_star((nodes, cells, star), v, at, max_volume, (0.0f64, f64::INFINITY), |(ratio, angles), q| {
+        let t = tet_quality(q);
+        (ratio.max(t.radius_edge), angles.min(angle_quality(t.min_dihedral_deg, t.max_dihedral_deg)))
+    })
 }
 
 /// Smoothing for the radius-edge ratio, after [`smooth`]: the movable
