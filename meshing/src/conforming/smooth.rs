@@ -80,22 +80,15 @@ fn fold_star<A>(
     Some(acc)
 }
 
-/// The smallest [`angle_quality`] of `star` with `v` at `at`, and its
-/// smallest and largest dihedral angle [deg]; `None` as for [`fold_star`].
-fn star_min(
-    nodes: &[Point],
-    cells: &[[u32; 4]],
-    star: &[u32],
-    v: u32,
-    at: Point,
-    max_volume: f64,
-) -> Option<(f64, (f64, f64))> {
-    let init = (f64::INFINITY, (f64::INFINITY, f64::NEG_INFINITY));
-    fold_star((nodes, cells, star), v, at, max_volume, init, |(worst, range), q| {
-        let (lo, hi) = dihedral_range_deg(q);
-        (worst.min(angle_quality(lo, hi)), (range.0.min(lo), range.1.max(hi)))
-    })
+/// [`fold_star`]'s step for [`smooth`]: the smallest [`angle_quality`] and
+/// the smallest and largest dihedral angle [deg] so far, with tet `q`.
+fn add_angles((worst, range): (f64, (f64, f64)), q: &[Point; 4]) -> (f64, (f64, f64)) {
+    let (lo, hi) = dihedral_range_deg(q);
+    (worst.min(angle_quality(lo, hi)), (range.0.min(lo), range.1.max(hi)))
 }
+
+/// [`fold_star`]'s start for [`add_angles`].
+const NO_ANGLES: (f64, (f64, f64)) = (f64::INFINITY, (f64::INFINITY, f64::NEG_INFINITY));
 
 /// Whether the dihedral range `new` [deg] is within `old`: neither its
 /// smallest nor its largest angle is worse.
@@ -161,10 +154,12 @@ pub(crate) fn smooth(
     // The cost is the star's smallest quality, negated; a candidate must
     // keep the star's dihedral angles within their range where it is.
     let start = |nodes: &[Point], star: &[u32], v: u32, here: Point| {
-        star_min(nodes, cells, star, v, here, f64::INFINITY).map(|(q, range)| (-q, range))
+        fold_star((nodes, cells, star), v, here, f64::INFINITY, NO_ANGLES, add_angles).map(|(q, range)| (-q, range))
     };
     let cost = |nodes: &[Point], star: &[u32], v: u32, at: Point, range: &(f64, f64)| {
-        star_min(nodes, cells, star, v, at, max_volume).filter(|&(_, r)| within(r, *range)).map(|(q, _)| -q)
+        fold_star((nodes, cells, star), v, at, max_volume, NO_ANGLES, add_angles)
+            .filter(|&(_, r)| within(r, *range))
+            .map(|(q, _)| -q)
     };
     smooth_with(nodes, cells, freedom, passes, 0xD1E5, bad, start, cost)
 }
@@ -264,20 +259,11 @@ fn smooth_with<S>(
     stats
 }
 
-/// The largest radius-edge ratio and the smallest [`angle_quality`] of `star`
-/// with `v` at `at`; `None` as for [`fold_star`].
-fn star_ratio(
-    nodes: &[Point],
-    cells: &[[u32; 4]],
-    star: &[u32],
-    v: u32,
-    at: Point,
-    max_volume: f64,
-) -> Option<(f64, f64)> {
-    fold_star((nodes, cells, star), v, at, max_volume, (0.0f64, f64::INFINITY), |(ratio, angles), q| {
-        let t = tet_quality(q);
-        (ratio.max(t.radius_edge), angles.min(angle_quality(t.min_dihedral_deg, t.max_dihedral_deg)))
-    })
+/// [`fold_star`]'s step for [`smooth_radius_edge`]: the largest radius-edge
+/// ratio and the smallest [`angle_quality`] so far, with tet `q`.
+fn add_ratio((ratio, angles): (f64, f64), q: &[Point; 4]) -> (f64, f64) {
+    let t = tet_quality(q);
+    (ratio.max(t.radius_edge), angles.min(angle_quality(t.min_dihedral_deg, t.max_dihedral_deg)))
 }
 
 /// Smoothing for the radius-edge ratio, after [`smooth`]: the movable
@@ -299,10 +285,13 @@ pub(crate) fn smooth_radius_edge(
     // The cost is the star's largest ratio; a candidate must keep the star's
     // smallest angle quality at the floor (`bound_deg`, or what it was).
     let start = |nodes: &[Point], star: &[u32], v: u32, here: Point| {
-        star_ratio(nodes, cells, star, v, here, f64::INFINITY).map(|(ratio, angles)| (ratio, angles.min(bound_deg)))
+        fold_star((nodes, cells, star), v, here, f64::INFINITY, (0.0, f64::INFINITY), add_ratio)
+            .map(|(ratio, angles)| (ratio, angles.min(bound_deg)))
     };
     let cost = |nodes: &[Point], star: &[u32], v: u32, at: Point, floor: &f64| {
-        star_ratio(nodes, cells, star, v, at, max_volume).filter(|&(_, angles)| angles >= *floor).map(|(r, _)| r)
+        fold_star((nodes, cells, star), v, at, max_volume, (0.0, f64::INFINITY), add_ratio)
+            .filter(|&(_, angles)| angles >= *floor)
+            .map(|(r, _)| r)
     };
     smooth_with(nodes, cells, freedom, passes, 0x5EED, bad, start, cost)
 }
