@@ -13,7 +13,8 @@
 //!    of spacing `size_mm` (the long lattice edges; the short ones are `0.87 h`):
 //!    every boundary node lies on the input surface (a cut point of a lattice edge,
 //!    or a lattice vertex warped onto one), and the dihedral angles are proven to
-//!    lie in [10.7°, 164.8°] for the outer boundary's stencils. With
+//!    lie in [10.7°, 164.8°] for the outer boundary's stencils where the input
+//!    is flat at the lattice's scale (not across its creases: below). With
 //!    [`EnvelopeOptions::grade_levels`] > 0, on a **graded** lattice instead
 //!    (`graded.rs`): the BCC lattice refined by conforming longest-edge
 //!    bisection down to `size_mm / 2^levels` where the input's chord error at the
@@ -82,11 +83,12 @@
 //! teapot's graded maximum, BENCHMARKS.md session 19, is not reported). Cells cut by region interfaces and layer planes have no proven angle
 //! bound; the quality report measures them, and the final guard refuses what it
 //! cannot bring into [12°, 155°]. The outer stencils' proven bound [10.7°,
-//! 164.8°] is wider than the targets: a lattice tet whose four vertices are
-//! warped onto the input, one edge onto a crease, has the crease's interior
-//! angle there (the teapot at 0.25 mm: 158° at the 22° crease along the lid
-//! knob's seam, 157° at a 23° one along the handle's), which the guard's
-//! splits repair.
+//! 164.8°] is wider than the targets, and holds for an input flat at the
+//! lattice's scale only: a lattice tet whose four vertices are warped onto the
+//! input, one edge onto a crease, has the crease's interior angle there (the
+//! teapot at 0.25 mm: 158° at the 22° crease along the lid knob's seam, 157° at
+//! a 23° one along the handle's; a roof with a 10° crease: 170°), which the
+//! guard's splits repair (BENCHMARKS.md, session 20).
 
 //! ## Example
 //!
