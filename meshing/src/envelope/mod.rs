@@ -248,10 +248,11 @@ pub enum EnvelopeError {
         cause: String,
     },
     /// Tets outside the dihedral angle targets [12°, 155°] that the final guard
-    /// (flips, peeling of thin boundary slivers) could not repair: refused rather
-    /// than emitted.
+    /// (smoothing, flips, peeling of thin boundary slivers, edge splits) could
+    /// not repair: refused rather than emitted.
     #[error(
-        "{num_cells} tets have dihedral angles outside [12, 155] deg after the repair; the worst, tet {cell} \
+        "{num_cells} tets have dihedral angles outside [12, 155] deg after the repair (no smoothing move, flip, \
+         peeling of a thin boundary sliver or edge split improved them); the worst, tet {cell} \
          ({min_deg:.2}..{max_deg:.2} deg) at {centroid_mm:?} mm; try another --size-mm or --grade-levels"
     )]
     AngleGuard {
