@@ -1,6 +1,7 @@
 //! Envelope mode (isosurface stuffing on the generalized winding number): analytic
 //! shapes built here, and the shared fixtures in `<workspace>/../shared/data/meshes`
-//! (the clean bunny, the defective corpus, the layered bunny), read with `tobj`.
+//! (the clean bunny, the defective corpus, the layered bunny), read with `tobj`
+//! (in f32), the corpus tests' files with `tests/common`'s reader (in f64).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
