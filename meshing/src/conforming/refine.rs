@@ -163,7 +163,7 @@ impl Recovery {
         let mut good: Vec<[u32; 4]> = Vec::new();
         for _pass in 0..64 {
             stats.passes += 1;
-            let (inside, _) = interior_components(&self.dt, &self.face_owner);
+            let (inside, _) = interior_components(self);
             let pts = self.dt.points();
             let mut bad: Vec<(f64, u32, [u32; 4], bool, bool, f64)> = Vec::new();
             for &(t, v, _) in &inside {
