@@ -144,10 +144,13 @@
 //!    ratio 1.74 to 1.47; fandisk 2.23 to 1.74; bunny 1.75 to 1.41).
 //!
 //! Everything is deterministic (candidate points come from generators seeded by
-//! the tet's or vertex's indices). The one parallel step is the probing of a
-//! bad tet's candidate points (`refine.rs`): each verdict is a function of
-//! the tetrahedralization and the point, read in candidate order, so the
-//! result does not depend on the number of threads. The output's cells are
+//! the tet's or vertex's indices). Two steps run on both cores: the probing
+//! of a bad tet's candidate points (`refine.rs`: each verdict is a function
+//! of the tetrahedralization and the point, read in candidate order), and
+//! the judging of vertices in smoothing (`smooth.rs`: a batch of vertices
+//! judged against the positions at its start, those whose star moved since
+//! judged again, the moves made in vertex order), so the result does not
+//! depend on the number of threads. The output's cells are
 //! sorted by their corners (vertex indices, in insertion order), not taken in
 //! the order of their slots in the tetrahedralization: which slot a new tet
 //! gets depends on where the location walk of its point ended when the point
