@@ -59,41 +59,24 @@ pub struct SmoothStats {
 /// Candidate positions tried per vertex (12 left fandisk's worst tet at 166 deg).
 const TRIES: usize = 24;
 
-/// The smallest [`angle_quality`] of `star` with `v` at `at`, and its
-/// smallest and largest dihedral angle [deg]; `None` when a tet of it would
-/// not be positively oriented or would be larger than `max_volume`.
-fn star_min(
-    nodes: &[Point],
-    cells: &[[u32; 4]],
-    star: &[u32],
-    v: u32,
-    at: Point,
-    max_volume: f64,
-) -> Option<(f64, (f64, f64))> {
-    let mut worst = f64::INFINITY;
-    let mut range = (f64::INFINITY, f64::NEG_INFINITY);
-    for &c in star {
-        let q = cells[c as usize].map(|u| if u == v { at } else { nodes[u as usize] });
-        if orient3d(q[0], q[1], q[2], q[3]) != 1 {
-            return None;
-        }
-        if tet_volume(&q) > max_volume {
-            return None;
-        }
-        let (lo, hi) = dihedral_range_deg(&q);
-        range = (range.0.min(lo), range.1.max(hi));
-        worst = worst.min(angle_quality(lo, hi));
+/// The tet `c` of `cells` with its corner `v` at `at`, when it is positively
+/// oriented (exact `orient3d`) and not larger than `max_volume`.
+fn placed(nodes: &[Point], cells: &[[u32; 4]], c: u32, v: u32, at: Point, max_volume: f64) -> Option<[Point; 4]> {
+    let q = cells[c as usize].map(|u| if u == v { at } else { nodes[u as usize] });
+    if orient3d(q[0], q[1], q[2], q[3]) != 1 || tet_volume(&q) > max_volume {
+        return None;
     }
-    Some((worst, range))
+    Some(q)
 }
 
-/// [`star_min`] for a candidate place: the star's smallest [`angle_quality`]
-/// when it is over `floor` and its dihedral range within `range`; `None` as
-/// soon as a tet shows it is not (or is not positive, or is larger than
-/// `max_volume`). The same verdict as `star_min` and the checks after it,
-/// without the rest of the star once one tet refuses the place.
+/// The smallest [`angle_quality`] of `star` with `v` at `at`, and its
+/// smallest and largest dihedral angle [deg]; `None` when a tet of it would
+/// not be positively oriented or would be larger than `max_volume`, and, as
+/// soon as a tet shows it, when the smallest quality is not over `floor` or
+/// the angles are not within `range` (`f64::NEG_INFINITY` and the whole
+/// line: the full figures).
 #[allow(clippy::too_many_arguments)]
-fn star_min_over(
+fn star_min(
     nodes: &[Point],
     cells: &[[u32; 4]],
     star: &[u32],
@@ -102,21 +85,20 @@ fn star_min_over(
     max_volume: f64,
     floor: f64,
     range: (f64, f64),
-) -> Option<f64> {
+) -> Option<(f64, (f64, f64))> {
     let mut worst = f64::INFINITY;
+    let mut angles = (f64::INFINITY, f64::NEG_INFINITY);
     for &c in star {
-        let q = cells[c as usize].map(|u| if u == v { at } else { nodes[u as usize] });
-        if orient3d(q[0], q[1], q[2], q[3]) != 1 || tet_volume(&q) > max_volume {
-            return None;
-        }
+        let q = placed(nodes, cells, c, v, at, max_volume)?;
         let (lo, hi) = dihedral_range_deg(&q);
         let quality = angle_quality(lo, hi);
         if lo < range.0 || hi > range.1 || quality <= floor {
             return None;
         }
+        angles = (angles.0.min(lo), angles.1.max(hi));
         worst = worst.min(quality);
     }
-    Some(worst)
+    Some((worst, angles))
 }
 
 /// Whether the dihedral range `new` [deg] is within `old`: neither its
@@ -185,11 +167,12 @@ pub(crate) fn smooth(
     // The cost is the star's smallest quality, negated; a candidate must
     // keep the star's dihedral angles within their range where it is.
     let start = |nodes: &[Point], star: &[u32], v: u32, here: Point| {
-        star_min(nodes, cells, star, v, here, f64::INFINITY).map(|(q, range)| (-q, range))
+        let anything = (f64::NEG_INFINITY, f64::INFINITY);
+        star_min(nodes, cells, star, v, here, f64::INFINITY, f64::NEG_INFINITY, anything).map(|(q, range)| (-q, range))
     };
     // Beating cost `beat` means a smallest quality over `-beat`.
     let cost = |nodes: &[Point], star: &[u32], v: u32, at: Point, range: &(f64, f64), beat: f64| {
-        star_min_over(nodes, cells, star, v, at, max_volume, -beat, *range).map(|q| -q)
+        star_min(nodes, cells, star, v, at, max_volume, -beat, *range).map(|(q, _)| -q)
     };
     let worse = |q: &[Point; 4]| {
         let (lo, hi) = dihedral_range_deg(q);
@@ -380,10 +363,7 @@ fn star_ratio(
     let mut ratio: f64 = 0.0;
     let mut angles = f64::INFINITY;
     for &c in star {
-        let q = cells[c as usize].map(|u| if u == v { at } else { nodes[u as usize] });
-        if orient3d(q[0], q[1], q[2], q[3]) != 1 || tet_volume(&q) > max_volume {
-            return None;
-        }
+        let q = placed(nodes, cells, c, v, at, max_volume)?;
         ratio = ratio.max(radius_edge_ratio(&q));
         if ratio >= beat && beat < f64::INFINITY {
             return None;
