@@ -163,6 +163,20 @@ pub fn tet_volume(p: &[P; 4]) -> f64 {
 /// face counts as an angle of 0 (a cosine of 1), as there; NaN cosines are
 /// ignored, as `f64::min` ignores them there.
 pub fn dihedral_range_deg(p: &[P; 4]) -> (f64, f64) {
+    let (lo, hi) = dihedral_cos_range(p);
+    // No finite cosine: `tet_quality`'s starting values.
+    let min_deg = if hi == f64::NEG_INFINITY { f64::INFINITY } else { hi.acos().to_degrees() };
+    let max_deg = if lo == f64::INFINITY { 0.0 } else { lo.acos().to_degrees() };
+    (min_deg, max_deg)
+}
+
+/// The smallest and largest cosine of the dihedral angles of the tet with
+/// corners `p` (NaN cosines ignored; infinite, of the wrong sign, when all
+/// are NaN): what [`dihedral_range_deg`] takes the `acos` of. The smallest
+/// dihedral angle of several tets is the `acos` of the largest of their
+/// largest cosines, bit for bit (`acos` and the conversion to degrees are
+/// monotone), for loops over stars.
+pub fn dihedral_cos_range(p: &[P; 4]) -> (f64, f64) {
     let mut lo = f64::INFINITY;
     let mut hi = f64::NEG_INFINITY;
     for edge in EDGES {
@@ -170,10 +184,7 @@ pub fn dihedral_range_deg(p: &[P; 4]) -> (f64, f64) {
         lo = lo.min(cos);
         hi = hi.max(cos);
     }
-    // No finite cosine: `tet_quality`'s starting values.
-    let min_deg = if hi == f64::NEG_INFINITY { f64::INFINITY } else { hi.acos().to_degrees() };
-    let max_deg = if lo == f64::INFINITY { 0.0 } else { lo.acos().to_degrees() };
-    (min_deg, max_deg)
+    (lo, hi)
 }
 
 /// One region's share of the mesh.
@@ -478,6 +489,12 @@ mod tests {
             assert_eq!(hi.to_bits(), q.max_dihedral_deg.to_bits(), "{p:?}: {hi} against {q:?}");
             let re = radius_edge_ratio(p);
             assert_eq!(re.to_bits(), q.radius_edge.to_bits(), "{p:?}: {re} against {q:?}");
+        }
+        // The smallest angle of a group of tets (a star) from its largest cosine.
+        for star in cases.chunks(7) {
+            let min = star.iter().map(|p| tet_quality(p).min_dihedral_deg).fold(f64::INFINITY, f64::min);
+            let cos = star.iter().map(|p| dihedral_cos_range(p).1).fold(f64::NEG_INFINITY, f64::max);
+            assert_eq!(min.to_bits(), cos.acos().to_degrees().to_bits(), "{star:?}");
         }
     }
 
