@@ -638,10 +638,14 @@ pub(crate) fn interior_components(rec: &Recovery) -> (Vec<(u32, [u32; 4], u32)>,
     const UNSEEN: u32 = u32::MAX;
     const OUTSIDE: u32 = u32::MAX - 1;
     let mut comp = vec![UNSEEN; slots];
-    let face_key = |v: [u32; 4], i: usize| {
+    // Whether face `i` of the tet with corners `v` is a subfacet (sorted for
+    // the look-up only when every corner is on the surface).
+    let subfacet = |v: [u32; 4], i: usize| {
         let mut k = FACE[i].map(|j| v[j]);
-        k.sort_unstable();
-        k
+        k.iter().all(|&x| x != GHOST && rec.on_surface(x)) && {
+            k.sort_unstable();
+            constrained.contains_key(&k)
+        }
     };
     let flood = |seeds: Vec<u32>, label: u32, comp: &mut Vec<u32>| {
         let mut stack = seeds;
@@ -655,8 +659,7 @@ pub(crate) fn interior_components(rec: &Recovery) -> (Vec<(u32, [u32; 4], u32)>,
                 if comp[n[i] as usize] != UNSEEN {
                     continue;
                 }
-                let k = face_key(v, i);
-                if !k.contains(&GHOST) && k.iter().all(|&x| rec.on_surface(x)) && constrained.contains_key(&k) {
+                if subfacet(v, i) {
                     continue;
                 }
                 comp[n[i] as usize] = label;
