@@ -388,9 +388,10 @@ fn the_bunny_is_meshed_with_its_exact_boundary() {
 
 /// The same input gives bit-identical output with 1 and 2 threads: the bad
 /// tets' candidates are probed in parallel and their verdicts read in
-/// candidate order (the bunny at 0.5 mm: refinement, facet refinement, edge
-/// removal and smoothing for the radius-edge ratio all run; edge removal leaves
-/// sliver smoothing nothing to do there).
+/// candidate order, and smoothing judges batches of vertices in parallel and
+/// moves them in vertex order (the bunny at 0.5 mm: refinement, facet
+/// refinement, edge removal and smoothing for the radius-edge ratio all run;
+/// edge removal leaves sliver smoothing nothing to do there).
 #[test]
 fn conforming_output_does_not_depend_on_the_thread_count() {
     let s = read_obj("meshes/npm_bunny.obj");
