@@ -213,6 +213,7 @@ fn smooth_with<S: Send>(
     start: impl Fn(&[Point], &[u32], u32, Point) -> Option<(f64, S)> + Sync,
     cost: impl Fn(&[Point], &[u32], u32, Point, &S, f64) -> Option<f64> + Sync,
 ) -> SmoothStats {
+    assert!(batch > 0, "a batch of at least one vertex");
     let mut stats = SmoothStats::default();
     let mut stars: Vec<Vec<u32>> = vec![Vec::new(); nodes.len()];
     for (c, cell) in cells.iter().enumerate() {

@@ -20,14 +20,15 @@
 //! so no third-level descendant has the two new body-centre vertices a BCC tet
 //! of the half lattice needs): Labelle and Shewchuk's angle proof does not carry
 //! over. All vertices sit on dyadic refinements of the lattice, kept as exact
-//! integers (in units of `h / 2^(3 (levels + 1) + 1)`), so lengths compare exactly
+//! integers (in units of `h / 2^(3 (MAX_LEVELS + 1) + 1)`), so lengths compare exactly
 //! and the longest edge of a tet is chosen by (squared length, larger first;
 //! then the smaller pair of vertex ids): a function of the edge alone, so that
 //! all tets around an edge agree.
 //!
 //! ## The sizing
 //!
-//! A cell is cut while its longest edge `L` exceeds `h / 2^levels` and the chord
+//! A cell is cut while its longest edge `L` exceeds `h / 2^levels` (at a rim,
+//! `h / 2^MAX_LEVELS`: below) and the chord
 //! error of a surface patch of that size, estimated from the input's triangles
 //! within the cell's circumscribing ball (centroid, farthest corner), exceeds the
 //! tolerance: with `n̄` their area-weighted mean unit normal and `θ` the largest
@@ -185,8 +186,9 @@ impl GradedLattice {
                     let (a, b) = r.longest(c);
                     let l2 = r.len2(a, b);
                     let p = c.map(position);
-                    (l2 > min_long2 && too_coarse(surface, rims, &p, tol))
-                        || (l2 > min_long2_rim && meets_rim(rims, &p) && too_coarse(surface, rims, &p, tol))
+                    // Above the smallest size, or above the rims' smallest at a rim.
+                    let may_cut = l2 > min_long2 || (l2 > min_long2_rim && meets_rim(rims, &p));
+                    may_cut && too_coarse(surface, rims, &p, tol)
                 })
                 .collect();
             let marked: Vec<[u32; 4]> =

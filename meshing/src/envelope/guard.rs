@@ -58,7 +58,7 @@ pub(crate) struct GuardStats {
     pub flips: usize,
     /// Boundary tets removed.
     pub peeled: usize,
-    /// Edges split at their midpoints.
+    /// Edges split (at their midpoints, or off the line for an edge inside one region).
     pub splits: usize,
 }
 

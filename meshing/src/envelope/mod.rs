@@ -412,13 +412,19 @@ pub struct EnvelopeStats {
     pub fit_snaps: usize,
     /// Candidates for which the fitting's angle guard refused every split.
     pub fit_refused: usize,
+    /// The smallest and largest dihedral angle [deg] of the mesh the final guard
+    /// was handed (after stuffing, smoothing and fitting): on the uniform
+    /// lattice, within the stuffing's proven bounds wherever the input is flat at
+    /// the lattice's scale (module docs).
+    pub dihedral_before_guard_deg: [f64; 2],
     /// Tets outside [12°, 155°] before the final guard.
     pub guard_bad: usize,
     /// Flips (2-3, 3-2) taken by the final guard.
     pub guard_flips: usize,
     /// Thin boundary tets removed by the final guard.
     pub guard_peeled: usize,
-    /// Edges split at their midpoints by the final guard.
+    /// Edges split by the final guard (at their midpoints, or off the line for
+    /// an edge inside one region: `guard.rs`).
     pub guard_splits: usize,
     /// Wall time [s].
     pub time_s: f64,
@@ -604,6 +610,12 @@ pub fn envelope_mesh_with_progress(
     // nodes now sliding along the input like boundary ones (they lie on it; layer
     // planes are not input, so their nodes stay).
     progress("angle guard", 0.0);
+    stats.dihedral_before_guard_deg = mesh
+        .cells
+        .par_iter()
+        .map(|c| crate::quality::dihedral_range_deg(&c.map(|v| mesh.nodes[v as usize])))
+        .reduce(|| (f64::INFINITY, f64::NEG_INFINITY), |a, b| (a.0.min(b.0), a.1.max(b.1)))
+        .into();
     if !guard::bad_cells(&mesh.nodes, &mesh.cells).is_empty() {
         let slide = self::mobility(&mesh, winding.tree(), eps, layer_planes.is_empty());
         for _ in 0..3 {
