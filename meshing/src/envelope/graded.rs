@@ -83,6 +83,10 @@ const BITS_PER_LEVEL: u32 = 3;
 /// The most halvings of the base spacing (the smallest long edge is `h / 2^MAX_LEVELS`).
 pub(crate) const MAX_LEVELS: u32 = 8;
 
+/// A cell is cut while the solid or a gap of it is thinner than this many times
+/// its longest edge near it (see the module docs).
+pub(crate) const THIN_FACTOR: f64 = 1.0;
+
 /// Warping threshold on axis-parallel edges of the graded lattice (measured, not
 /// proven: see the module docs).
 pub(crate) const ALPHA_AXIS: f64 = 0.2;
@@ -145,6 +149,8 @@ impl GradedLattice {
         // the exact comparisons: any edge longer than this is cut).
         let min_long = (0.5 * h / unit) / (1u64 << levels) as f64 * 2.0;
         let min_long2 = (min_long * min_long * 1.000_001) as i128;
+        // The offset of the thin test's probes off the input [mm].
+        let offset = 1e-4 * min_long * unit;
         let mut todo: Vec<u32> = (0..r.cells.cells.len() as u32).collect();
         while !todo.is_empty() && r.coords.len() < max_vertices {
             let position = |v: u32| g.position_of(&r.coords, v);
@@ -153,7 +159,7 @@ impl GradedLattice {
                 .map(|&k| {
                     let c = r.cells.cells[k as usize];
                     let (a, b) = r.longest(c);
-                    r.len2(a, b) > min_long2 && too_coarse(surface, rims, &c.map(position), tol)
+                    r.len2(a, b) > min_long2 && too_coarse(surface, rims, &c.map(position), tol, offset)
                 })
                 .collect();
             let marked: Vec<[u32; 4]> =
@@ -236,7 +242,25 @@ impl Grid for GradedLattice {
 /// Whether a cell with corners `p` is coarser than the surface near it allows
 /// (see the module docs); `rims`: triangles whose first edge is a border edge of
 /// the input.
-fn too_coarse(surface: &TriangleTree, rims: &TriangleTree, p: &[P; 4], tol: f64) -> bool {
+fn too_coarse(surface: &TriangleTree, rims: &TriangleTree, p: &[P; 4], tol: f64, offset: f64) -> bool {
+    chord_too_large(surface, rims, p, tol) || thinner_than_cell(surface, p, offset)
+}
+
+/// Whether the solid or a gap of it is thinner than [`THIN_FACTOR`] times the
+/// longest edge of the cell with corners `p`, across the input point nearest to
+/// its centroid within its circumscribing ball ([`TriangleTree::thin_across`];
+/// `offset` [mm]: its probes' offset off the input). One point per cell: the
+/// cells' centroids sample the input at about their own size as they shrink.
+fn thinner_than_cell(surface: &TriangleTree, p: &[P; 4], offset: f64) -> bool {
+    let (c, radius, longest) = ball_and_longest(p);
+    surface
+        .closest_point_and_normal(c, radius)
+        .and_then(|(x, n)| surface.thin_across(x, n, THIN_FACTOR * longest, offset))
+        .is_some_and(|(part, gap)| part.is_some() || gap.is_some())
+}
+
+/// The centroid of a cell with corners `p`, the radius of its ball about it and its longest edge [mm].
+fn ball_and_longest(p: &[P; 4]) -> (P, f64, f64) {
     let c = scale([0, 1, 2].map(|k| p[0][k] + p[1][k] + p[2][k] + p[3][k]), 0.25);
     let radius = p.iter().map(|&q| norm(sub(q, c))).fold(0.0, f64::max);
     let mut longest: f64 = 0.0;
@@ -245,6 +269,12 @@ fn too_coarse(surface: &TriangleTree, rims: &TriangleTree, p: &[P; 4], tol: f64)
             longest = longest.max(norm(sub(p[i], p[j])));
         }
     }
+    (c, radius, longest)
+}
+
+/// The chord-error part of [`too_coarse`] (see the module docs).
+fn chord_too_large(surface: &TriangleTree, rims: &TriangleTree, p: &[P; 4], tol: f64) -> bool {
+    let (c, radius, longest) = ball_and_longest(p);
     // A border edge in the ball: the crease where the solid leaves the input for the cap over a hole.
     let mut on_rim = false;
     rims.for_each_within(c, radius, |t| on_rim |= norm(sub(closest_on_segment(t[0], t[1], c), c)) <= radius);

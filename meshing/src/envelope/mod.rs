@@ -75,9 +75,11 @@
 //! the inside) and reported as [`EnvelopeWarning::ThinFeature`], never dropped
 //! silently; likewise a gap narrower than that (outward rays that enter the
 //! inside again within `h / 2`: [`EnvelopeWarning::ThinGap`]), which may be
-//! closed. Both test one ray per input triangle, from its centroid: a thin
-//! part or gap that no centroid faces is not seen (the crack beside the
-//! teapot's graded maximum, BENCHMARKS.md session 19, is not reported). Cells cut by region interfaces and layer planes have no proven angle
+//! closed. Both test rays both ways from a grid of points on each input
+//! triangle (spacing about `h / 2`), the graded lattice's thin test
+//! (`TriangleTree::thin_across`): the solid's wall may be the level set
+//! `w = 1/2` (the teapot handle's open mouth against the body, BENCHMARKS.md
+//! session 20, now reported as a thin gap). Cells cut by region interfaces and layer planes have no proven angle
 //! bound; the quality report measures them, and the final guard refuses what it
 //! cannot bring into [12°, 155°] (measured: the uniform lattice on the open teapot
 //! at 0.25 mm, 2 tets at 158° at the stem of the lid's knob, is refused).
@@ -699,55 +701,48 @@ fn bounding_vertices(surface: &Surface, winding: &WindingNumber, diag: f64) -> V
     surface.vertices.iter().zip(&used).filter(|(_, &u)| u).map(|(p, _)| *p).collect()
 }
 
-/// Triangles whose inward ray leaves the inside within `h / 2` (thin parts), or
-/// with `gaps`, whose outward ray enters the inside again within `h / 2` (thin
-/// gaps), grouped by region.
+/// Triangles across which the solid ends again within `h / 2` (thin parts), or
+/// with `gaps`, its outside (thin gaps), grouped by region: the test of the
+/// graded lattice's sizing ([`TriangleTree::thin_across`], a thin wall of the
+/// solid may be the level set `w = 1/2` in an open tube's mouth) at the
+/// centroids of the sub-triangles of a grid of spacing about `h / 2` on each
+/// triangle (at most 8 intervals an edge), so that a thin part or gap that
+/// only part of a large triangle faces is seen.
 fn thin_features(surface: &Surface, winding: &WindingNumber, h: f64, diag: f64, gaps: bool) -> Vec<EnvelopeWarning> {
     let tree = winding.tree();
     let nreg = num_regions(surface);
-    let flip: Vec<bool> = (0..nreg as u32).map(|r| surface.signed_volume(Some(r)) < 0.0).collect();
     let reach = 0.5 * h;
-    let min_gap = 1e-7 * diag;
+    let offset = 1e-7 * diag;
     let hits: Vec<Option<(f64, f64)>> = surface
         .triangles
         .par_iter()
-        .enumerate()
-        .map(|(i, t)| {
-            let r = surface.triangle_regions.get(i).copied().unwrap_or(0) as usize;
+        .map(|t| {
             let p = t.map(|v| surface.vertices[v as usize]);
-            let av = cross(sub(p[1], p[0]), sub(p[2], p[0]));
-            let len = norm(av);
-            if !(len > 0.0) {
-                return None;
-            }
-            let mut n = scale(av, 1.0 / len);
-            if flip.get(r).copied().unwrap_or(false) {
-                n = scale(n, -1.0);
-            }
-            let c = scale(
-                [p[0][0] + p[1][0] + p[2][0], p[0][1] + p[1][1] + p[2][1], p[0][2] + p[1][2] + p[2][2]],
-                1.0 / 3.0,
-            );
-            // Inward (-n) for parts, outward (+n) for gaps. Start just off the
-            // triangle, so that it is not hit itself.
-            let n = if gaps { n } else { scale(n, -1.0) };
-            let from = add(c, scale(n, min_gap));
-            let to = add(c, scale(n, reach));
-            // The inside (outside) must be there at all (an interior sheet of overlapping parts is not thin).
-            if winding.is_inside(from) == gaps {
-                return None;
-            }
-            for (s, _) in tree.segment_crossings(from, to) {
-                let d = min_gap + s * (reach - min_gap);
-                if d < 2.0 * min_gap {
-                    continue;
-                }
-                let beyond = add(c, scale(n, d + min_gap));
-                if winding.is_inside(beyond) == gaps {
-                    return Some((d, 0.5 * len));
+            let n = crate::distance::unit_normal(&p)?;
+            let area = 0.5 * norm(cross(sub(p[1], p[0]), sub(p[2], p[0])));
+            let longest = (0..3).map(|i| norm(sub(p[(i + 1) % 3], p[i]))).fold(0.0, f64::max);
+            let m = ((longest / reach).ceil() as usize).clamp(1, 8);
+            let at = |u: f64, v: f64| {
+                let (u, v) = (u / m as f64, v / m as f64);
+                add(p[0], add(scale(sub(p[1], p[0]), u), scale(sub(p[2], p[0]), v)))
+            };
+            let mut thinnest: Option<f64> = None;
+            for i in 0..m {
+                for j in 0..m - i {
+                    let mut points = vec![at(i as f64 + 1.0 / 3.0, j as f64 + 1.0 / 3.0)];
+                    if i + j + 1 < m {
+                        points.push(at(i as f64 + 2.0 / 3.0, j as f64 + 2.0 / 3.0));
+                    }
+                    for x in points {
+                        if let Some((part, gap)) = tree.thin_across(x, n, reach, offset) {
+                            if let Some(d) = if gaps { gap } else { part } {
+                                thinnest = Some(thinnest.map_or(d, |t: f64| t.min(d)));
+                            }
+                        }
+                    }
                 }
             }
-            None
+            thinnest.map(|d| (d, area))
         })
         .collect();
     let mut out = Vec::new();
