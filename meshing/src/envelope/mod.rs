@@ -701,24 +701,30 @@ fn bounding_vertices(surface: &Surface, winding: &WindingNumber, diag: f64) -> V
     surface.vertices.iter().zip(&used).filter(|(_, &u)| u).map(|(p, _)| *p).collect()
 }
 
-/// Triangles across which the solid ends again within `h / 2` (thin parts), or
-/// with `gaps`, its outside (thin gaps), grouped by region: the test of the
-/// graded lattice's sizing ([`TriangleTree::thin_across`], a thin wall of the
-/// solid may be the level set `w = 1/2` in an open tube's mouth) at the
-/// centroids of the sub-triangles of a grid of spacing about `h / 2` on each
-/// triangle (at most 8 intervals an edge), so that a thin part or gap that
-/// only part of a large triangle faces is seen.
+/// Triangles whose inward ray (from the inside) leaves the inside within `h / 2`
+/// (thin parts), or with `gaps`, whose outward ray (from the outside) enters it
+/// again within `h / 2` (thin gaps), grouped by region: the ray test of the
+/// graded lattice's sizing ([`TriangleTree::thin_along`]: a thin wall may be
+/// the level set `w = 1/2` in an open tube's mouth), from the centroids of the
+/// sub-triangles of a grid of spacing about `h / 2` on each triangle (at most 8
+/// intervals an edge), so that a thin part or gap that only part of a large
+/// triangle faces is seen.
 fn thin_features(surface: &Surface, winding: &WindingNumber, h: f64, diag: f64, gaps: bool) -> Vec<EnvelopeWarning> {
     let tree = winding.tree();
     let nreg = num_regions(surface);
+    let flip: Vec<bool> = (0..nreg as u32).map(|r| surface.signed_volume(Some(r)) < 0.0).collect();
     let reach = 0.5 * h;
     let offset = 1e-7 * diag;
     let hits: Vec<Option<(f64, f64)>> = surface
         .triangles
         .par_iter()
-        .map(|t| {
+        .enumerate()
+        .map(|(i, t)| {
+            let r = surface.triangle_regions.get(i).copied().unwrap_or(0) as usize;
             let p = t.map(|v| surface.vertices[v as usize]);
             let n = crate::distance::unit_normal(&p)?;
+            // Outward for gaps, inward for parts.
+            let dir = if flip.get(r).copied().unwrap_or(false) != gaps { n } else { scale(n, -1.0) };
             let area = 0.5 * norm(cross(sub(p[1], p[0]), sub(p[2], p[0])));
             let longest = (0..3).map(|i| norm(sub(p[(i + 1) % 3], p[i]))).fold(0.0, f64::max);
             let m = ((longest / reach).ceil() as usize).clamp(1, 8);
@@ -734,10 +740,12 @@ fn thin_features(surface: &Surface, winding: &WindingNumber, h: f64, diag: f64, 
                         points.push(at(i as f64 + 2.0 / 3.0, j as f64 + 2.0 / 3.0));
                     }
                     for x in points {
-                        if let Some((part, gap)) = tree.thin_across(x, n, reach, offset) {
-                            if let Some(d) = if gaps { gap } else { part } {
-                                thinnest = Some(thinnest.map_or(d, |t: f64| t.min(d)));
-                            }
+                        // The inside (outside) must be there at all (an interior sheet of overlapping parts is not thin).
+                        if tree.is_inside_checked(add(x, scale(dir, offset))) == gaps {
+                            continue;
+                        }
+                        if let Some(d) = tree.thin_along(x, dir, reach, offset) {
+                            thinnest = Some(thinnest.map_or(d, |t: f64| t.min(d)));
                         }
                     }
                 }

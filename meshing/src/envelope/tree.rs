@@ -333,35 +333,41 @@ impl TriangleTree {
         if front == back {
             return None;
         }
-        let along = |sign: f64, start: bool| -> Option<f64> {
-            let mut first: Option<f64> = None;
-            for (s, _) in self.segment_crossings(at(sign * offset), at(sign * reach)) {
-                let d = offset + s * (reach - offset);
-                if d < 2.0 * offset {
-                    continue;
+        // The inside is on the side of `front` when it is inside.
+        let inside = if front { n } else { scale(n, -1.0) };
+        Some((self.thin_along(x, inside, reach, offset), self.thin_along(x, scale(inside, -1.0), reach, offset)))
+    }
+
+    /// The first distance within `reach` [mm] at which the inside test along the
+    /// ray from `x` in the unit direction `dir` turns from its state at
+    /// `offset` (see [`Self::thin_across`]).
+    pub(crate) fn thin_along(&self, x: P, dir: P, reach: f64, offset: f64) -> Option<f64> {
+        let at = |d: f64| add(x, scale(dir, d));
+        let start = self.is_inside_checked(at(offset));
+        let mut first: Option<f64> = None;
+        for (s, _) in self.segment_crossings(at(offset), at(reach)) {
+            let d = offset + s * (reach - offset);
+            if d < 2.0 * offset {
+                continue;
+            }
+            if self.is_inside_checked(at(d + offset)) != start {
+                first = Some(d);
+                break;
+            }
+        }
+        if (self.winding_number(at(offset)) - 0.5).abs() < crate::winding::NEAR_HALF {
+            for k in 1..=8 {
+                let d = reach * k as f64 / 8.0;
+                if first.is_some_and(|f| f <= d) {
+                    break;
                 }
-                if self.is_inside_checked(at(sign * (d + offset))) != start {
+                if self.is_inside_checked(at(d)) != start {
                     first = Some(d);
                     break;
                 }
             }
-            if (self.winding_number(at(sign * offset)) - 0.5).abs() < crate::winding::NEAR_HALF {
-                for k in 1..=8 {
-                    let d = reach * k as f64 / 8.0;
-                    if first.is_some_and(|f| f <= d) {
-                        break;
-                    }
-                    if self.is_inside_checked(at(sign * d)) != start {
-                        first = Some(d);
-                        break;
-                    }
-                }
-            }
-            first
-        };
-        // The inside is on the side of `front` when it is inside.
-        let (inside_sign, outside_sign) = if front { (1.0, -1.0) } else { (-1.0, 1.0) };
-        Some((along(inside_sign, true), along(outside_sign, false)))
+        }
+        first
     }
 
     /// The closest point within `max_distance`, its distance and its triangle's index in tree order.
