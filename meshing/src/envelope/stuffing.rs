@@ -1,7 +1,9 @@
 //! Isosurface stuffing (Labelle and Shewchuk 2007, "Isosurface Stuffing: Fast
 //! Tetrahedral Meshes with Good Dihedral Angles"), uniform BCC lattice.
 //!
-//! 1. **Signs.** Each lattice vertex is inside (`-`, winding number > 1/2),
+//! 1. **Signs.** Each lattice vertex is inside (`-`, winding number > 1/2,
+//!    summed exactly where the fast value is within 0.1 of 1/2, as the quality
+//!    report's distance decides it: `TriangleTree::is_inside_checked`),
 //!    outside (`+`) or on the surface (`0`, closer than `eps` to a triangle).
 //! 2. **Cut points.** On each lattice edge from a `-` to a `+` vertex, the point
 //!    where the inside test changes, walking from the inside end: a crossing with
