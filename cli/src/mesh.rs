@@ -104,7 +104,7 @@ pub struct MeshArgs {
     pub layers_mm: Vec<f64>,
 
     /// Envelope mode (ignored by --mode conforming): refine the lattice by bisection down to --size-mm / 2^N
-    /// where the surface is creased, curved or thin (0: the uniform lattice;
+    /// where the surface is creased, curved or thin (deeper at the rims of holes, as the grading tolerance asks; 0: the uniform lattice;
     /// at most 8). Grading brings the boundary within 1e-3 of the diagonal on
     /// creased input (the bunny) at several times the uniform lattice's time.
     #[arg(long = "grade-levels", value_name = "N", default_value_t = DEFAULT_GRADE_LEVELS,

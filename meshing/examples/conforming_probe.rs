@@ -118,7 +118,7 @@ fn main() {
                 let r = report(&m.mesh, &s, t);
                 println!(
                     "h {h:?} q {q} sliver {sliver}: {} tets, dihedral {:.2}..{:.2}, <10deg {:.3} %, r-e max {:.2} p99.9 {:.3}, \
-                     vol err {:.1e}, Hausdorff {:.1e}, {t:.2} s\n  {:?}\n  {:?}\n  {:?}",
+                     vol err {:.1e}, Hausdorff {:.1e}, {t:.2} s\n  {:?}\n  {:?}\n  {:?}\n  {:?}\n  {:?}\n  {:?}",
                     r.num_cells,
                     r.min_dihedral_deg,
                     r.max_dihedral_deg,
@@ -129,7 +129,10 @@ fn main() {
                     r.hausdorff_relative,
                     m.stats.refinement,
                     m.stats.flips,
-                    m.stats.stars
+                    m.stats.stars,
+                    m.stats.smoothing,
+                    m.stats.radius_edge_smoothing,
+                    m.stats.stage_times
                 );
             }
             Err(e) => println!("h {h:?}: {e}"),

@@ -105,18 +105,9 @@ pub fn tet_quality(p: &[P; 4]) -> TetQuality {
         min_d = min_d.min(angle);
         max_d = max_d.max(angle);
     }
-    let a = sub(p[1], p[0]);
-    let b = sub(p[2], p[0]);
-    let c = sub(p[3], p[0]);
-    let det = dot(a, cross(b, c));
+    let (circumradius, det) = circumradius(p);
     // `tet_volume`'s expression, bit for bit.
     let volume = det / 6.0;
-    let num = [
-        dot(a, a) * cross(b, c)[0] + dot(b, b) * cross(c, a)[0] + dot(c, c) * cross(a, b)[0],
-        dot(a, a) * cross(b, c)[1] + dot(b, b) * cross(c, a)[1] + dot(c, c) * cross(a, b)[1],
-        dot(a, a) * cross(b, c)[2] + dot(b, b) * cross(c, a)[2] + dot(c, c) * cross(a, b)[2],
-    ];
-    let circumradius = if det != 0.0 { norm(num) / (2.0 * det.abs()) } else { f64::INFINITY };
     let area: f64 = (0..4)
         .map(|i| {
             let f = [p[(i + 1) % 4], p[(i + 2) % 4], p[(i + 3) % 4]];
@@ -127,6 +118,34 @@ pub fn tet_quality(p: &[P; 4]) -> TetQuality {
     let radius_ratio = if circumradius.is_finite() && circumradius > 0.0 { 3.0 * inradius / circumradius } else { 0.0 };
     let radius_edge = if l_min > 0.0 { circumradius / l_min } else { f64::INFINITY };
     TetQuality { min_dihedral_deg: min_d, max_dihedral_deg: max_d, radius_edge, radius_ratio, volume_mm3: volume }
+}
+
+/// The circumradius [mm] of the tet with corners `p` (infinite when it is
+/// flat) and the determinant of its edge vectors from `p[0]` (6 times its
+/// signed volume, `tet_volume`'s expression).
+fn circumradius(p: &[P; 4]) -> (f64, f64) {
+    let a = sub(p[1], p[0]);
+    let b = sub(p[2], p[0]);
+    let c = sub(p[3], p[0]);
+    let det = dot(a, cross(b, c));
+    let num = [
+        dot(a, a) * cross(b, c)[0] + dot(b, b) * cross(c, a)[0] + dot(c, c) * cross(a, b)[0],
+        dot(a, a) * cross(b, c)[1] + dot(b, b) * cross(c, a)[1] + dot(c, c) * cross(a, b)[1],
+        dot(a, a) * cross(b, c)[2] + dot(b, b) * cross(c, a)[2] + dot(c, c) * cross(a, b)[2],
+    ];
+    (if det != 0.0 { norm(num) / (2.0 * det.abs()) } else { f64::INFINITY }, det)
+}
+
+/// The radius-edge ratio of the tet with corners `p`: [`tet_quality`]'s
+/// `radius_edge`, bit for bit, without the angles (for the smoothing loops
+/// that need only the ratio).
+pub fn radius_edge_ratio(p: &[P; 4]) -> f64 {
+    let l_min = EDGES.iter().map(|&(i, j, _, _)| norm(sub(p[j], p[i]))).fold(f64::INFINITY, f64::min);
+    if l_min > 0.0 {
+        circumradius(p).0 / l_min
+    } else {
+        f64::INFINITY
+    }
 }
 
 /// The signed volume [mm^3] of the tet with corners `p` (`tet_quality`'s `volume_mm3`).
@@ -144,6 +163,20 @@ pub fn tet_volume(p: &[P; 4]) -> f64 {
 /// face counts as an angle of 0 (a cosine of 1), as there; NaN cosines are
 /// ignored, as `f64::min` ignores them there.
 pub fn dihedral_range_deg(p: &[P; 4]) -> (f64, f64) {
+    let (lo, hi) = dihedral_cos_range(p);
+    // No finite cosine: `tet_quality`'s starting values.
+    let min_deg = if hi == f64::NEG_INFINITY { f64::INFINITY } else { hi.acos().to_degrees() };
+    let max_deg = if lo == f64::INFINITY { 0.0 } else { lo.acos().to_degrees() };
+    (min_deg, max_deg)
+}
+
+/// The smallest and largest cosine of the dihedral angles of the tet with
+/// corners `p` (NaN cosines ignored; infinite, of the wrong sign, when all
+/// are NaN): what [`dihedral_range_deg`] takes the `acos` of. The smallest
+/// dihedral angle of several tets is the `acos` of the largest of their
+/// largest cosines, bit for bit (`acos` and the conversion to degrees are
+/// monotone), for loops over stars.
+pub fn dihedral_cos_range(p: &[P; 4]) -> (f64, f64) {
     let mut lo = f64::INFINITY;
     let mut hi = f64::NEG_INFINITY;
     for edge in EDGES {
@@ -151,10 +184,7 @@ pub fn dihedral_range_deg(p: &[P; 4]) -> (f64, f64) {
         lo = lo.min(cos);
         hi = hi.max(cos);
     }
-    // No finite cosine: `tet_quality`'s starting values.
-    let min_deg = if hi == f64::NEG_INFINITY { f64::INFINITY } else { hi.acos().to_degrees() };
-    let max_deg = if lo == f64::INFINITY { 0.0 } else { lo.acos().to_degrees() };
-    (min_deg, max_deg)
+    (lo, hi)
 }
 
 /// One region's share of the mesh.
@@ -431,7 +461,7 @@ mod tests {
     }
 
     #[test]
-    fn dihedral_range_is_tet_qualitys_angles_bit_for_bit() {
+    fn dihedral_range_and_radius_edge_ratio_are_tet_qualitys_bit_for_bit() {
         // Random tets, slivers (a corner near the opposite face), needles and
         // degenerate ones (repeated corners, collinear corners).
         let mut state = 0x1234_5678_9abc_def0u64;
@@ -457,6 +487,14 @@ mod tests {
             let (lo, hi) = dihedral_range_deg(p);
             assert_eq!(lo.to_bits(), q.min_dihedral_deg.to_bits(), "{p:?}: {lo} against {q:?}");
             assert_eq!(hi.to_bits(), q.max_dihedral_deg.to_bits(), "{p:?}: {hi} against {q:?}");
+            let re = radius_edge_ratio(p);
+            assert_eq!(re.to_bits(), q.radius_edge.to_bits(), "{p:?}: {re} against {q:?}");
+        }
+        // The smallest angle of a group of tets (a star) from its largest cosine.
+        for star in cases.chunks(7) {
+            let min = star.iter().map(|p| tet_quality(p).min_dihedral_deg).fold(f64::INFINITY, f64::min);
+            let cos = star.iter().map(|p| dihedral_cos_range(p).1).fold(f64::NEG_INFINITY, f64::max);
+            assert_eq!(min.to_bits(), cos.acos().to_degrees().to_bits(), "{star:?}");
         }
     }
 

@@ -388,9 +388,10 @@ fn the_bunny_is_meshed_with_its_exact_boundary() {
 
 /// The same input gives bit-identical output with 1 and 2 threads: the bad
 /// tets' candidates are probed in parallel and their verdicts read in
-/// candidate order (the bunny at 0.5 mm: refinement, facet refinement, edge
-/// removal and smoothing for the radius-edge ratio all run; edge removal leaves
-/// sliver smoothing nothing to do there).
+/// candidate order, and smoothing judges batches of vertices in parallel and
+/// moves them in vertex order (the bunny at 0.5 mm: refinement, facet
+/// refinement, edge removal and smoothing for the radius-edge ratio all run;
+/// edge removal leaves sliver smoothing nothing to do there).
 #[test]
 fn conforming_output_does_not_depend_on_the_thread_count() {
     let s = read_obj("meshes/npm_bunny.obj");
@@ -479,6 +480,67 @@ fn defective_input_is_refused_with_the_defect_named() {
     let err = conforming_mesh(&s, &ConformingOptions::default()).unwrap_err();
     assert!(matches!(err, ConformingError::Invalid(_)));
     assert!(err.to_string().contains("border") || err.to_string().contains("open"), "{err}");
+}
+
+/// Strict mode on the defect corpus (`bad_syn_*.obj`, issue 3): each file is
+/// refused before any meshing with `ConformingError::Invalid`, whose defect is
+/// the file's (the first `meshing::validate` finds, with its count as in
+/// `tests/validate.rs`) and whose message names it and where it is (a vertex
+/// with its coordinates, or a triangle's centroid). The teapot is another
+/// test's (`tests/validate.rs`); the clean bunny and the layered files are
+/// accepted (tests above).
+#[test]
+fn the_defect_corpus_is_refused_with_each_defect_named() {
+    use meshing::{Defect, InvalidSurface};
+    // (file, the defect's kind, its count, the number of kinds found, the message's start)
+    let corpus: [(&str, &str, usize, usize, &str); 8] = [
+        (
+            "bad_syn_hole.obj",
+            "open boundary",
+            12,
+            1,
+            "open boundary: 12 border edges in 1 loops; the first from vertex",
+        ),
+        ("bad_syn_flipped10pct.obj", "inconsistent orientation", 987, 1, "inconsistent orientation: 987 edges"),
+        ("bad_syn_inverted.obj", "inverted", 3674, 1, "inverted: component 0 (triangle 0 and 3673 more, first at ("),
+        ("bad_syn_soup_jitter.obj", "unwelded vertices", 0, 3, "unwelded vertices: "),
+        ("bad_syn_degenerate_dup.obj", "degenerate triangles", 20, 2, "degenerate triangles: 20 in all; the first"),
+        (
+            "bad_syn_nonmanifold_edge.obj",
+            "non-manifold edges",
+            1,
+            1,
+            "non-manifold edges: 1 in all; the first from vertex 6",
+        ),
+        (
+            "bad_syn_overlapping_spheres.obj",
+            "self-intersections",
+            158,
+            1,
+            "self-intersections: 158 triangle pairs; the first",
+        ),
+        ("bad_syn_thin_fin.obj", "self-intersections", 12, 1, "self-intersections: 12 triangle pairs; the first"),
+    ];
+    for (name, kind, count, kinds, start) in corpus {
+        let s = read_obj(&format!("meshes/{name}"));
+        let err = conforming_mesh(&s, &ConformingOptions::default()).unwrap_err();
+        let message = err.to_string();
+        eprintln!("{name}: {message}");
+        let ConformingError::Invalid(InvalidSurface::Defect { defect, description, num_defects }) = &err else {
+            panic!("{name}: not a defect: {err:?}");
+        };
+        assert_eq!(defect.kind(), kind, "{name}");
+        // The soup's count of unwelded groups depends on the weld tolerance: only its presence is asserted.
+        assert!(if count > 0 { defect.count() == count } else { defect.count() > 0 }, "{name}: {}", defect.count());
+        assert_eq!(*num_defects, kinds, "{name}");
+        assert!(message.starts_with("conforming mode needs a clean, closed surface: "), "{name}: {message}");
+        assert!(description.starts_with(start), "{name}: {description}");
+        assert!(message.contains(description.as_str()), "{name}: {message}");
+        // The place: a vertex with its coordinates, or a triangle with its centroid.
+        let by_triangle = matches!(defect.as_ref(), Defect::SelfIntersections { .. } | Defect::Inverted { .. });
+        let what = if by_triangle { "triangle" } else { "vertex" };
+        assert!(description.contains(what) && description.contains('('), "{name}: {description}");
+    }
 }
 
 // ---- stage 3: size

@@ -1,13 +1,16 @@
 //! Envelope mode (isosurface stuffing on the generalized winding number): analytic
 //! shapes built here, and the shared fixtures in `<workspace>/../shared/data/meshes`
-//! (the clean bunny, the defective corpus, the layered bunny), read with `tobj`.
+//! (the clean bunny, the defective corpus, the layered bunny), read with `tobj`
+//! (in f32), the corpus tests' files with `tests/common`'s reader (in f64).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use meshing::envelope::{envelope_mesh, EnvelopeError, EnvelopeOptions, EnvelopeWarning};
+use meshing::envelope::{envelope_mesh, EnvelopeError, EnvelopeMesh, EnvelopeOptions, EnvelopeWarning};
 use meshing::quality::{report, QualityReport};
 use meshing::{Surface, WindingNumber};
+
+mod common;
 
 // ---- shapes built here
 
@@ -134,8 +137,67 @@ fn soup(parts: &[&Surface]) -> Surface {
     s
 }
 
+/// A prism along y whose +x side is a roof: two faces meeting at a ridge (at
+/// `z = 0`, `x = ridge_x + tilt y`) at the interior angle `180 - 2 half_deg`
+/// deg; the cross-section is the pentagon (-1, -w), (r - w tan, -w), (r, 0),
+/// (r - w tan, w), (-1, w) with `w = 1.1`, for `y` in [-1.1, 1.1] mm; outward.
+/// Its volume is `2.2 (2.2 (ridge_x - 1.1 tan + 1) + 1.21 tan)` mm^3 (the
+/// section's area is linear in `y`, odd about its value at `y = 0`).
+fn roof(ridge_x: f64, half_deg: f64, tilt: f64) -> Surface {
+    let (w, t) = (1.1, half_deg.to_radians().tan());
+    let mut vertices = Vec::new();
+    for y in [-1.1, 1.1] {
+        let r = ridge_x + tilt * y;
+        for (x, z) in [(-1.0, -w), (r - w * t, -w), (r, 0.0), (r - w * t, w), (-1.0, w)] {
+            vertices.push([x, y, z]);
+        }
+    }
+    let mut triangles: Vec<[u32; 3]> = Vec::new();
+    for i in 1..4 {
+        triangles.push([0, i, i + 1]);
+        triangles.push([5, 6 + i, 5 + i]);
+    }
+    for i in 0..5 {
+        let j = (i + 1) % 5;
+        triangles.push([i, 5 + j, j]);
+        triangles.push([i, 5 + i, 5 + j]);
+    }
+    let s = Surface { vertices, triangles, triangle_regions: vec![0; 16], region_names: vec!["roof".into()] };
+    assert!(s.signed_volume(None) > 0.0);
+    s
+}
+
 fn corners(s: &Surface) -> Vec<[[f64; 3]; 3]> {
     s.triangles.iter().map(|t| t.map(|v| s.vertices[v as usize])).collect()
+}
+
+/// Regression, the teapot at 0.25 mm (session 20): a lattice tet whose four
+/// vertices are all warped onto the input, its long black edge onto a crease
+/// and its red edge's ends onto the two faces beside it, inherits the
+/// crease's interior angle (158 deg for a 22 deg crease: inside the stuffing's
+/// proven [10.7, 164.8], outside the issue's [12, 155]). Smoothing cannot
+/// change it (all four nodes slide on the input); the guard splits the
+/// tet's interior edge at a point moved off the edge into its ring, so two
+/// tets share the crease edge. Before: refused, 1 tet at 15.23..158.18 deg.
+/// Measured after (fitting on, the default): dihedral [13.83, 150.91] deg,
+/// 1 bad tet before the guard, 1 split; volume error -1.76e-3 against the
+/// closed form (asserted under 5e-3: the box's edges are rounded to the
+/// lattice); 0.2 s.
+#[test]
+fn a_tet_spanning_a_crease_is_split_not_refused() {
+    let (ridge_x, half_deg, tilt) = (0.52, 11.0, -0.13);
+    let s = roof(ridge_x, half_deg, tilt);
+    let t = half_deg.to_radians().tan();
+    let exact = 2.2 * (2.2 * (ridge_x - 1.1 * t + 1.0) + 1.21 * t);
+    assert!((s.signed_volume(None) - exact).abs() < 1e-12 * exact, "{} vs {exact}", s.signed_volume(None));
+    let (out, q) = mesh_and_report(&s, 0.25);
+    eprintln!("{:?}", out.stats);
+    assert!(out.stats.guard_bad >= 1 && out.stats.guard_splits >= 1, "{:?}", out.stats);
+    assert_issue_angles(&q);
+    assert_conforming(&out.mesh);
+    let error = out.mesh.measure() / exact - 1.0;
+    eprintln!("volume error against the closed form {error:.3e}");
+    assert!(error.abs() < 5e-3, "{error}");
 }
 
 // ---- the shared fixtures
@@ -430,172 +492,49 @@ fn bunny_meets_the_angle_and_volume_targets() {
     });
 }
 
-/// The bunny on the graded lattice (`grade_levels`, module docs of
-/// `meshing::envelope`): base size 0.2 mm, refined by bisection down to 0.025 mm
-/// where the input is creased, curved or thin (the ears): the issue's Hausdorff
-/// target, 1e-3 of the diagonal, with its angle and volume targets, which the
-/// uniform lattice at 0.2 mm misses by a factor 9 (test above).
+/// The layered bunny on the graded lattice (base 0.2 mm, 3 levels, as the
+/// bunny family): three regions, and issue 3's envelope gates on clean input:
+/// every tet within [12°, 155°] (session 16: one 10.06° tet at a region
+/// interface at these options; now smoothed away by the final guard, whose
+/// smoothing lets the region shells' nodes slide along them), the boundary
+/// figure within 1e-3 of the diagonal (the inner shells bound no solid: left
+/// out), the whole volume within 2e-3 of the exact one (the json's three
+/// regions). Measured (session 20): 740k tets, dihedral [13.80, 151.24] deg,
+/// boundary figure 9.98e-4, volume error -4.4e-4; region volume errors
+/// -2.5e-5 (bunny), -1.80e-3 (sphere A), -4.50e-3 (sphere B: a **miss** of
+/// 2e-3 per region). Asserted per region: the bunny 2e-3, the spheres 1e-2
+/// (the bound of session 19's uniform test at 0.15 mm, 750k tets, which this
+/// test replaces), and no cell across sphere A (conforming interfaces).
 #[test]
-fn graded_bunny_meets_the_hausdorff_angle_and_volume_targets() {
-    let s = obj("npm_bunny.obj");
-    // Measured: 713k tets, dihedral [13.80, 151.24] deg, volume error -4.4e-4,
-    // Hausdorff 9.98e-4 (a thin margin: BENCHMARKS.md).
-    let options = EnvelopeOptions { grade_levels: 3, ..EnvelopeOptions::new(0.2) };
-    let (out, q) = mesh_and_report_with(&s, &options);
-    assert_eq!(q.num_inverted, 0);
-    assert_issue_angles(&q);
-    assert_conforming(&out.mesh);
-    assert!(q.volume_error.abs() <= 2e-3, "{}", q.volume_error);
-    assert!(q.hausdorff_relative <= 1e-3, "{}", q.hausdorff_relative);
-    assert!(out.stats.grade_bisections > 0);
-}
-
-/// The defective variants of the bunny: within 1 % of the clean bunny's volume,
-/// the proven angle bounds, no crash. Flipped faces need the repair's orientation
-/// first (as `wagashi mesh` does); the others are meshed raw.
-#[test]
-fn the_defective_bunnies_mesh_within_one_percent_of_the_clean_one() {
-    let clean = obj("npm_bunny.obj").signed_volume(None);
-    for (name, repaired) in [
-        ("bad_syn_hole.obj", false),
-        ("bad_syn_inverted.obj", false),
-        ("bad_syn_soup_jitter.obj", false),
-        ("bad_syn_degenerate_dup.obj", false),
-        ("bad_syn_flipped10pct.obj", true),
-    ] {
-        let mut s = obj(name);
-        if repaired {
-            s = meshing::repair(&s, &meshing::RepairOptions::default()).unwrap().surface;
-        }
-        eprintln!("{name}:");
-        let (out, q) = mesh_and_report(&s, 0.3);
-        assert_proven_bounds(&q);
-        assert_issue_angles(&q);
-        assert_conforming(&out.mesh);
-        let err = (q.volume_mm3 - clean) / clean;
-        assert!(err.abs() < 1e-2, "{name}: volume error {err} against the clean bunny");
-        if name == "bad_syn_inverted.obj" {
-            assert!(out.warnings.iter().any(|w| matches!(w, EnvelopeWarning::InsideOut { .. })), "{:?}", out.warnings);
-        }
-        // The hole's cap is measured apart (session 18: cap 2.91e-2 of the
-        // diagonal from the rim, 12 border edges, boundary distance 1.96e-2 as
-        // the clean bunny's at 0.3 mm); the degenerate file's 34 border edges
-        // (gaps beside its degenerate triangles) give caps 1.14e-3 from the
-        // input; the other files have no border once welded.
-        eprintln!(
-            "  boundary {:.3e}, hole caps {:.3e} ({} border edges), raw {:.3e}",
-            q.hausdorff_relative, q.hole_cap_relative, q.num_border_edges, q.raw_hausdorff_relative
-        );
-        if name == "bad_syn_hole.obj" {
-            assert_eq!(q.num_border_edges, 12);
-            assert!(q.hole_cap_relative > 2.5e-2 && q.hausdorff_relative < 2e-2, "{q:?}");
-        } else if name == "bad_syn_degenerate_dup.obj" {
-            assert_eq!(q.num_border_edges, 34);
-            assert!(q.hole_cap_relative < 2e-3 && q.hausdorff_relative < 2e-2, "{q:?}");
-        } else {
-            assert_eq!((q.hole_cap_mm, q.widest_hole_mm), (0.0, 0.0), "{name}");
-        }
-    }
-}
-
-/// Raw flipped faces (no repair) still give a valid mesh with the proven bounds;
-/// the volume is off near the flipped faces only.
-#[test]
-fn raw_flipped_faces_still_give_a_valid_mesh() {
-    let s = obj("bad_syn_flipped10pct.obj");
-    let clean = obj("npm_bunny.obj").signed_volume(None);
-    let (out, q) = mesh_and_report(&s, 0.3);
-    assert_proven_bounds(&q);
-    assert_conforming(&out.mesh);
-    let err = (q.volume_mm3 - clean) / clean;
-    eprintln!("raw flipped: volume error {err:.3e} against the clean bunny");
-    assert!(err.abs() < 0.1, "{err}");
-}
-
-/// Regression (session 16): the raw bunny with 10 % of its faces flipped on the
-/// graded lattice gave 200 tets outside [12°, 155°] (down to 0.36°) and 2.25M
-/// tets: the winding number is inverted next to each flipped face, and the
-/// graded lattice resolved those "pillows". The flipped faces are now turned
-/// back before the inside test (and said, as a warning), so the graded mesh is
-/// the clean bunny's: the angle targets and within 1 % of its volume.
-/// Measured (session 17, h = 0.4 mm, 2 levels): 400k tets, dihedral [13.80°,
-/// 151.23°], volume -5.2e-4 from the clean bunny's, 367 faces turned; asserted
-/// [12°, 155°] and within 1e-2 (the issue's bound for defective input).
-#[test]
-fn raw_flipped_faces_on_the_graded_lattice_meet_the_angle_targets() {
-    let s = obj("bad_syn_flipped10pct.obj");
-    let clean = obj("npm_bunny.obj").signed_volume(None);
-    let options = EnvelopeOptions { grade_levels: 2, ..EnvelopeOptions::new(0.4) };
-    let (out, q) = mesh_and_report_with(&s, &options);
-    assert_eq!(q.num_inverted, 0);
-    assert_issue_angles(&q);
-    assert_conforming(&out.mesh);
-    let err = (q.volume_mm3 - clean) / clean;
-    eprintln!("raw flipped, graded: volume error {err:.3e} against the clean bunny");
-    assert!(err.abs() < 1e-2, "{err}");
-    let turned: usize = out
-        .warnings
-        .iter()
-        .filter_map(|w| match w {
-            EnvelopeWarning::FlippedFaces { num_triangles, .. } => Some(*num_triangles),
-            _ => None,
-        })
-        .sum();
-    assert!(turned > 0, "{:?}", out.warnings);
-}
-
-/// The layered bunny on the graded lattice: three regions, every tet within
-/// [12°, 155°] (session 16: one 10.06° tet at a region interface at 0.2 mm,
-/// 3 levels; now smoothed away by the final guard, whose smoothing lets the
-/// region shells' nodes slide along them). Measured (session 17, h = 0.3 mm, 2
-/// levels): 562k tets, dihedral [12.64°, 153.52°]; region volume errors
-/// +3.1e-5 (bunny), -2.58e-3 (sphere A), -3.51e-3 (sphere B). Asserted: the
-/// issue's 2e-3 (clean input) for the bunny region; the spheres within 1e-2 (the
-/// bound of the uniform test below): both **miss** 2e-3 at this size.
-#[test]
-fn the_graded_layered_bunny_meets_the_angle_and_region_volume_targets() {
+fn the_graded_layered_bunny_meets_every_envelope_gate() {
     let s = obj("layered_bunny.obj");
-    let (_, exact) = layered_bunny_exact_volumes();
-    let options = EnvelopeOptions { grade_levels: 2, ..EnvelopeOptions::new(0.3) };
-    let (out, q) = mesh_and_report_with(&s, &options);
-    assert_eq!(q.num_inverted, 0);
-    assert_issue_angles(&q);
-    assert_conforming(&out.mesh);
+    let (json, exact) = layered_bunny_exact_volumes();
+    assert_eq!(exact.len(), 3);
+    let (out, q) = mesh_and_report_with(&s, &bunny_graded());
+    assert_envelope_gates("layered_bunny.obj", &out, &q, exact.iter().sum(), 2e-3);
     assert_eq!(out.mesh.region_names, vec!["layer0_bunny", "layer1_sphereA", "layer2_sphereB"]);
     for (r, e) in q.regions.iter().zip(&exact) {
         let err = (r.volume_mm3 - e) / e;
         eprintln!("graded region {}: {} cells, error {err:.2e}", r.name, r.num_cells);
         let bound = if r.name == "layer0_bunny" { 2e-3 } else { 1e-2 };
         assert!(err.abs() <= bound, "{}: {err}", r.name);
+        // The report's reference: each shell less the shells nested in it.
+        assert!((r.reference_volume_mm3.unwrap() - e).abs() < 1e-4 * e);
     }
-}
-
-/// Two overlapping unit icospheres: the union, against the exact union of the two
-/// spheres scaled by the icospheres' volume deficit.
-#[test]
-fn overlapping_spheres_mesh_their_union() {
-    let s = obj("bad_syn_overlapping_spheres.obj");
-    let (out, q) = mesh_and_report(&s, 0.1);
-    assert_proven_bounds(&q);
-    assert_conforming(&out.mesh);
-    let d = (1.0f64 + 0.04 + 0.01).sqrt();
-    let pi = std::f64::consts::PI;
-    let sphere = 4.0 / 3.0 * pi;
-    let lens = pi * (4.0 + d) * (2.0 - d).powi(2) / 12.0;
-    let deficit = s.signed_volume(None) / (2.0 * sphere);
-    let union = (2.0 * sphere - lens) * deficit;
-    let err = (q.volume_mm3 - union) / union;
-    eprintln!("union {union}: error {err:.3e}");
-    assert!(err.abs() < 1e-2, "{err}");
-    // The caps inside the other sphere bound nothing: left out of the Hausdorff
-    // distance (session 18: 540 input triangles bound nothing, 158 in part;
-    // boundary distance 4.75e-3 of the diagonal, the lattice's rounding of the
-    // concave crease; raw 2.27e-1, the inner poles about d = 1.02 mm from the
-    // union's boundary). Session 19: 4.94e-3, the jump curve (the crease) now
-    // placed on it, not up to one fine sample spacing short of it.
-    assert!(q.num_interior_input_triangles > 0 && q.num_partly_interior_input_triangles > 0, "{q:?}");
-    assert!(q.hausdorff_relative < 6e-3, "{q:?}");
-    assert!(q.raw_hausdorff_mm > 0.9, "{q:?}");
+    // The sphere interfaces are conforming: no cell has nodes strictly on both sides.
+    let centre = [0.8843064102564098, 2.968511615384615, 0.7171120256410255];
+    let r_a = json["rA"].as_f64().unwrap();
+    for (c, &reg) in out.mesh.cells.iter().zip(&out.mesh.cell_regions) {
+        let d: Vec<f64> = c
+            .iter()
+            .map(|&v| {
+                let p = out.mesh.nodes[v as usize];
+                ((p[0] - centre[0]).powi(2) + (p[1] - centre[1]).powi(2) + (p[2] - centre[2]).powi(2)).sqrt() - r_a
+            })
+            .collect();
+        let straddles = d.iter().any(|&x| x < -0.02) && d.iter().any(|&x| x > 0.02);
+        assert!(!straddles, "a cell of region {reg} crosses sphere A: {d:?}");
+    }
 }
 
 /// The distance the envelope is judged by (`meshing::distance`), against closed
@@ -768,16 +707,20 @@ fn the_cap_over_an_open_scans_hole_is_measured_apart() {
     assert_eq!(m.num_interior_input_triangles, 0);
 }
 
-/// An open scan on the graded lattice (session 19): the unit sphere with a
+/// An open scan on the graded lattice (sessions 19, 20): the unit sphere with a
 /// polar cap of angular radius 40 deg cut off (as above). Where the solid leaves
 /// the input for the cap over the hole, its boundary has a crease along the rim
-/// that no input triangle shows; the grading refines the cells the rim passes
-/// to the smallest size, as at a crease of the input. Measured (h = 0.25 mm, 3
-/// levels, 83k tets, 3.6 s): boundary figure (caps apart) 2.19e-3 of the
-/// diagonal, its input -> mesh maximum at the midpoint of a rim chord (without
-/// the rim's refinement: 3.65e-3, at the same place); asserted <= 2.5e-3: a
-/// **miss** of the issue's 1e-3 (the fitting does not reach the rim between its
-/// vertices). The cap over the hole is reported apart (1.9e-1).
+/// that no input triangle shows, and the fitting cannot bring the boundary onto
+/// it (`graded.rs` module docs): the grading refines the cells the rim passes
+/// below the smallest size, until their crease estimate meets the grading
+/// tolerance. Measured (h = 0.25 mm, 3 levels, 156k tets, mesh 4 to 9 s,
+/// report 2 to 3 s, the machine shared with four other helpers): boundary
+/// figure (caps apart) 7.43e-4 of the diagonal, its maximum now off the rim
+/// (in -> out at an input vertex by the equator; out -> in 6.91e-4); before
+/// session 20 (rim at the smallest size, 83k tets) 2.19e-3 at the midpoint of
+/// a rim chord, without the rim's refinement 3.65e-3. Asserted <= 1e-3 (the
+/// issue's gate), angles in [12, 155] deg (measured [13.82, 150.89]). The cap
+/// over the hole is reported apart (1.9e-1).
 #[test]
 fn an_open_scans_rim_is_refined_on_the_graded_lattice() {
     let alpha = 40f64.to_radians();
@@ -793,28 +736,19 @@ fn an_open_scans_rim_is_refined_on_the_graded_lattice() {
     assert_conforming(&out.mesh);
     assert_eq!(q.num_border_edges, 64);
     assert!(q.hole_cap_relative > q.hausdorff_relative, "{q:?}");
-    assert!(q.hausdorff_relative <= 2.5e-3, "{q:?}");
-}
-
-/// Two boxes sharing an edge (non-manifold): both, volume 2.
-#[test]
-fn boxes_sharing_an_edge_mesh_both() {
-    let s = obj("bad_syn_nonmanifold_edge.obj");
-    let (out, q) = mesh_and_report(&s, 0.1);
-    assert_proven_bounds(&q);
-    assert_conforming(&out.mesh);
-    assert!((q.volume_mm3 - 2.0).abs() < 2e-2, "{}", q.volume_mm3);
+    assert!(q.hausdorff_relative <= 1e-3, "{q:?}");
 }
 
 /// Two unit boxes sharing a face given once (four edges in three faces): two
-/// regions, one per box, volume 1 each, a conforming interface between them.
+/// regions, one per box, volume 1 each (within 1e-9), a conforming interface
+/// between them, and every envelope gate of issue 3.
 #[test]
 fn boxes_sharing_a_face_become_two_regions() {
     let s = obj("layered_two_boxes.obj");
     let (out, q) = mesh_and_report(&s, 0.1);
     assert_proven_bounds(&q);
-    assert_conforming(&out.mesh);
-    assert!((q.volume_mm3 - 2.0).abs() < 1e-9, "{}", q.volume_mm3);
+    // Issue 3's envelope gates (measured: dihedral [45, 90] deg, boundary figure 1.9e-16).
+    assert_envelope_gates("layered_two_boxes.obj", &out, &q, 2.0, 1e-9);
     assert_eq!(out.mesh.region_names.len(), 2, "{:?}", out.mesh.region_names);
     for r in 0..2u16 {
         let v: f64 = out
@@ -827,29 +761,6 @@ fn boxes_sharing_a_face_become_two_regions() {
             .sum();
         assert!((v - 1.0).abs() < 1e-9, "region {r}: {v}");
     }
-}
-
-/// A fin 1e-4 mm thick on a unit box: the box is meshed, the fin reported.
-#[test]
-fn a_thin_fin_is_reported_not_dropped_silently() {
-    let s = obj("bad_syn_thin_fin.obj");
-    let (out, q) = mesh_and_report(&s, 0.1);
-    assert_proven_bounds(&q);
-    assert!((q.volume_mm3 - 1.0).abs() < 1e-2, "{}", q.volume_mm3);
-    let thin: Vec<_> = out
-        .warnings
-        .iter()
-        .filter_map(|w| match w {
-            EnvelopeWarning::ThinFeature { min_thickness_mm, lo_mm, hi_mm, .. } => {
-                Some((*min_thickness_mm, *lo_mm, *hi_mm))
-            }
-            _ => None,
-        })
-        .collect();
-    assert_eq!(thin.len(), 1, "{:?}", out.warnings);
-    let (t, lo, hi) = thin[0];
-    assert!((t - 1e-4).abs() < 2e-5, "thinnest {t}");
-    assert!(lo[0] > 0.49 && hi[0] < 0.51, "{lo:?}..{hi:?}");
 }
 
 /// Two unit boxes 0.01 mm apart (session 19): the gap between them, narrower
@@ -942,42 +853,6 @@ fn the_graded_teapot_resolves_the_void_at_the_handles_mouth() {
     assert!(q.mesh_to_surface_mm / s.diagonal() < 2e-3, "{q:?}");
 }
 
-/// The layered bunny: three nested shells become three regions whose volumes
-/// match the exact ones of layered_bunny.json.
-#[test]
-fn the_layered_bunny_has_three_regions_of_the_right_volume() {
-    let s = obj("layered_bunny.obj");
-    let (json, exact) = layered_bunny_exact_volumes();
-    assert_eq!(exact.len(), 3);
-    let (out, q) = mesh_and_report(&s, 0.15);
-    // The cells cut by the sphere interfaces have no proven bound: the final
-    // guard repairs or refuses what falls outside the issue's targets.
-    assert_eq!(q.num_inverted, 0);
-    assert_issue_angles(&q);
-    assert_conforming(&out.mesh);
-    assert_eq!(out.mesh.region_names, vec!["layer0_bunny", "layer1_sphereA", "layer2_sphereB"]);
-    for (r, e) in q.regions.iter().zip(&exact) {
-        let err = (r.volume_mm3 - e) / e;
-        eprintln!("region {}: {} cells, {} mm^3, exact {e}, error {err:.2e}", r.name, r.num_cells, r.volume_mm3);
-        assert!(err.abs() < 1e-2, "{}: {err}", r.name);
-        assert!((r.reference_volume_mm3.unwrap() - e).abs() < 1e-4 * e);
-    }
-    // The sphere interfaces are conforming: no cell has nodes strictly on both sides.
-    let centre = [0.8843064102564098, 2.968511615384615, 0.7171120256410255];
-    let r_a = json["rA"].as_f64().unwrap();
-    for (c, &reg) in out.mesh.cells.iter().zip(&out.mesh.cell_regions) {
-        let d: Vec<f64> = c
-            .iter()
-            .map(|&v| {
-                let p = out.mesh.nodes[v as usize];
-                ((p[0] - centre[0]).powi(2) + (p[1] - centre[1]).powi(2) + (p[2] - centre[2]).powi(2)).sqrt() - r_a
-            })
-            .collect();
-        let straddles = d.iter().any(|&x| x < -0.02) && d.iter().any(|&x| x > 0.02);
-        assert!(!straddles, "a cell of region {reg} crosses sphere A: {d:?}");
-    }
-}
-
 /// Layers along y: conforming planes, each layer's cells between its planes.
 #[test]
 fn the_bunny_cut_into_layers() {
@@ -1008,6 +883,410 @@ fn the_bunny_cut_into_layers() {
     assert!((total - q.volume_mm3).abs() < 1e-9 * total);
     let err = opts.layers_mm.iter().sum::<f64>() - height;
     assert!(err.abs() < 1e-12);
+}
+
+// ---- the corpus: every envelope gate of issue 3, one run per file
+
+/// A corpus file as written (`common::read_obj` parses f64; `obj` above, with
+/// tobj's default f32, rounds the coordinates to 6e-8 relative: the thin fin's
+/// 9.9e-5 mm would be off by 3e-8 mm).
+fn corpus_obj(name: &str) -> Surface {
+    common::read_obj(&format!("meshes/{name}"))
+}
+
+/// The graded lattice the bunny family needs for the Hausdorff gate: base 0.2
+/// mm, 3 levels (finest 0.025 mm). Measured (session 20, BENCHMARKS.md): 0.4 mm
+/// with 4 levels and 0.8 mm with 5 (the same finest size) cost the same within
+/// 3 % and warn of the ear as thinner than half the base spacing; 0.3 mm with 3
+/// levels and 0.5 mm with 4 miss (1.54e-3 and 1.19e-3 of the diagonal), as does
+/// a grading tolerance of 7e-4 (1.49e-3).
+fn bunny_graded() -> EnvelopeOptions {
+    EnvelopeOptions { grade_levels: 3, ..EnvelopeOptions::new(0.2) }
+}
+
+/// Issue 3's envelope gates on a mesh of the corpus: no inverted tet, every
+/// dihedral angle in [12, 155] deg (none under 10 deg), a conforming mesh with a
+/// closed boundary, the report's boundary figure (caps over holes apart, see
+/// `meshing::distance`) within 1e-3 of the diagonal, and the volume within
+/// `bound` of `reference_mm3` (relative). Returns the volume error.
+fn assert_envelope_gates(name: &str, out: &EnvelopeMesh, q: &QualityReport, reference_mm3: f64, bound: f64) -> f64 {
+    assert_eq!(q.num_inverted, 0, "{name}");
+    assert_issue_angles(q);
+    assert_conforming(&out.mesh);
+    assert!(q.hausdorff_relative <= 1e-3, "{name}: boundary figure {} of the diagonal", q.hausdorff_relative);
+    let err = (q.volume_mm3 - reference_mm3) / reference_mm3;
+    eprintln!("{name}: volume {:.6} mm^3 against {reference_mm3:.6} mm^3, error {err:.2e}", q.volume_mm3);
+    assert!(err.abs() <= bound, "{name}: volume error {err} against {reference_mm3} mm^3");
+    err
+}
+
+/// A defective variant of the bunny, raw (no repair), on [`bunny_graded`]: the
+/// gates, its volume within 1 % of the clean bunny's enclosed volume.
+fn defective_bunny(name: &str) -> (EnvelopeMesh, QualityReport) {
+    let clean = corpus_obj("npm_bunny.obj").signed_volume(None);
+    let (out, q) = mesh_and_report_with(&corpus_obj(name), &bunny_graded());
+    assert_envelope_gates(name, &out, &q, clean, 1e-2);
+    (out, q)
+}
+
+/// The vertices of the surface's border edges (edges of one triangle).
+fn border_vertices(s: &Surface) -> Vec<[f64; 3]> {
+    let mut edges: std::collections::BTreeMap<(u32, u32), usize> = Default::default();
+    for t in &s.triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            *edges.entry((a.min(b), a.max(b))).or_default() += 1;
+        }
+    }
+    let mut v: Vec<u32> = edges.iter().filter(|(_, &n)| n == 1).flat_map(|(&(a, b), _)| [a, b]).collect();
+    v.sort_unstable();
+    v.dedup();
+    v.iter().map(|&i| s.vertices[i as usize]).collect()
+}
+
+/// Two closed parts of `s` given as its triangles `0..split` and `split..`: their
+/// bounding boxes, each checked to be the part (its enclosed volume the box's,
+/// within 1e-12 relative).
+fn two_boxes(s: &Surface, split: usize) -> [([f64; 3], [f64; 3]); 2] {
+    let part = |range: std::ops::Range<usize>| {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        let mut volume = 0.0;
+        for t in &s.triangles[range] {
+            let p = t.map(|v| s.vertices[v as usize]);
+            for q in p {
+                for k in 0..3 {
+                    lo[k] = lo[k].min(q[k]);
+                    hi[k] = hi[k].max(q[k]);
+                }
+            }
+            volume += fem_core::element::signed_measure(&[[0.0; 3], p[0], p[1], p[2]]);
+        }
+        let boxed = (0..3).map(|k| hi[k] - lo[k]).product::<f64>();
+        assert!((volume - boxed).abs() <= 1e-12 * boxed, "a part of volume {volume} in a box of {boxed}");
+        (lo, hi)
+    };
+    [part(0..split), part(split..s.triangles.len())]
+}
+
+/// The volume of the union of two axis-aligned boxes (closed form).
+fn box_union_volume(a: ([f64; 3], [f64; 3]), b: ([f64; 3], [f64; 3])) -> f64 {
+    let size = |lo: [f64; 3], hi: [f64; 3]| (0..3).map(|k| (hi[k] - lo[k]).max(0.0)).product::<f64>();
+    let common = size([0, 1, 2].map(|k| a.0[k].max(b.0[k])), [0, 1, 2].map(|k| a.1[k].min(b.1[k])));
+    size(a.0, a.1) + size(b.0, b.1) - common
+}
+
+/// The volume of the union of two closed, outward, **convex** polyhedra given as
+/// triangles, by the divergence theorem over the union's boundary: each one's
+/// triangles less their parts inside the other, those parts cut out exactly
+/// (but for rounding) by clipping the triangle against the other's face planes
+/// (Sutherland-Hodgman). Asserts the convexity it relies on (every vertex on
+/// the inner side of every face plane of its own polyhedron, within 1e-12).
+fn convex_union_volume(a: &[[[f64; 3]; 3]], b: &[[[f64; 3]; 3]]) -> f64 {
+    type V3 = [f64; 3];
+    let sub = |p: V3, q: V3| [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
+    let dot = |p: V3, q: V3| p[0] * q[0] + p[1] * q[1] + p[2] * q[2];
+    let cross = |u: V3, v: V3| [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
+    // Outward unit normal and offset of each face plane: inside where n.x <= d.
+    let planes = |s: &[[V3; 3]]| -> Vec<(V3, f64)> {
+        s.iter()
+            .map(|t| {
+                let n = cross(sub(t[1], t[0]), sub(t[2], t[0]));
+                let l = dot(n, n).sqrt();
+                let n = [n[0] / l, n[1] / l, n[2] / l];
+                (n, dot(n, t[0]))
+            })
+            .collect()
+    };
+    let (pa, pb) = (planes(a), planes(b));
+    for (s, p) in [(a, &pa), (b, &pb)] {
+        for &(n, d) in p {
+            for t in s {
+                for &v in t {
+                    assert!(dot(n, v) - d <= 1e-12, "not convex: {}", dot(n, v) - d);
+                }
+            }
+        }
+    }
+    // The signed volume of the cone from the origin over a planar polygon (a fan).
+    let cone = |poly: &[V3]| -> f64 {
+        (1..poly.len().saturating_sub(1)).map(|i| dot(poly[0], cross(poly[i], poly[i + 1])) / 6.0).sum()
+    };
+    let inside_part = |t: &[V3; 3], planes: &[(V3, f64)]| -> Vec<V3> {
+        let mut poly = t.to_vec();
+        for &(n, d) in planes {
+            if poly.is_empty() {
+                break;
+            }
+            let mut next = Vec::with_capacity(poly.len() + 1);
+            for i in 0..poly.len() {
+                let (p, q) = (poly[i], poly[(i + 1) % poly.len()]);
+                let (dp, dq) = (dot(n, p) - d, dot(n, q) - d);
+                if dp <= 0.0 {
+                    next.push(p);
+                }
+                if (dp < 0.0 && dq > 0.0) || (dp > 0.0 && dq < 0.0) {
+                    let u = dp / (dp - dq);
+                    next.push([p[0] + u * (q[0] - p[0]), p[1] + u * (q[1] - p[1]), p[2] + u * (q[2] - p[2])]);
+                }
+            }
+            poly = next;
+        }
+        poly
+    };
+    let outside =
+        |s: &[[V3; 3]], other: &[(V3, f64)]| -> f64 { s.iter().map(|t| cone(t) - cone(&inside_part(t, other))).sum() };
+    outside(a, &pb) + outside(b, &pa)
+}
+
+/// The clean bunny (session 16's graded test, now with every gate). Measured
+/// (session 20, 0.2 mm, 3 levels): 713k tets, dihedral [13.80, 151.24] deg,
+/// volume error -4.4e-4 against its enclosed volume, boundary figure 9.98e-4
+/// of the diagonal (a thin margin: the same 9.98e-4 at every base size whose
+/// finest cells are 0.025 mm). Asserted: the gates, the volume within 2e-3
+/// (clean input), no warning, no border.
+#[test]
+fn corpus_clean_bunny_meets_every_envelope_gate() {
+    let s = corpus_obj("npm_bunny.obj");
+    let (out, q) = mesh_and_report_with(&s, &bunny_graded());
+    let err = assert_envelope_gates("npm_bunny.obj", &out, &q, s.signed_volume(None), 2e-3);
+    assert!((err - q.volume_error).abs() < 1e-12, "{err} {}", q.volume_error);
+    assert!(out.warnings.is_empty(), "{:?}", out.warnings);
+    assert!(out.stats.grade_bisections > 0);
+    assert_eq!((q.num_border_edges, q.hole_cap_mm), (0, 0.0));
+}
+
+/// The holed bunny (12 border edges in one loop, 1.87 mm wide), raw. Off the
+/// hole, the gates: boundary figure measured 9.98e-4 (session 19's rim
+/// refinement), volume -6.1e-4 from the clean bunny's (+8.5e-3 from the holed
+/// file's own divergence-theorem volume, which misses the hole's part).
+///
+/// The cap over the hole is measured apart (`hole_cap_mm`: the mesh boundary
+/// nearer to a patch over the hole than to the input, its distance to the
+/// input), against a closed-form bound. With the holed input closed by a fan
+/// from its rim's centroid c (inside the rim's convex hull), the winding number
+/// is w = k - Omega/(4 pi), k an integer (the closed surface's) and Omega the
+/// fan's solid angle; from a point outside the hull the fan lies in an open
+/// half-space, |Omega| < 2 pi, so w = 1/2 (the solid's boundary) only inside
+/// the hull. A point p = sum l_i v_i of the hull has sum l_i |p - v_i|^2 = sum
+/// l_i |v_i - c|^2 - |p - c|^2 <= rho^2, rho = max |v_i - c|: it is within rho
+/// of a rim vertex, a point of the input. The mesh's cap interpolates w = 1/2 on
+/// the lattice, whose finest spacing (0.025 mm) is added. Measured: cap 0.461 mm
+/// (2.93e-2 of the diagonal) against the bound 0.742 + 0.025 mm; the widest hole's
+/// extent, the rim's bounding-box diagonal, 1.866 mm (asserted to 1e-9 mm).
+#[test]
+fn corpus_holed_bunny_meets_every_gate_its_cap_within_its_bound() {
+    let name = "bad_syn_hole.obj";
+    let (_, q) = defective_bunny(name);
+    let rim = border_vertices(&corpus_obj(name));
+    assert_eq!((q.num_border_edges, rim.len()), (12, 12));
+    let n = rim.len() as f64;
+    let c = [0, 1, 2].map(|k| rim.iter().map(|v| v[k]).sum::<f64>() / n);
+    let rho = rim
+        .iter()
+        .map(|v| ((v[0] - c[0]).powi(2) + (v[1] - c[1]).powi(2) + (v[2] - c[2]).powi(2)).sqrt())
+        .fold(0.0, f64::max);
+    let finest = bunny_graded().size_mm / 8.0;
+    eprintln!(
+        "{name}: cap {:.4} mm ({:.3e} of the diagonal), bound rho {rho:.4} + {finest} mm",
+        q.hole_cap_mm, q.hole_cap_relative
+    );
+    assert!(q.hole_cap_mm > 0.0 && q.hole_cap_mm <= rho + finest, "{q:?}");
+    let extent = {
+        let lo = [0, 1, 2].map(|k| rim.iter().map(|v| v[k]).fold(f64::INFINITY, f64::min));
+        let hi = [0, 1, 2].map(|k| rim.iter().map(|v| v[k]).fold(f64::NEG_INFINITY, f64::max));
+        ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2)).sqrt()
+    };
+    assert!((q.widest_hole_mm - extent).abs() < 1e-9, "{} against {extent}", q.widest_hole_mm);
+}
+
+/// The bunny with 10 % of its faces flipped, raw. Regression (session 16): on
+/// the graded lattice it gave 200 tets outside [12, 155] deg (down to 0.36 deg)
+/// and 2.25M tets, the winding number inverted next to each flipped face; they
+/// are now turned back before the inside test, and said (367 triangles, as
+/// `repair` flips). Measured (session 20): the clean bunny's 713k tets,
+/// angles, boundary figure 9.98e-4 and volume (-4.4e-4 from the clean one's).
+#[test]
+fn corpus_flipped_bunny_meets_every_envelope_gate() {
+    let (out, _) = defective_bunny("bad_syn_flipped10pct.obj");
+    let turned: usize = out
+        .warnings
+        .iter()
+        .filter_map(|w| match w {
+            EnvelopeWarning::FlippedFaces { num_triangles, .. } => Some(*num_triangles),
+            _ => None,
+        })
+        .sum();
+    assert_eq!(turned, 367, "{:?}", out.warnings);
+}
+
+/// The bunny given inside out, raw: meshed as the bunny (measured: its 713k
+/// tets, boundary figure 9.98e-4, volume -4.4e-4 from the clean one's), with
+/// an `InsideOut` warning.
+#[test]
+fn corpus_inverted_bunny_meets_every_envelope_gate() {
+    let (out, _) = defective_bunny("bad_syn_inverted.obj");
+    assert!(out.warnings.iter().any(|w| matches!(w, EnvelopeWarning::InsideOut { .. })), "{:?}", out.warnings);
+}
+
+/// The bunny as an unwelded soup with 1e-9 jitter, raw: welded by the
+/// distance's border test (no border edge), meshed as the bunny (measured: 713k
+/// tets, boundary figure 9.98e-4, volume -4.4e-4 from the clean one's).
+#[test]
+fn corpus_soup_bunny_meets_every_envelope_gate() {
+    let (_, q) = defective_bunny("bad_syn_soup_jitter.obj");
+    assert_eq!((q.num_border_edges, q.hole_cap_mm), (0, 0.0), "{q:?}");
+}
+
+/// The bunny with 20 degenerate (needle) and 20 duplicate triangles, raw: the
+/// needles leave 32 border edges beside them (34 when read in f32, as tobj
+/// does: the rounding makes or unmakes needles), slits whose caps are measured
+/// apart: 2.4e-3 mm, 1.55e-4 of the diagonal (the widest chain's extent 1.26
+/// mm), asserted within the boundary gate, 1e-3. Measured 748k tets (the
+/// border edges refined), boundary figure 9.98e-4, volume -4.4e-4 from the
+/// clean bunny's.
+#[test]
+fn corpus_degenerate_bunny_meets_every_envelope_gate() {
+    let (_, q) = defective_bunny("bad_syn_degenerate_dup.obj");
+    assert_eq!(q.num_border_edges, 32, "{q:?}");
+    assert!(q.hole_cap_relative <= 1e-3, "{q:?}");
+}
+
+/// Two overlapping icospheres (unit radius, 1280 triangles each, centres
+/// d = sqrt(1.05) apart), raw, on the graded lattice (0.2 mm, 4 levels; 0.1 mm
+/// with 3 and 0.4 mm with 5 cost the same). The reference is the exact union of
+/// the two polyhedra (`convex_union_volume`): 7.071708 mm^3, against the
+/// closed form of the two balls' union (7.126287) less the facets' deficit per
+/// unit area times the union's area, 7.071770 (a first-order estimate: within
+/// 8.8e-6, asserted 1e-4). (Session 16's reference, the balls' union scaled by
+/// the deficit per unit volume, 7.064957, is 9.6e-4 low: the lens has more
+/// area per volume than a ball.) Measured (session 20): 250k tets, dihedral
+/// [13.89, 151.21] deg, boundary figure 9.39e-4 (the inner caps, 540 input
+/// triangles wholly and 158 in part, bound nothing and are left out; the raw
+/// figure, 0.97 mm, is the inner poles' depth), volume -9.6e-4 from the exact
+/// union (the chords across the facets' convex edges cut inward).
+#[test]
+fn corpus_overlapping_spheres_mesh_their_exact_union() {
+    let name = "bad_syn_overlapping_spheres.obj";
+    let s = corpus_obj(name);
+    assert_eq!((s.vertices.len(), s.triangles.len()), (1284, 2560));
+    let (a, b) = s.triangles.split_at(1280);
+    assert!(a.iter().flatten().all(|&v| v < 642) && b.iter().flatten().all(|&v| v >= 642));
+    let tris =
+        |part: &[[u32; 3]]| -> Vec<[[f64; 3]; 3]> { part.iter().map(|t| t.map(|v| s.vertices[v as usize])).collect() };
+    let (ta, tb) = (tris(a), tris(b));
+    let centre = |range: std::ops::Range<usize>| {
+        [0, 1, 2].map(|k| s.vertices[range.clone()].iter().map(|v| v[k]).sum::<f64>() / 642.0)
+    };
+    let (ca, cb) = (centre(0..642), centre(642..1284));
+    let d = ((cb[0] - ca[0]).powi(2) + (cb[1] - ca[1]).powi(2) + (cb[2] - ca[2]).powi(2)).sqrt();
+    assert!((d - 1.05f64.sqrt()).abs() < 1e-9, "{d}");
+    let exact = convex_union_volume(&ta, &tb);
+    // The balls' union, closed form: two balls less the lens pi (4 + d)(2 - d)^2 / 12,
+    // less the facets' deficit: the icosphere's per unit area of its sphere,
+    // delta = (4/3 pi - V_ico) / (4 pi), times the union's area, 8 pi less the
+    // two caps inside the other ball (each 2 pi h, h = 1 - d/2).
+    let pi = std::f64::consts::PI;
+    let ball = 4.0 / 3.0 * pi;
+    let balls = 2.0 * ball - pi * (4.0 + d) * (2.0 - d).powi(2) / 12.0;
+    let delta = (ball - 0.5 * s.signed_volume(None)) / (4.0 * pi);
+    let area = 8.0 * pi - 4.0 * pi * (1.0 - d / 2.0);
+    let estimate = balls - delta * area;
+    eprintln!("{name}: exact union {exact:.6} mm^3; balls' union {balls:.6} less the facets' deficit: {estimate:.6}");
+    assert!((exact / estimate - 1.0).abs() < 1e-4, "{exact} against {estimate}");
+    let options = EnvelopeOptions { grade_levels: 4, ..EnvelopeOptions::new(0.2) };
+    let (out, q) = mesh_and_report_with(&s, &options);
+    assert_envelope_gates(name, &out, &q, exact, 1e-2);
+    assert!(q.num_interior_input_triangles > 0 && q.num_partly_interior_input_triangles > 0, "{q:?}");
+    assert!(q.raw_hausdorff_mm > 0.9, "{q:?}");
+}
+
+/// A fin 1e-4 mm thick (0.8 x 0.8 mm) through a face of a unit box, raw, on
+/// the graded lattice (0.2 mm, 2 levels): the fin, thinner than half the
+/// lattice spacing, is reported (`ThinFeature`: 1e-4 mm, at x = 0.5), not
+/// dropped silently. Reference: the union of the two boxes (closed form), 1 +
+/// 0.64 x 9.9e-5 mm^3. Measured (session 20): 16k tets, dihedral [44.89,
+/// 120.03] deg, boundary figure 4.04e-5 of the diagonal (the fin, 9.9e-5 mm
+/// proud of the face, is within that of the box's face), volume error X.
+#[test]
+fn corpus_thin_fin_meets_every_gate_and_is_reported() {
+    let name = "bad_syn_thin_fin.obj";
+    let s = corpus_obj(name);
+    let [cube, fin] = two_boxes(&s, 12);
+    let exact = box_union_volume(cube, fin);
+    assert!((exact - (1.0 + 0.64 * 9.9e-5)).abs() < 1e-12, "{exact}");
+    let options = EnvelopeOptions { grade_levels: 2, ..EnvelopeOptions::new(0.2) };
+    let (out, q) = mesh_and_report_with(&s, &options);
+    assert_envelope_gates(name, &out, &q, exact, 1e-2);
+    let thin: Vec<_> = out
+        .warnings
+        .iter()
+        .filter_map(|w| match w {
+            EnvelopeWarning::ThinFeature { min_thickness_mm, lo_mm, hi_mm, .. } => {
+                Some((*min_thickness_mm, *lo_mm, *hi_mm))
+            }
+            _ => None,
+        })
+        .collect();
+    assert_eq!(thin.len(), 1, "{:?}", out.warnings);
+    let (t, lo, hi) = thin[0];
+    assert!((t - 1e-4).abs() < 2e-5, "thinnest {t}");
+    assert!(lo[0] > 0.49 && hi[0] < 0.51, "{lo:?}..{hi:?}");
+}
+
+/// Two unit boxes sharing an edge (non-manifold), raw, on the uniform lattice
+/// (0.25 mm: their faces on lattice planes, exact): both boxes meshed, each
+/// with its exact volume 1 (cells by centroid, within 1e-9), the union 2
+/// (closed form); angles [45, 90] deg, boundary figure ~1e-16.
+#[test]
+fn corpus_boxes_sharing_an_edge_mesh_both_exactly() {
+    let name = "bad_syn_nonmanifold_edge.obj";
+    let s = corpus_obj(name);
+    let boxes = two_boxes(&s, 12);
+    let exact = box_union_volume(boxes[0], boxes[1]);
+    assert!((exact - 2.0).abs() < 1e-12, "{exact}");
+    let (out, q) = mesh_and_report(&s, 0.25);
+    assert_proven_bounds(&q);
+    assert_envelope_gates(name, &out, &q, exact, 1e-9);
+    for (lo, hi) in boxes {
+        let v: f64 = out
+            .mesh
+            .cells
+            .iter()
+            .map(|c| c.map(|v| out.mesh.nodes[v as usize]))
+            .filter(|p| (0..3).all(|k| (lo[k]..hi[k]).contains(&((p[0][k] + p[1][k] + p[2][k] + p[3][k]) / 4.0))))
+            .map(|p| fem_core::element::signed_measure(&p))
+            .sum();
+        assert!((v - 1.0).abs() < 1e-9, "the box {lo:?}..{hi:?}: {v}");
+    }
+}
+
+/// The uniform lattice (the default) on the corpus, at coarse sizes: what it
+/// alone proves, the stuffing's angle bounds (Labelle and Shewchuk) on a
+/// conforming mesh of positive cells, on every file raw (no repair); the
+/// issue's gates are the tests' above. The angles are taken per cell here, not
+/// from the quality report (whose distances cost more than the meshes).
+#[test]
+fn the_uniform_lattice_keeps_the_proven_bounds_on_the_corpus() {
+    for (name, h) in [
+        ("npm_bunny.obj", 0.4),
+        ("bad_syn_hole.obj", 0.4),
+        ("bad_syn_flipped10pct.obj", 0.4),
+        ("bad_syn_inverted.obj", 0.4),
+        ("bad_syn_soup_jitter.obj", 0.4),
+        ("bad_syn_degenerate_dup.obj", 0.4),
+        ("bad_syn_overlapping_spheres.obj", 0.2),
+        ("bad_syn_thin_fin.obj", 0.1),
+    ] {
+        let out = envelope_mesh(&corpus_obj(name), &EnvelopeOptions::new(h)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_conforming(&out.mesh);
+        let (lo, hi) = out.mesh.cells.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| {
+            let (a, b) = meshing::quality::dihedral_range_deg(&c.map(|v| out.mesh.nodes[v as usize]));
+            (lo.min(a), hi.max(b))
+        });
+        eprintln!("{name} at {h} mm: {} cells, dihedral [{lo:.2}, {hi:.2}] deg", out.mesh.cells.len());
+        assert!(lo >= 10.7 && hi <= 164.8, "{name}: dihedral [{lo}, {hi}] deg");
+    }
 }
 
 // ---- determinism and refusals

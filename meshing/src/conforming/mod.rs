@@ -144,10 +144,13 @@
 //!    ratio 1.74 to 1.47; fandisk 2.23 to 1.74; bunny 1.75 to 1.41).
 //!
 //! Everything is deterministic (candidate points come from generators seeded by
-//! the tet's or vertex's indices). The one parallel step is the probing of a
-//! bad tet's candidate points (`refine.rs`): each verdict is a function of
-//! the tetrahedralization and the point, read in candidate order, so the
-//! result does not depend on the number of threads. The output's cells are
+//! the tet's or vertex's indices). Two steps run on both cores: the probing
+//! of a bad tet's candidate points (`refine.rs`: each verdict is a function
+//! of the tetrahedralization and the point, read in candidate order), and
+//! the judging of vertices in smoothing (`smooth.rs`: a batch of vertices
+//! judged against the positions at its start, those whose star moved since
+//! judged again, the moves made in vertex order), so the result does not
+//! depend on the number of threads. The output's cells are
 //! sorted by their corners (vertex indices, in insertion order), not taken in
 //! the order of their slots in the tetrahedralization: which slot a new tet
 //! gets depends on where the location walk of its point ended when the point
@@ -373,6 +376,29 @@ pub struct ConformingStats {
     pub radius_edge_smoothing: SmoothStats,
     /// Wall time [s].
     pub time_s: f64,
+    /// Wall time of each stage [s].
+    pub stage_times: StageTimes,
+}
+
+/// Wall time of each stage of [`conforming_mesh`] [s] (module docs' numbering).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct StageTimes {
+    /// Validation, the Delaunay tetrahedralization and boundary recovery (stages 1, 2) [s].
+    pub recovery_s: f64,
+    /// Size and quality refinement (stage 3) [s].
+    pub refinement_s: f64,
+    /// The inside's components, regions and flat caps (stage 4) [s].
+    pub regions_s: f64,
+    /// Edge removal (stage 5) [s].
+    pub edge_removal_s: f64,
+    /// Star insertion (stage 6) [s].
+    pub stars_s: f64,
+    /// Sliver smoothing (stage 7) [s].
+    pub smoothing_s: f64,
+    /// Smoothing for the radius-edge ratio (stage 7) [s].
+    pub radius_edge_smoothing_s: f64,
+    /// The boundary sets and the final check [s].
+    pub check_s: f64,
 }
 
 /// The result of [`conforming_mesh`].
@@ -420,6 +446,13 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
     let max_steiner = options.max_steiner_per_vertex * vertices.len() + 10_000;
     let mut rec = recover::Recovery::new(&vertices, &facets, max_steiner)?;
     rec.run()?;
+    let mut stage_times = StageTimes::default();
+    let mut lap = start;
+    let mut stage = |slot: &mut f64| {
+        *slot = lap.elapsed().as_secs_f64();
+        lap = Instant::now();
+    };
+    stage(&mut stage_times.recovery_s);
     let mut refinement = RefineStats::default();
     if options.size_mm.is_some() {
         let max_volume = options.size_mm.map_or(f64::INFINITY, |h| h.powi(3) / (6.0 * 2f64.sqrt()));
@@ -445,8 +478,9 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
             }
         }
     }
+    stage(&mut stage_times.refinement_s);
     let delaunay_tets = rec.dt.finite_tets().count();
-    let (mut tets, num_components) = recover::interior_components(&rec.dt, &rec.face_owner);
+    let (mut tets, num_components) = recover::interior_components(&rec);
     // In the order of their corners, not of their slots in the
     // tetrahedralization: the slots depend on where each location walk ended
     // (a point on a face or edge lies in several tets), which is machinery;
@@ -499,8 +533,9 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
     let mut stars = StarStats::default();
     if options.sliver_deg > 0.0 {
         // `compact` numbers the used vertices in increasing order.
-        let used: std::collections::BTreeSet<u32> = cell_tets.iter().flatten().copied().collect();
-        let index: Vec<u32> = used.iter().copied().collect();
+        let mut index: Vec<u32> = cell_tets.iter().flatten().copied().collect();
+        index.sort_unstable();
+        index.dedup();
         let renumber = |v: u32| index.binary_search(&v).ok().map(|i| i as u32);
         // The subfacets, in the compacted numbering (sorted corners): edge
         // removal keeps them.
@@ -514,19 +549,31 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
                 Some(k)
             })
             .collect();
+        stage(&mut stage_times.regions_s);
         flips = flip::remove_edges(&nodes, &mut cells, &mut cell_regions, &constrained, options.sliver_deg);
+        stage(&mut stage_times.edge_removal_s);
         let max_volume = options.size_mm.map_or(f64::INFINITY, |h| h.powi(3) / (6.0 * 2f64.sqrt()));
         stars =
             star::insert_stars(&mut nodes, &mut cells, &mut cell_regions, &constrained, options.sliver_deg, max_volume);
+        stage(&mut stage_times.stars_s);
         let all = rec.freedom();
         // The points star insertion added are interior: free.
-        let freedom: Vec<recover::Freedom> = used
+        let freedom: Vec<recover::Freedom> = index
             .iter()
             .map(|&v| all[v as usize])
             .chain(std::iter::repeat(recover::Freedom::Free))
             .take(nodes.len())
             .collect();
-        smoothing = smooth::smooth(&mut nodes, &cells, &freedom, options.sliver_deg, max_volume, SMOOTHING_PASSES);
+        smoothing = smooth::smooth(
+            &mut nodes,
+            &cells,
+            &freedom,
+            options.sliver_deg,
+            max_volume,
+            SMOOTHING_PASSES,
+            smooth::BATCH,
+        );
+        stage(&mut stage_times.smoothing_s);
         if options.radius_edge.is_finite() {
             radius_edge_smoothing = smooth::smooth_radius_edge(
                 &mut nodes,
@@ -536,8 +583,12 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
                 options.sliver_deg,
                 max_volume,
                 SMOOTHING_PASSES,
+                smooth::BATCH,
             );
         }
+        stage(&mut stage_times.radius_edge_smoothing_s);
+    } else {
+        stage(&mut stage_times.regions_s);
     }
     let region_names = if nreg > 1 {
         regions_surface.region_names.clone()
@@ -553,6 +604,7 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
     mesh.node_sets.insert("boundary".into(), boundary);
     mesh.face_sets.insert("boundary".into(), faces);
     mesh.validate().map_err(|e| ConformingError::Internal { cause: e.to_string() })?;
+    stage(&mut stage_times.check_s);
     let stats = ConformingStats {
         input_vertices: vertices.len(),
         input_triangles: facets.len(),
@@ -567,6 +619,7 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
         smoothing,
         radius_edge_smoothing,
         time_s: start.elapsed().as_secs_f64(),
+        stage_times,
     };
     Ok(ConformingMesh { mesh, stats })
 }
@@ -590,8 +643,8 @@ fn drop_flat_caps(
     tol: f64,
 ) -> Vec<(u32, [u32; 4], u32)> {
     loop {
-        // Faces by sorted corners -> (count, component).
-        let mut faces: HashMap<[u32; 3], (u32, u32)> = HashMap::new();
+        // Faces by sorted corners -> (count, component); never iterated.
+        let mut faces: recover::FaceMap<(u32, u32)> = recover::FaceMap::default();
         for (_, t, c) in &tets {
             for f in FACE {
                 let mut k = f.map(|j| t[j]);
@@ -603,31 +656,31 @@ fn drop_flat_caps(
                 }
             }
         }
-        let before = tets.len();
-        let mut removed: std::collections::HashSet<[u32; 4]> = std::collections::HashSet::new();
-        for (_, t, _) in &tets {
-            let on_boundary = FACE
-                .iter()
-                .filter(|f| {
-                    let mut k = f.map(|j| t[j]);
-                    k.sort_unstable();
-                    faces.get(&k).is_some_and(|&(n, _)| n != 2)
-                })
-                .count();
-            if on_boundary >= 1 {
+        let removed: Vec<bool> = tets
+            .iter()
+            .map(|(_, t, _)| {
+                let on_boundary = FACE
+                    .iter()
+                    .filter(|f| {
+                        let mut k = f.map(|j| t[j]);
+                        k.sort_unstable();
+                        faces.get(&k).is_some_and(|&(n, _)| n != 2)
+                    })
+                    .count();
                 // Flat: its smallest height under `tol` (a needle or a wedge
                 // with a tiny angle is no flat cap: removing it would move the
                 // boundary).
-                let q = t.map(|v| points[v as usize]);
-                if crate::quality::tet_quality(&q).min_dihedral_deg < FLAT_DEG && on_its_plane(q, tol) {
-                    removed.insert(*t);
+                on_boundary >= 1 && {
+                    let q = t.map(|v| points[v as usize]);
+                    crate::quality::dihedral_range_deg(&q).0 < FLAT_DEG && on_its_plane(q, tol)
                 }
-            }
-        }
-        tets.retain(|(_, t, _)| !removed.contains(t));
-        if tets.len() == before {
+            })
+            .collect();
+        if !removed.contains(&true) {
             return tets;
         }
+        let mut flags = removed.into_iter();
+        tets.retain(|_| !flags.next().unwrap_or(false));
     }
 }
 

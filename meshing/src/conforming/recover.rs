@@ -3,7 +3,7 @@
 //!
 //! See the module docs of [`crate::conforming`] for the design and why.
 
-use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::collections::{BTreeSet, HashMap};
 
 use super::delaunay::{Delaunay, FACE, GHOST};
 use super::facet::Facet;
@@ -626,19 +626,26 @@ pub(crate) fn circumcentre(q: [Point; 3]) -> Point {
     [0, 1, 2].map(|k| q[0][k] + (aa * t2[k] + bb * t1[k]) / (2.0 * nn))
 }
 
-/// The finite tets not reachable from the outside (the ghosts) without
-/// crossing a constrained face, grouped into the components that constrained
-/// faces separate: `(tet corners, component)` and the number of components.
-pub(crate) fn interior_components(dt: &Delaunay, constrained: &FaceMap<u32>) -> (Vec<(u32, [u32; 4], u32)>, usize) {
+/// The finite tets of `rec` not reachable from the outside (the ghosts)
+/// without crossing a subfacet, grouped into the components that subfacets
+/// separate: `(slot, tet corners, component)` and the number of components.
+/// A face with a corner off the surface is no subfacet: settled without a
+/// look-up in the map (most faces; the flood runs once per refinement pass).
+pub(crate) fn interior_components(rec: &Recovery) -> (Vec<(u32, [u32; 4], u32)>, usize) {
+    let (dt, constrained) = (&rec.dt, &rec.face_owner);
     let live: Vec<(u32, [u32; 4])> = dt.live_tets().collect();
     let slots = live.iter().map(|(t, _)| *t as usize + 1).max().unwrap_or(0);
     const UNSEEN: u32 = u32::MAX;
     const OUTSIDE: u32 = u32::MAX - 1;
     let mut comp = vec![UNSEEN; slots];
-    let face_key = |v: [u32; 4], i: usize| {
+    // Whether face `i` of the tet with corners `v` is a subfacet (sorted for
+    // the look-up only when every corner is on the surface).
+    let subfacet = |v: [u32; 4], i: usize| {
         let mut k = FACE[i].map(|j| v[j]);
-        k.sort_unstable();
-        k
+        k.iter().all(|&x| x != GHOST && rec.on_surface(x)) && {
+            k.sort_unstable();
+            constrained.contains_key(&k)
+        }
     };
     let flood = |seeds: Vec<u32>, label: u32, comp: &mut Vec<u32>| {
         let mut stack = seeds;
@@ -652,8 +659,7 @@ pub(crate) fn interior_components(dt: &Delaunay, constrained: &FaceMap<u32>) -> 
                 if comp[n[i] as usize] != UNSEEN {
                     continue;
                 }
-                let k = face_key(v, i);
-                if !k.contains(&GHOST) && constrained.contains_key(&k) {
+                if subfacet(v, i) {
                     continue;
                 }
                 comp[n[i] as usize] = label;
@@ -677,10 +683,17 @@ pub(crate) fn interior_components(dt: &Delaunay, constrained: &FaceMap<u32>) -> 
 
 /// Compacts the vertices used by `tets`: `(nodes, renumbered tets)`.
 pub(crate) fn compact(points: &[Point], tets: &[[u32; 4]]) -> (Vec<Point>, Vec<[u32; 4]>) {
-    let used: BTreeSet<u32> = tets.iter().flatten().copied().collect();
-    let map: BTreeMap<u32, u32> = used.iter().enumerate().map(|(i, &v)| (v, i as u32)).collect();
-    let nodes = used.iter().map(|&v| points[v as usize]).collect();
-    let cells = tets.iter().map(|t| t.map(|v| map[&v])).collect();
+    // The used vertices in increasing order get 0, 1, ...
+    let mut index = vec![u32::MAX; points.len()];
+    tets.iter().flatten().for_each(|&v| index[v as usize] = 0);
+    let mut nodes = Vec::new();
+    for (v, slot) in index.iter_mut().enumerate() {
+        if *slot == 0 {
+            *slot = nodes.len() as u32;
+            nodes.push(points[v]);
+        }
+    }
+    let cells = tets.iter().map(|t| t.map(|v| index[v as usize])).collect();
     (nodes, cells)
 }
 

@@ -50,7 +50,7 @@ use rayon::prelude::*;
 use super::recover::{interior_components, Recovery};
 use super::ConformingError;
 use crate::predicates::{cross, dot, sub, Point};
-use crate::quality::dihedral_range_deg;
+use crate::quality::{dihedral_cos_range, dihedral_range_deg};
 
 /// Candidate points per bad tet (the circumcentre and points near it).
 pub const CANDIDATES: usize = 8;
@@ -163,7 +163,7 @@ impl Recovery {
         let mut good: Vec<[u32; 4]> = Vec::new();
         for _pass in 0..64 {
             stats.passes += 1;
-            let (inside, _) = interior_components(&self.dt, &self.face_owner);
+            let (inside, _) = interior_components(self);
             let pts = self.dt.points();
             let mut bad: Vec<(f64, u32, [u32; 4], bool, bool, f64)> = Vec::new();
             for &(t, v, _) in &inside {
@@ -502,12 +502,14 @@ impl Recovery {
         if star.iter().any(|t| t.contains(&super::delaunay::GHOST)) {
             return Candidate::Duplicate; // beyond the hull: never inserted
         }
-        let mut worst = f64::INFINITY;
+        // The smallest dihedral angle of the star: the `acos` of its
+        // largest cosine (`dihedral_cos_range`), one `acos` for the star.
+        let mut cos = f64::NEG_INFINITY;
         for t in star.iter() {
             let q = t.map(|v| if v == n { p } else { pts[v as usize] });
-            worst = worst.min(dihedral_range_deg(&q).0);
+            cos = cos.max(dihedral_cos_range(&q).1);
         }
-        Candidate::Free(worst)
+        Candidate::Free(if cos == f64::NEG_INFINITY { f64::INFINITY } else { cos.acos().to_degrees() })
     }
 }
 

@@ -13,12 +13,13 @@
 //!    of spacing `size_mm` (the long lattice edges; the short ones are `0.87 h`):
 //!    every boundary node lies on the input surface (a cut point of a lattice edge,
 //!    or a lattice vertex warped onto one), and the dihedral angles are proven to
-//!    lie in [10.7°, 164.8°] for the outer boundary's stencils. With
+//!    lie in [10.7°, 164.8°] for the outer boundary's stencils where the input
+//!    is flat at the lattice's scale (not across its creases: below). With
 //!    [`EnvelopeOptions::grade_levels`] > 0, on a **graded** lattice instead
 //!    (`graded.rs`): the BCC lattice refined by conforming longest-edge
 //!    bisection down to `size_mm / 2^levels` where the input's chord error at the
 //!    cell's size exceeds [`EnvelopeOptions::grade_tolerance`] (creases, curved
-//!    parts, thin parts, the rims of holes), coarse elsewhere; the same stuffing per tet, with
+//!    parts, thin parts, the rims of holes; rims deeper, as the tolerance asks), coarse elsewhere; the same stuffing per tet, with
 //!    measured (not proven) warping thresholds, then boundary slivers peeled.
 //! 3. **Regions**: with several input regions (OBJ objects or groups, glTF meshes),
 //!    each region's shell is cut into the mesh as a conforming interface
@@ -38,7 +39,9 @@
 //!    angles in [12°, 155°].
 //! 7. **Angle guard** (`guard.rs`): what is still outside [12°, 155°] is smoothed
 //!    again (region-shell interface nodes now sliding along the input), flipped
-//!    (2-3, 3-2), peeled (thin boundary slivers) or split; whatever stays outside
+//!    (2-3, 3-2), peeled (thin boundary slivers) or split (an edge inside the
+//!    mesh at a point moved off it, which repairs a tet spanning a crease of the
+//!    input, whose angle there is the crease's); whatever stays outside
 //!    is refused ([`EnvelopeError::AngleGuard`]), never emitted. So every tet of a
 //!    returned mesh has its dihedral angles in [12°, 155°].
 //!
@@ -81,8 +84,13 @@
 //! `w = 1/2` (the teapot handle's open mouth against the body, BENCHMARKS.md
 //! session 20, now reported as a thin gap). Cells cut by region interfaces and layer planes have no proven angle
 //! bound; the quality report measures them, and the final guard refuses what it
-//! cannot bring into [12°, 155°] (measured: the uniform lattice on the open teapot
-//! at 0.25 mm, 2 tets at 158° at the stem of the lid's knob, is refused).
+//! cannot bring into [12°, 155°]. The outer stencils' proven bound [10.7°,
+//! 164.8°] is wider than the targets, and holds for an input flat at the
+//! lattice's scale only: a lattice tet whose four vertices are warped onto the
+//! input, one edge onto a crease, has the crease's interior angle there (the
+//! teapot at 0.25 mm: 158° at the 22° crease along the lid knob's seam, 157° at
+//! a 23° one along the handle's; a roof with a 10° crease: 170°), which the
+//! guard's splits repair (BENCHMARKS.md, session 20).
 
 //! ## Example
 //!
@@ -157,7 +165,9 @@ pub struct EnvelopeOptions {
     pub max_fit_rounds: usize,
     /// Grading (`graded.rs`): the lattice is refined by bisection down to
     /// `size_mm / 2^grade_levels` where the input is curved, creased or thin at
-    /// the scale of the cells; 0 (default): the uniform lattice. At most 8.
+    /// the scale of the cells, and at the rims of holes (the input's border
+    /// edges) deeper, as far as [`Self::grade_tolerance`] asks (to `size_mm /
+    /// 2^8` at most); 0 (default): the uniform lattice. At most 8.
     pub grade_levels: u32,
     /// The grading's chord-error tolerance, relative to the bounding-box diagonal
     /// (default 5e-4): a cell is cut while its estimated chord error exceeds it.
@@ -242,10 +252,11 @@ pub enum EnvelopeError {
         cause: String,
     },
     /// Tets outside the dihedral angle targets [12°, 155°] that the final guard
-    /// (flips, peeling of thin boundary slivers) could not repair: refused rather
-    /// than emitted.
+    /// (smoothing, flips, peeling of thin boundary slivers, edge splits) could
+    /// not repair: refused rather than emitted.
     #[error(
-        "{num_cells} tets have dihedral angles outside [12, 155] deg after the repair; the worst, tet {cell} \
+        "{num_cells} tets have dihedral angles outside [12, 155] deg after the repair (no smoothing move, flip, \
+         peeling of a thin boundary sliver or edge split improved them); the worst, tet {cell} \
          ({min_deg:.2}..{max_deg:.2} deg) at {centroid_mm:?} mm; try another --size-mm or --grade-levels"
     )]
     AngleGuard {
