@@ -99,12 +99,7 @@ impl WindingNumber {
     /// tube, across a hole) is classified as the solid `w > 1/2` defines it.
     /// Costs one fast evaluation, and a sum over all triangles near 1/2.
     pub fn is_inside_checked(&self, q: [f64; 3]) -> bool {
-        let w = self.at(q);
-        if (w - 0.5).abs() < NEAR_HALF {
-            self.tree.winding_number_exact(q) > 0.5
-        } else {
-            w > 0.5
-        }
+        self.tree.is_inside_checked(q)
     }
 
     /// The winding number at each point, in parallel (same result at any thread count).

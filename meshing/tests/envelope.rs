@@ -823,6 +823,38 @@ fn the_teapot_meshes_with_the_proven_bounds() {
     assert!(q.raw_hausdorff_relative > q.hausdorff_relative, "{q:?}");
     assert!(out.warnings.iter().any(|w| matches!(w, EnvelopeWarning::ThinFeature { .. })), "{:?}", out.warnings);
     assert!(q.mesh_time_s > 0.0 && q.mesh_time_s.is_finite());
+    // Session 20: where the handle's open tube meets the body, outside the body
+    // `w` is 0.49 to 0.51 (the tube's mouth), and the solid has a void there, a
+    // wedge between the body and the level set `w = 1/2` (0 at |z| = 0.23 mm,
+    // 0.15 mm thick at |z| = 1.06 mm, up to 0.5 mm), which no centroid ray saw:
+    // the sampled thin test now reports it as a thin gap, on the handle's side.
+    let gap = out.warnings.iter().find_map(|w| match w {
+        EnvelopeWarning::ThinGap { lo_mm, hi_mm, .. } => Some((*lo_mm, *hi_mm)),
+        _ => None,
+    });
+    let (lo, hi) = gap.unwrap_or_else(|| panic!("no thin gap reported: {:?}", out.warnings));
+    let mouth = [-10.83, -4.12, 0.23];
+    assert!((0..3).all(|k| lo[k] <= mouth[k] && mouth[k] <= hi[k]), "{lo:?}..{hi:?}");
+    assert!(hi[0] < 0.0, "the gap is on the handle's side: {lo:?}..{hi:?}");
+}
+
+/// The teapot on the graded lattice (0.5 mm, 3 levels), session 20: the sizing
+/// now refines cells across which the solid or a gap of it is thinner than the
+/// cell (the level set `w = 1/2` counted as a wall), and the stuffing decides
+/// the inside exactly where `w` is within 0.1 of 1/2. The boundary figure's
+/// maximum, at the handle's mouth, fell from 1.15e-2 (session 19) to 3.63e-3 of
+/// the diagonal (asserted < 4e-3: still a miss of the issue's 1e-3, the void's
+/// tail is thinner than the finest cells; 5 levels give 1.59e-3, too slow
+/// here); dihedral angles measured 13.81-151.24 deg, asserted in [12, 155].
+#[test]
+fn the_graded_teapot_resolves_the_void_at_the_handles_mouth() {
+    let s = obj("npm_teapot.obj");
+    let (out, q) = mesh_and_report_with(&s, &EnvelopeOptions { grade_levels: 3, ..EnvelopeOptions::new(0.5) });
+    assert_issue_angles(&q);
+    assert_conforming(&out.mesh);
+    assert!(q.volume_error.abs() < 3e-2, "{}", q.volume_error);
+    assert!(q.hausdorff_relative < 4e-3, "{q:?}");
+    assert!(q.mesh_to_surface_mm / s.diagonal() < 2e-3, "{q:?}");
 }
 
 /// Layers along y: conforming planes, each layer's cells between its planes.
