@@ -19,6 +19,9 @@
 //! faces lie on the boundary (`classify`), and by shape (needle, wedge, cap,
 //! sliver), with the angle at the hinge of those with two boundary faces and
 //! where their shortest edge lies (`classify_shapes`).
+//! `PROBE_TIMES=1` prints the wall time of reading the file, of the surface's
+//! validation, of the quality report and of each of its parts computed again
+//! alone (cell statistics, volumes, boundary faces, boundary distance).
 //! The mesh's fingerprints (hashes of its nodes and cells, with the cells
 //! sorted and as output) tell identical meshes apart from merely similar ones.
 //!
@@ -85,6 +88,7 @@ fn main() {
     let arg = |i: usize| args.get(i).and_then(|a| a.parse::<f64>().ok());
     let defaults = ConformingOptions::default();
     let (q, sliver) = (arg(3).unwrap_or(defaults.radius_edge), arg(4).unwrap_or(defaults.sliver_deg));
+    let clock = Instant::now();
     let (s, sizes) = match args.get(1) {
         Some(path) if path.ends_with(".obj") => (read_obj(path), vec![arg(2)]),
         Some(path) => (read_off_or_stl(path), vec![arg(2)]),
@@ -99,6 +103,10 @@ fn main() {
     } else {
         s
     };
+    let read_s = clock.elapsed().as_secs_f64();
+    if std::env::var_os("PROBE_TIMES").is_some() {
+        report_times(&s, read_s);
+    }
     for h in sizes {
         let o = ConformingOptions { size_mm: h, radius_edge: q, sliver_deg: sliver, ..defaults.clone() };
         let clock = Instant::now();
@@ -115,7 +123,12 @@ fn main() {
                 println!(
                     "mesh fingerprint {canonical:016x} (cells sorted), {ordered:016x} (as output), {cells:016x} (sorted cells alone)"
                 );
+                let clock = Instant::now();
                 let r = report(&m.mesh, &s, t);
+                if std::env::var_os("PROBE_TIMES").is_some() {
+                    println!("report {:.3} s", clock.elapsed().as_secs_f64());
+                    report_part_times(&m.mesh, &s);
+                }
                 println!(
                     "h {h:?} q {q} sliver {sliver}: {} tets, dihedral {:.2}..{:.2}, <10deg {:.3} %, r-e max {:.2} p99.9 {:.3}, \
                      vol err {:.1e}, Hausdorff {:.1e}, {t:.2} s\n  {:?}\n  {:?}\n  {:?}\n  {:?}\n  {:?}\n  {:?}",
@@ -138,6 +151,34 @@ fn main() {
             Err(e) => println!("h {h:?}: {e}"),
         }
     }
+}
+
+/// `PROBE_TIMES=1`: the wall time of reading the file and of the surface's
+/// checks the mesher starts with.
+fn report_times(s: &Surface, read_s: f64) {
+    let clock = Instant::now();
+    let valid = s.require_valid().map(|_| ());
+    println!("read {read_s:.3} s, require_valid {:.3} s ({valid:?})", clock.elapsed().as_secs_f64());
+}
+
+/// `PROBE_TIMES=1`: the wall time of the quality report's parts, each
+/// computed again alone.
+fn report_part_times(mesh: &fem_core::mesh::TetMesh, s: &Surface) {
+    let lap = |name: &str, clock: &mut Instant| {
+        println!("  {name} {:.3} s", clock.elapsed().as_secs_f64());
+        *clock = Instant::now();
+    };
+    let mut clock = Instant::now();
+    let _ = meshing::quality::cell_statistics(mesh);
+    lap("cell statistics", &mut clock);
+    let _ = mesh.measure();
+    let _ = s.signed_volume(None);
+    lap("volumes", &mut clock);
+    let faces = mesh.boundary_facets();
+    lap("boundary faces", &mut clock);
+    let tris: Vec<[[f64; 3]; 3]> = faces.iter().map(|f| f.map(|v| mesh.nodes[v as usize])).collect();
+    let _ = meshing::distance::boundary_distance(&tris, s, s.diagonal() / 300.0);
+    lap("boundary distance", &mut clock);
 }
 
 /// FNV-1a hashes of the mesh (node coordinates' bits, cells with their

@@ -343,19 +343,23 @@ pub fn report(mesh: &TetMesh, surface: &Surface, mesh_time_s: f64) -> QualityRep
     }
     let reference_volume_mm3: f64 = (0..nreg).filter(|&r| parent[r].is_none()).map(|r| shell_volume[r]).sum();
     let same_regions = mesh.region_names.len() == nreg && nreg > 1 && mesh.region_names == surface.region_names;
+    // Each region's cells and volume, summed in cell order (one pass over the
+    // cells, not one per region; the volumes are `tet_quality`'s, bit for bit).
+    let cell_volumes: Vec<f64> =
+        mesh.cells.par_iter().map(|c| tet_volume(&c.map(|x| mesh.nodes[x as usize]))).collect();
+    let mut region_sums = vec![(0.0, 0usize); mesh.region_names.len()];
+    for (&v, &cr) in cell_volumes.iter().zip(&mesh.cell_regions) {
+        if let Some((sum, n)) = region_sums.get_mut(cr as usize) {
+            *sum += v;
+            *n += 1;
+        }
+    }
     let regions = mesh
         .region_names
         .iter()
+        .zip(region_sums)
         .enumerate()
-        .map(|(r, name)| {
-            let mut v = 0.0;
-            let mut n = 0;
-            for (c, &cr) in mesh.cells.iter().zip(&mesh.cell_regions) {
-                if cr as usize == r {
-                    v += tet_quality(&c.map(|x| mesh.nodes[x as usize])).volume_mm3;
-                    n += 1;
-                }
-            }
+        .map(|(r, (name, (v, n)))| {
             let reference = if same_regions || (nreg == 1 && mesh.region_names.len() == 1) {
                 Some(if nreg == 1 { reference_volume_mm3 } else { own[r] })
             } else {

@@ -97,8 +97,13 @@ pub enum Probe {
 /// Scratch of [`Delaunay::probe_star`], one per thread.
 #[derive(Debug, Default, Clone)]
 pub struct ProbeScratch {
-    /// Tets tested: in conflict or not.
-    inside: rustc_hash::FxHashMap<u32, bool>,
+    /// Tets tested by the current probe, by slot: `2 * epoch + 1` in
+    /// conflict, `2 * epoch` not; anything else untested (a stamp per slot
+    /// instead of a hash map of the tested tets: the map's look-ups were
+    /// most of the probe's own time).
+    tested: Vec<u32>,
+    /// The current probe's stamp (see `tested`).
+    epoch: u32,
     stack: Vec<u32>,
     cavity: Vec<u32>,
     /// Cavity boundary faces: cavity tet, face index.
@@ -297,28 +302,38 @@ impl Delaunay {
         if !self.is_ghost(start) && self.tets[start as usize].iter().any(|&v| self.points[v as usize] == p) {
             return Probe::Duplicate;
         }
-        let ProbeScratch { inside, stack, cavity, boundary } = scratch;
-        inside.clear();
+        let ProbeScratch { tested, epoch, stack, cavity, boundary } = scratch;
+        // A fresh stamp; the stamps restart from 1 before they overflow.
+        *epoch = if *epoch >= u32::MAX / 2 - 1 {
+            tested.iter_mut().for_each(|m| *m = 0);
+            1
+        } else {
+            *epoch + 1
+        };
+        let (outside_mark, conflict_mark) = (2 * *epoch, 2 * *epoch + 1);
+        if tested.len() < self.tets.len() {
+            tested.resize(self.tets.len(), 0);
+        }
         stack.clear();
         cavity.clear();
         boundary.clear();
-        inside.insert(start, true);
+        tested[start as usize] = conflict_mark;
         cavity.push(start);
         stack.push(start);
         while let Some(t) = stack.pop() {
             for i in 0..4 {
                 let n = self.nbrs[t as usize][i];
-                let conflict = match inside.get(&n) {
-                    Some(&c) => c,
-                    None => {
-                        let c = self.in_conflict_at(n, p);
-                        inside.insert(n, c);
-                        if c {
-                            cavity.push(n);
-                            stack.push(n);
-                        }
-                        c
+                let m = tested[n as usize];
+                let conflict = if m == conflict_mark || m == outside_mark {
+                    m == conflict_mark
+                } else {
+                    let c = self.in_conflict_at(n, p);
+                    tested[n as usize] = if c { conflict_mark } else { outside_mark };
+                    if c {
+                        cavity.push(n);
+                        stack.push(n);
                     }
+                    c
                 };
                 if !conflict {
                     boundary.push((t, i));
@@ -335,7 +350,7 @@ impl Delaunay {
         for &t in cavity.iter() {
             for i in 0..4 {
                 let n = self.nbrs[t as usize][i];
-                if n > t && inside.get(&n) == Some(&true) {
+                if n > t && tested[n as usize] == conflict_mark {
                     let v = self.tets[t as usize];
                     let mut f = FACE[i].map(|j| v[j]);
                     f.sort_unstable();
