@@ -765,3 +765,60 @@ impl Delaunay {
         self.boundary = boundary;
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `probe_star` (`&self`, its own per-thread stamps) lists the same star
+    /// and removed faces as `star_of` (the cavity dug with the
+    /// tetrahedralization's own marks), compared sorted, for 300 points in
+    /// and around 200 random points (every tenth on a vertex: a duplicate;
+    /// some beyond the hull: ghost tets in the star), with one scratch reused
+    /// throughout whose stamps restart at the third probe, over slots
+    /// pre-filled with the mark "in conflict" of the restarted stamp 5 (which
+    /// the restart must clear: without the clearing this test fails).
+    /// Measured: 270 stars and 30 duplicates agree; asserted: every list equal.
+    #[test]
+    fn probe_star_matches_star_of_with_its_stamps_reused_and_restarted() {
+        let mut state = 0x5EED_u64;
+        let mut rand = || {
+            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let points: Vec<Point> = (0..200).map(|_| [rand(), rand(), rand()]).collect();
+        let mut dt = Delaunay::new(&points).unwrap();
+        let mut scratch =
+            ProbeScratch { tested: vec![2 * 5 + 1; dt.tets.len()], epoch: u32::MAX / 2 - 3, ..ProbeScratch::default() };
+        let (mut star, mut destroyed) = (Vec::new(), Vec::new());
+        let (mut ref_star, mut ref_destroyed) = (Vec::new(), Vec::new());
+        let (mut stars, mut duplicates) = (0, 0);
+        for k in 0..300 {
+            let p = if k % 10 == 0 { points[k % 200] } else { [0; 3].map(|_| 1.4 * rand() - 0.2) };
+            let hint = dt.tet_at((k % 200) as u32);
+            let probe = dt.probe_star(p, hint, &mut scratch, &mut star, &mut destroyed, |_| false);
+            let dug = dt.star_of_near(p, hint, &mut ref_star, &mut ref_destroyed);
+            match probe {
+                Probe::Duplicate => {
+                    assert!(!dug, "point {k}: a duplicate for the probe only");
+                    duplicates += 1;
+                }
+                Probe::Star => {
+                    assert!(dug, "point {k}: a duplicate for star_of only");
+                    for list in [&mut star, &mut ref_star] {
+                        list.sort_unstable();
+                    }
+                    for list in [&mut destroyed, &mut ref_destroyed] {
+                        list.sort_unstable();
+                    }
+                    assert_eq!(star, ref_star, "point {k}: stars differ");
+                    assert_eq!(destroyed, ref_destroyed, "point {k}: removed faces differ");
+                    stars += 1;
+                }
+                Probe::Stopped(f) => panic!("point {k}: stopped at {f:?} with no stop asked"),
+            }
+        }
+        assert_eq!((stars, duplicates), (270, 30));
+        assert!(scratch.epoch < 300, "the stamps did not restart: {}", scratch.epoch);
+    }
+}
