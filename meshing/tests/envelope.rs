@@ -4,10 +4,11 @@
 //! (in f32), the corpus tests' files with `tests/common`'s reader (in f64).
 
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 use std::time::Instant;
 
 use meshing::envelope::{envelope_mesh, EnvelopeError, EnvelopeMesh, EnvelopeOptions, EnvelopeWarning};
-use meshing::quality::{report, QualityReport};
+use meshing::quality::{cell_statistics, report, CellStatistics, QualityReport};
 use meshing::{Surface, WindingNumber};
 
 mod common;
@@ -288,14 +289,43 @@ fn mesh_and_report_with(s: &Surface, options: &EnvelopeOptions) -> (meshing::env
 /// Checked on the mesh handed to the final guard (`dihedral_before_guard_deg`),
 /// not on the returned one: the guard refuses any tet outside [12°, 155°], so
 /// the returned mesh could not fail this.
-fn assert_proven_bounds(out: &meshing::envelope::EnvelopeMesh, q: &QualityReport) {
-    assert_eq!(q.num_inverted, 0);
+fn assert_proven_bounds(out: &meshing::envelope::EnvelopeMesh, q: &impl CellFigures) {
+    assert_eq!(q.figures().num_inverted, 0);
     let [lo, hi] = out.stats.dihedral_before_guard_deg;
     assert!(lo >= 10.7 && hi <= 164.8, "dihedral before the guard [{lo}, {hi}] deg");
 }
 
+/// The cell figures the angle gates read, from the full report or from the cell
+/// statistics alone (`cell_statistics`: no surface distance, for tests that do
+/// not assert one).
+trait CellFigures {
+    fn figures(&self) -> CellStatistics;
+}
+
+impl CellFigures for CellStatistics {
+    fn figures(&self) -> CellStatistics {
+        *self
+    }
+}
+
+impl CellFigures for QualityReport {
+    fn figures(&self) -> CellStatistics {
+        CellStatistics {
+            min_dihedral_deg: self.min_dihedral_deg,
+            max_dihedral_deg: self.max_dihedral_deg,
+            fraction_below_10_deg: self.fraction_below_10_deg,
+            max_radius_edge: self.max_radius_edge,
+            p999_radius_edge: self.p999_radius_edge,
+            mean_radius_ratio: self.mean_radius_ratio,
+            min_radius_ratio: self.min_radius_ratio,
+            num_inverted: self.num_inverted,
+        }
+    }
+}
+
 /// The issue's envelope targets for the angles: [12, 155] deg.
-fn assert_issue_angles(q: &QualityReport) {
+fn assert_issue_angles(q: &impl CellFigures) {
+    let q = q.figures();
     assert!(q.min_dihedral_deg >= 12.0, "min dihedral {}", q.min_dihedral_deg);
     assert!(q.max_dihedral_deg <= 155.0, "max dihedral {}", q.max_dihedral_deg);
     assert_eq!(q.fraction_below_10_deg, 0.0);
@@ -346,25 +376,49 @@ fn order(points: &[(f64, f64)]) -> f64 {
 
 // ---- shapes with known volume
 
+/// The sphere of the sphere tests: an icosphere of 20480 triangles, radius 1
+/// about this centre [mm].
+const SPHERE_CENTRE: [f64; 3] = [0.1, -0.2, 0.05];
+
+/// The sphere's stuffing alone (no boundary fitting) at size `h` [mm].
+fn unfitted(h: f64) -> EnvelopeOptions {
+    EnvelopeOptions { fit_tolerance: 0.0, ..EnvelopeOptions::new(h) }
+}
+
+/// The sphere, and its unfitted mesh at 0.2 mm with its report, built once for
+/// the two tests that use them: the coarsest size of
+/// `sphere_quality_and_volume_convergence` and the unfitted reference of
+/// `sphere_boundary_is_fitted_to_one_thousandth_of_the_diagonal`.
+fn sphere_unfitted_at_0_2() -> &'static (Surface, EnvelopeMesh, QualityReport) {
+    static SHARED: OnceLock<(Surface, EnvelopeMesh, QualityReport)> = OnceLock::new();
+    SHARED.get_or_init(|| {
+        let s = icosphere(1.0, SPHERE_CENTRE, 5);
+        let (out, q) = mesh_and_report_with(&s, &unfitted(0.2));
+        (s, out, q)
+    })
+}
+
 /// The sphere (an icosphere of 20480 triangles, volume by the divergence theorem),
 /// stuffing without boundary fitting: proven angle bounds at every size, the volume error converges at second order.
 #[test]
 fn sphere_quality_and_volume_convergence() {
-    let s = icosphere(1.0, [0.1, -0.2, 0.05], 5);
-    let mut errors = Vec::new();
-    for h in [0.2, 0.1, 0.05] {
-        // The stuffing alone (the fitting's error follows its tolerance, not h).
-        let (out, q) = mesh_and_report_with(&s, &EnvelopeOptions { fit_tolerance: 0.0, ..EnvelopeOptions::new(h) });
-        assert_proven_bounds(&out, &q);
-        assert_issue_angles(&q);
+    // The stuffing alone (the fitting's error follows its tolerance, not h).
+    let check = |h: f64, out: &EnvelopeMesh, q: &QualityReport| {
+        assert_proven_bounds(out, q);
+        assert_issue_angles(q);
         assert_conforming(&out.mesh);
         assert!(out.warnings.is_empty(), "{:?}", out.warnings);
-        // Every boundary node lies on the input surface.
         // Every boundary node lies on the input: the distance is the chord error
         // of boundary triangles (edges up to about 1.2 h on a unit sphere: 0.18 h^2)
         // plus the icosphere's own facets.
         assert!(q.mesh_to_surface_mm < 0.5 * h * h, "chord error {} at h = {h}", q.mesh_to_surface_mm);
-        errors.push((h, q.volume_error.abs()));
+        (h, q.volume_error.abs())
+    };
+    let (s, out, q) = sphere_unfitted_at_0_2();
+    let mut errors = vec![check(0.2, out, q)];
+    for h in [0.1, 0.05] {
+        let (out, q) = mesh_and_report_with(s, &unfitted(h));
+        errors.push(check(h, &out, &q));
     }
     let p = order(&errors);
     eprintln!("sphere volume errors {errors:?}: order {p:.2}");
@@ -374,6 +428,11 @@ fn sphere_quality_and_volume_convergence() {
 
 /// A cube turned against the lattice (side 0.93, rotated 20 deg about (1, 2, 3)):
 /// its edges and corners are rounded by the lattice, an error that converges too.
+/// Nothing here reads a surface distance: the cells' statistics alone
+/// (`cell_statistics`) and the volume against the closed form (the report's
+/// distance was 30 % of the test's time). Measured (session 21): volume errors
+/// -3.47e-3, -9.19e-4, -3.15e-4 at 0.1, 0.05, 0.025 mm (order 1.73; asserted
+/// the finest under 5e-3, order above 1).
 #[test]
 fn cube_quality_and_volume_convergence() {
     let mut s = Surface::cuboid([-0.465; 3], [0.465; 3], "box");
@@ -390,11 +449,19 @@ fn cube_quality_and_volume_convergence() {
     assert!((s.signed_volume(None) - exact).abs() < 1e-12);
     let mut errors = Vec::new();
     for h in [0.1, 0.05, 0.025] {
-        let (out, q) = mesh_and_report(&s, h);
-        assert_proven_bounds(&out, &q);
-        assert_issue_angles(&q);
+        let out = envelope_mesh(&s, &EnvelopeOptions::new(h)).unwrap_or_else(|e| panic!("h = {h}: {e}"));
+        let cells = cell_statistics(&out.mesh);
+        assert_proven_bounds(&out, &cells);
+        assert_issue_angles(&cells);
         assert_conforming(&out.mesh);
-        errors.push((h, q.volume_error.abs()));
+        let error = out.mesh.measure() / exact - 1.0;
+        eprintln!(
+            "h {h}: {} cells, dihedral [{:.2}, {:.2}] deg, volume error {error:.2e}",
+            out.mesh.cells.len(),
+            cells.min_dihedral_deg,
+            cells.max_dihedral_deg
+        );
+        errors.push((h, error.abs()));
     }
     let p = order(&errors);
     eprintln!("cube volume errors {errors:?}: order {p:.2}");
@@ -412,16 +479,12 @@ fn cube_quality_and_volume_convergence() {
 /// same size misses the Hausdorff target.
 #[test]
 fn sphere_boundary_is_fitted_to_one_thousandth_of_the_diagonal() {
-    let c = [0.1, -0.2, 0.05];
-    let s = icosphere(1.0, c, 5);
+    let c = SPHERE_CENTRE;
     let h = 0.2;
-    let mut plain = EnvelopeOptions::new(h);
-    plain.fit_tolerance = 0.0;
-    let unfitted = envelope_mesh(&s, &plain).unwrap();
-    let q0 = report(&unfitted.mesh, &s, 0.0);
+    let (s, _, q0) = sphere_unfitted_at_0_2();
     eprintln!("unfitted: Hausdorff {:.2e} of diag, volume error {:.2e}", q0.hausdorff_relative, q0.volume_error);
     assert!(q0.hausdorff_relative > 1e-3, "{}", q0.hausdorff_relative);
-    let (out, q) = mesh_and_report(&s, h);
+    let (out, q) = mesh_and_report(s, h);
     assert!(out.stats.fit_splits > 0);
     assert_eq!(q.num_inverted, 0);
     assert_issue_angles(&q);
@@ -444,7 +507,7 @@ fn sphere_boundary_is_fitted_to_one_thousandth_of_the_diagonal() {
     // gate (2e-3) needs a tighter fit than its Hausdorff gate here: 2.5e-4.
     let exact = 4.0 / 3.0 * std::f64::consts::PI;
     let tight = EnvelopeOptions { fit_tolerance: 2.5e-4, ..EnvelopeOptions::new(h) };
-    let (out, q) = mesh_and_report_with(&s, &tight);
+    let (out, q) = mesh_and_report_with(s, &tight);
     assert_eq!(q.num_inverted, 0);
     assert_issue_angles(&q);
     assert_conforming(&out.mesh);
@@ -1311,7 +1374,8 @@ fn output_does_not_depend_on_the_thread_count() {
 
 /// The graded lattice (sizing in parallel, bisection and peeling sequential) on
 /// a sphere: the same mesh, bit for bit, on 1 and 2 threads, and the sphere's
-/// volume and angle targets.
+/// volume and angle targets (from the cells' statistics and the volume: no
+/// surface distance is asserted here).
 #[test]
 fn graded_output_does_not_depend_on_the_thread_count() {
     let s = icosphere(1.0, [0.1, -0.2, 0.05], 4);
@@ -1324,14 +1388,18 @@ fn graded_output_does_not_depend_on_the_thread_count() {
     assert_eq!(a.cells, b.cells);
     let bits = |m: &fem_core::mesh::TetMesh| -> Vec<u64> { m.nodes.iter().flatten().map(|x| x.to_bits()).collect() };
     assert_eq!(bits(&a), bits(&b));
-    let q = report(&a, &s, 0.0);
+    let cells = cell_statistics(&a);
+    let volume_error = a.measure() / s.signed_volume(None) - 1.0;
     eprintln!(
-        "graded sphere: {} cells, dihedral [{:.2}, {:.2}], volume error {:.2e}, Hausdorff {:.2e}",
-        q.num_cells, q.min_dihedral_deg, q.max_dihedral_deg, q.volume_error, q.hausdorff_relative
+        "graded sphere: {} cells, dihedral [{:.2}, {:.2}], volume error {volume_error:.2e}",
+        a.cells.len(),
+        cells.min_dihedral_deg,
+        cells.max_dihedral_deg
     );
-    assert_issue_angles(&q);
+    assert_eq!(cells.num_inverted, 0);
+    assert_issue_angles(&cells);
     assert_conforming(&a);
-    assert!(q.volume_error.abs() <= 2e-3, "{}", q.volume_error);
+    assert!(volume_error.abs() <= 2e-3, "{volume_error}");
 }
 
 #[test]
