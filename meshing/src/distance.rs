@@ -17,15 +17,15 @@
 //! [`boundary_distance`] measures:
 //!
 //! - the **boundary Hausdorff distance**: the larger of (a) an upper bound of the
-//!   distance from the mesh boundary to the solid's boundary, caps included
-//!   (below), and (b) the distance from the bounding part of the input to the
-//!   mesh boundary;
-//! - the **hole caps** apart, so that nothing is hidden: the mesh boundary's
-//!   samples farther than a sample spacing from the bounding input whose nearest
-//!   boundary point found is on the level set (the probe below finds a sign
-//!   change nearer than the input) are over a hole; their largest distance to
-//!   the input (about the radius of the opening) and their fraction are
-//!   reported. The input's border edges (edges of one non-degenerate triangle
+//!   distance from the mesh boundary to the solid's boundary (the bounding input
+//!   and the level set, below), over the samples not over a hole, and (b) the
+//!   distance from the bounding part of the input to the mesh boundary;
+//! - the **hole caps** apart: a mesh boundary sample farther than a sample
+//!   spacing from the bounding input whose nearest boundary point found is on
+//!   the level set (the inside test differs at 0.9 of that distance on its two
+//!   sides along its face's normal, or the probe below finds a change nearer
+//!   than the input) is over a hole; the largest distance to the input of those
+//!   (about the radius of the opening) and their fraction are reported. The input's border edges (edges of one non-degenerate triangle
 //!   once vertices within 1e-6 of the diagonal are welded, so seams of unwelded
 //!   patches and jittered soups are not holes) are counted, and grouped in
 //!   connected chains: the widest chain's extent is reported, a chain whose fan
@@ -51,17 +51,22 @@
 //! 20 left out the samples nearer to a fan patch over each chain of border
 //! edges than to the input (a proxy for the cap): a cap sample was not measured
 //! at all, and a sample by a hole but nearer the body than the rim's patch was
-//! measured against the input only.
+//! measured against the input only. Now a sample by a hole, nearer to the
+//! input than a sample spacing (the rim of a cap, the mouth of a tube), is
+//! measured against the level set too, and a sample farther away is over a hole
+//! only where the level set is nearer to it than the input.
 //!
 //! Cost: only the samples that can set the largest bound or be over a hole are
-//! probed: in the order of decreasing `d`, in batches of doubling size (64
+//! probed (a cap sample settles in two tests at 0.9 d, mostly decided by the
+//! fast winding number): in the order of decreasing `d`, in batches of doubling size (64
 //! first), each in parallel against the largest bound of the batches before
 //! (a sample is settled as soon as its bound is proven below it: two tests at
 //! 0.9 of that bound on each side settle a sample lying on the level set), until
 //! `d` is below both that bound and a sample spacing. The batches are fixed, so
-//! the result does not depend on the thread count. On the graded teapot (0.5
-//! mm, 3 levels: 33k of 2.9M samples probed, 2.3 tests each) the report's
-//! CPU time grows by about a fifth (BENCHMARKS.md, session 21).
+//! the result does not depend on the thread count. The distance's time grows by
+//! 6 % on the graded bunny, 8 % on the graded teapot, 30 % on the holed bunny
+//! and 3x (0.39 -> 1.24 s) on the graded open scan with a 40 deg hole, whose
+//! cap's rim band needs exact sums (BENCHMARKS.md, session 21).
 //!
 //! ## Sampling
 //!
@@ -117,15 +122,15 @@ type P = [f64; 3];
 pub struct BoundaryDistance {
     /// The larger of [`Self::mesh_to_boundary_mm`] and [`Self::boundary_to_mesh_mm`] [mm].
     pub hausdorff_mm: f64,
-    /// Largest upper bound of the distance from the mesh boundary to the solid's
-    /// boundary (the bounding input and the level set `w = 1/2`, caps included;
-    /// module docs) [mm].
+    /// Largest upper bound of the distance from the mesh boundary, samples over
+    /// holes left out, to the solid's boundary (the bounding input and the level
+    /// set `w = 1/2`; module docs) [mm].
     pub mesh_to_boundary_mm: f64,
     /// Largest distance from the bounding part of the input to the mesh boundary [mm].
     pub boundary_to_mesh_mm: f64,
     /// Largest distance to the bounding input of a mesh boundary sample over a
     /// hole (farther than a sample spacing from the input, nearer to the level
-    /// set) [mm]; 0 when there is none.
+    /// set; module docs) [mm]; 0 when there is none.
     pub hole_cap_mm: f64,
     /// Fraction of the mesh boundary's samples over a hole.
     pub hole_cap_fraction: f64,
@@ -286,9 +291,10 @@ struct ToBoundary {
 /// `m` of the batches before it (a sample proven below it cannot be the
 /// largest), probing the samples whose `d` exceeds `min(m, spacing)`, until a
 /// face's largest `d` is at most that. A sample farther than `spacing` from
-/// the bounding input whose probe finds a change nearer than `d` is over a
-/// hole (its nearest boundary point found is on the level set). The batches
-/// are fixed, so the result does not depend on the thread count.
+/// the bounding input is over a hole (its nearest boundary point found is on
+/// the level set, left out of the largest bound) where the inside test differs
+/// at `0.9 d` on its two sides, or its probe finds a change nearer than `d`.
+/// The batches are fixed, so the result does not depend on the thread count.
 fn mesh_to_solid_boundary(
     boundary: &[[P; 3]],
     spacing: f64,
@@ -308,7 +314,7 @@ fn mesh_to_solid_boundary(
     order.sort_by(|&a, &b| face_max[b].total_cmp(&face_max[a]).then(a.cmp(&b)));
     let mut farthest: (f64, P) = (0.0, [0.0; 3]);
     let (mut cap_mm, mut num_cap): (f64, usize) = (0.0, 0);
-    let mut known: HashMap<[u64; 3], f64> = HashMap::new();
+    let mut known: HashMap<[u64; 3], (f64, bool)> = HashMap::new();
     let (mut start, mut size) = (0, 64);
     while start < order.len() && face_max[order[start]] > farthest.0.min(spacing) {
         let end = (start + size).min(order.len());
@@ -330,31 +336,47 @@ fn mesh_to_solid_boundary(
         let mut fresh: Vec<usize> = Vec::new();
         for (i, c) in candidates.iter().enumerate() {
             if let std::collections::hash_map::Entry::Vacant(e) = known.entry(c.0.map(f64::to_bits)) {
-                e.insert(f64::NAN);
+                e.insert((f64::NAN, false));
                 fresh.push(i);
             }
         }
-        let bounds: Vec<f64> = fresh
+        // (bound, over a hole) per fresh point: a point farther than a spacing
+        // from the input is over a hole when the inside test differs at 0.9 d
+        // on its two sides (a sign change nearer than the input: the level set).
+        let bounds: Vec<(f64, bool)> = fresh
             .par_iter()
             .map(|&i| {
                 let (p, n, d) = candidates[i];
-                n.map_or(f64::INFINITY, |n| level_set_bound(inside, p, n, d, target.min(d), precision))
+                let Some(n) = n else { return (f64::INFINITY, false) };
+                if d > spacing && straddles(inside, p, n, 0.9 * d) {
+                    return (0.9 * d, true);
+                }
+                let t = level_set_bound(inside, p, n, d, target.min(d), precision);
+                (t, d > spacing && t < d)
             })
             .collect();
-        for (&i, &t) in fresh.iter().zip(&bounds) {
-            known.insert(candidates[i].0.map(f64::to_bits), t);
+        for (&i, &b) in fresh.iter().zip(&bounds) {
+            known.insert(candidates[i].0.map(f64::to_bits), b);
         }
         for &(p, _, d) in &candidates {
-            let t = known[&p.map(f64::to_bits)];
-            farthest = farther(farthest, (d.min(t), p));
-            if d > spacing && t < d {
+            let (t, over_hole) = known[&p.map(f64::to_bits)];
+            if over_hole {
                 cap_mm = cap_mm.max(d);
                 num_cap += 1;
+            } else {
+                farthest = farther(farthest, (d.min(t), p));
             }
         }
         (start, size) = (end, 2 * size);
     }
     ToBoundary { farthest, cap_mm, num_cap, num_samples }
+}
+
+/// Whether the inside test differs at `p + s n` and `p - s n`: then the solid's
+/// boundary passes within `s` of `p`.
+fn straddles(inside: &impl Fn(P) -> bool, p: P, n: P, s: f64) -> bool {
+    inside([p[0] + s * n[0], p[1] + s * n[1], p[2] + s * n[2]])
+        != inside([p[0] - s * n[0], p[1] - s * n[1], p[2] - s * n[2]])
 }
 
 /// An upper bound of the distance from `p` to the boundary of the solid
@@ -371,7 +393,7 @@ fn mesh_to_solid_boundary(
 pub(crate) fn level_set_bound(inside: &impl Fn(P) -> bool, p: P, n: P, reach: f64, target: f64, precision: f64) -> f64 {
     let at = |s: f64| inside([p[0] + s * n[0], p[1] + s * n[1], p[2] + s * n[2]]);
     let quick = 0.9 * target;
-    if target > 0.0 && target < reach && at(quick) != at(-quick) {
+    if target > 0.0 && target < reach && straddles(inside, p, n, quick) {
         return quick;
     }
     let here = at(0.0);

@@ -37,8 +37,9 @@
 //! over holes, the mouth of an open tube) and the distance from the bounding
 //! input to the mesh boundary (inner caps of overlapping parts, parts of a
 //! self-intersecting input inside the rest, region interfaces and stray faces
-//! are not boundary). The mesh's caps over holes of an open input are reported
-//! apart too ([`QualityReport::hole_cap_mm`], [`QualityReport::widest_hole_mm`]),
+//! are not boundary). The mesh's caps over holes of an open input (farther
+//! than a sample spacing from the input, nearer to the level set) are reported
+//! apart ([`QualityReport::hole_cap_mm`], [`QualityReport::widest_hole_mm`]),
 //! and the raw figure (every input triangle, caps included) beside it. Both surfaces are sampled on a
 //! barycentric grid of spacing at most 1/300 of the diagonal; the sampled maximum
 //! is below the true one by at most a sample spacing.
@@ -242,8 +243,9 @@ pub struct QualityReport {
     pub hausdorff_mm: f64,
     /// `hausdorff_mm / diagonal_mm`.
     pub hausdorff_relative: f64,
-    /// Largest upper bound of the distance from the mesh boundary to the solid's
-    /// boundary (the bounding input and the level set `w = 1/2`, caps included) [mm].
+    /// Largest upper bound of the distance from the mesh boundary (caps over
+    /// holes left out) to the solid's boundary (the bounding input and the level
+    /// set `w = 1/2`) [mm].
     pub mesh_to_surface_mm: f64,
     /// Largest distance from the bounding part of the input to the mesh boundary [mm].
     pub surface_to_mesh_mm: f64,
