@@ -352,8 +352,9 @@ fn print_table(
         out,
         "Hausdorff",
         format!(
-            "{:.3e} mm = {:.2e} of the {:.4} mm diagonal, to the input's part bounding the solid (mesh->input \
-             {:.3e}, input->mesh {:.3e}; {} input triangles bound nothing, {} in part)",
+            "{:.3e} mm = {:.2e} of the {:.4} mm diagonal, to the solid's boundary: the input's part bounding it \
+             and the level set w = 1/2 over holes (mesh->solid {:.3e}, input->mesh {:.3e}; {} input triangles \
+             bound nothing, {} in part)",
             q.hausdorff_mm,
             q.hausdorff_relative,
             q.diagonal_mm,

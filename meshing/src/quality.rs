@@ -31,13 +31,16 @@
 //! ## Hausdorff distance
 //!
 //! The distance the envelope mode is judged by ([`crate::distance`]): the
-//! symmetric Hausdorff distance between the mesh boundary and the part of the
-//! input that bounds the solid its winding number defines (inner caps of
-//! overlapping parts, parts of a self-intersecting input inside the rest,
-//! region interfaces and stray faces are not boundary), with the mesh's caps
-//! over holes of an open input measured apart ([`QualityReport::hole_cap_mm`],
-//! [`QualityReport::widest_hole_mm`]) rather than hidden, and the raw figure
-//! (every input triangle, caps included) beside it. Both surfaces are sampled on a
+//! larger of an upper bound of the distance from the mesh boundary to the
+//! boundary of the solid its winding number defines (the part of the input
+//! bounding it, plus the level set `w = 1/2` where it leaves the input: caps
+//! over holes, the mouth of an open tube) and the distance from the bounding
+//! input to the mesh boundary (inner caps of overlapping parts, parts of a
+//! self-intersecting input inside the rest, region interfaces and stray faces
+//! are not boundary). The mesh's caps over holes of an open input (farther
+//! than a sample spacing from the input, nearer to the level set) are reported
+//! apart ([`QualityReport::hole_cap_mm`], [`QualityReport::widest_hole_mm`]),
+//! and the raw figure (every input triangle, caps included) beside it. Both surfaces are sampled on a
 //! barycentric grid of spacing at most 1/300 of the diagonal; the sampled maximum
 //! is below the true one by at most a sample spacing.
 
@@ -236,19 +239,19 @@ pub struct QualityReport {
     pub volume_error: f64,
     /// The input's bounding-box diagonal [mm].
     pub diagonal_mm: f64,
-    /// Symmetric Hausdorff distance between the mesh boundary (caps over the
-    /// input's holes left out) and the part of the input bounding the solid [mm]
-    /// (module docs).
+    /// The larger of `mesh_to_surface_mm` and `surface_to_mesh_mm` [mm] (module docs).
     pub hausdorff_mm: f64,
     /// `hausdorff_mm / diagonal_mm`.
     pub hausdorff_relative: f64,
-    /// Largest distance from the mesh boundary (caps over holes left out) to the
-    /// bounding part of the input [mm].
+    /// Largest upper bound of the distance from the mesh boundary (caps over
+    /// holes left out) to the solid's boundary (the bounding input and the level
+    /// set `w = 1/2`) [mm].
     pub mesh_to_surface_mm: f64,
     /// Largest distance from the bounding part of the input to the mesh boundary [mm].
     pub surface_to_mesh_mm: f64,
-    /// Largest distance from the mesh boundary over the input's holes to the
-    /// input [mm] (0: none).
+    /// Largest distance to the input of the mesh boundary over the input's holes
+    /// (farther than a sample spacing from the input, nearer to the level set
+    /// `w = 1/2`) [mm] (0: none).
     pub hole_cap_mm: f64,
     /// `hole_cap_mm / diagonal_mm`.
     pub hole_cap_relative: f64,
