@@ -949,22 +949,36 @@ fn the_teapot_meshes_with_the_proven_bounds() {
     assert!(hi[0] < 0.0, "the gap is on the handle's side: {lo:?}..{hi:?}");
 }
 
-/// The teapot on the graded lattice (0.5 mm, 3 levels), session 20: the sizing
-/// now refines cells across which the solid or a gap of it is thinner than the
-/// cell (the level set `w = 1/2` counted as a wall), and the stuffing decides
-/// the inside exactly where `w` is within 0.1 of 1/2. The boundary figure's
-/// maximum, at the handle's mouth, fell from 1.15e-2 (session 19) to 3.63e-3 of
-/// the diagonal (asserted < 4e-3: still a miss of the issue's 1e-3, the void's
-/// tail is thinner than the finest cells; 5 levels give 1.59e-3, too slow
-/// here); dihedral angles measured 13.81-151.24 deg, asserted in [12, 155].
+/// The teapot on the graded lattice (0.5 mm, 3 levels), sessions 20-21. Session
+/// 20: the sizing refines cells across which the solid or a gap of it is
+/// thinner than the cell (the level set `w = 1/2` counted as a wall); the
+/// stuffing decides the inside exactly where `w` is within 0.1 of 1/2 (the
+/// figure 1.15e-2 -> 3.63e-3 of the diagonal, at the handle's mouth). Session
+/// 21: below the smallest size, cells across which such a part or gap is
+/// thinner than the cell are cut again while 2.5 times their longest edge
+/// exceeds the grading tolerance (the void at the handle's mouth, then the void
+/// between the spout's wall and the cap over its opening): input -> mesh
+/// measured 1.00e-3 (1.005e-3: 0.0412 mm at the spout's tip, a miss of the
+/// issue's 1e-3 by 0.5 %), asserted < 1.1e-3; mesh -> input 1.43e-3 (the
+/// metric's question at the handle's mouth), asserted < 2e-3; dihedral angles
+/// measured 12.05-154.42 deg, asserted in [12, 155]; 1,588,954 tets.
 #[test]
-fn the_graded_teapot_resolves_the_void_at_the_handles_mouth() {
+fn the_graded_teapot_resolves_the_voids_at_the_handles_mouth_and_the_spouts_lip() {
     let s = obj("npm_teapot.obj");
     let (out, q) = mesh_and_report_with(&s, &EnvelopeOptions { grade_levels: 3, ..EnvelopeOptions::new(0.5) });
+    eprintln!(
+        "teapot graded: {} tets, [{:.2}, {:.2}] deg, out->in {:.4e}, in->out {:.4e}, volume {:.3e}",
+        q.num_cells,
+        q.min_dihedral_deg,
+        q.max_dihedral_deg,
+        q.mesh_to_surface_mm / s.diagonal(),
+        q.surface_to_mesh_mm / s.diagonal(),
+        q.volume_error
+    );
     assert_issue_angles(&q);
     assert_conforming(&out.mesh);
     assert!(q.volume_error.abs() < 3e-2, "{}", q.volume_error);
-    assert!(q.hausdorff_relative < 4e-3, "{q:?}");
+    assert!(q.surface_to_mesh_mm / s.diagonal() < 1.1e-3, "{q:?}");
     assert!(q.mesh_to_surface_mm / s.diagonal() < 2e-3, "{q:?}");
 }
 

@@ -780,7 +780,7 @@ fn thin_features(surface: &Surface, winding: &WindingNumber, h: f64, diag: f64, 
                 if tree.is_inside_checked(start) == gaps {
                     continue;
                 }
-                if let Some(d) = tree.thin_along(x, dir, reach, offset) {
+                if let Some(d) = tree.thin_along(x, dir, reach, offset, crate::winding::NEAR_HALF) {
                     thinnest = Some(thinnest.map_or(d, |t: f64| t.min(d)));
                 }
             }

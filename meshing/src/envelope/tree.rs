@@ -305,14 +305,10 @@ impl TriangleTree {
         self.closest_in_tree_order(p, max_distance).map(|(c, d, k)| (c, d, self.ids[k]))
     }
 
-    /// The closest point of the soup to `p` within `max_distance` and the unit
-    /// normal of its triangle (`None` for a degenerate one).
-    pub(crate) fn closest_point_and_normal(&self, p: P, max_distance: f64) -> Option<(P, P)> {
+    /// The closest point of the soup to `p` within `max_distance` and the corners of its triangle.
+    pub(crate) fn closest_point_and_triangle(&self, p: P, max_distance: f64) -> Option<(P, [P; 3])> {
         let (c, _, k) = self.closest_in_tree_order(p, max_distance)?;
-        let t = &self.tris[k];
-        let n = cross(sub(t[1], t[0]), sub(t[2], t[0]));
-        let l = norm(n);
-        (l > 0.0).then(|| (c, scale(n, 1.0 / l)))
+        Some((c, self.tris[k]))
     }
 
     /// The distance within `reach` [mm] at which the solid `w > 1/2` (a thin part) or
@@ -321,12 +317,20 @@ impl TriangleTree {
     /// inside test agrees at `x ± offset n`), else `(thin part, thin gap)`, each
     /// the first distance along the ray into that side at which the inside test
     /// turns: at a crossing of the input (tested just beyond it), or, where the
-    /// winding number there is within `NEAR_HALF` (0.1) of 1/2 (a soft field: the mouth of an
+    /// winding number there is within `soft` of 1/2 (`NEAR_HALF`, 0.1, for the
+    /// sizing above its smallest size and the warnings; a soft field: the mouth of an
     /// open tube, a hole, where the solid's wall is the level set `w = 1/2` and
     /// no triangle), at 8 even steps up to `reach`. The inside test is
     /// [`Self::is_inside_checked`]. Shared by the graded lattice's sizing and
     /// the thin-part and thin-gap warnings.
-    pub(crate) fn thin_across(&self, x: P, n: P, reach: f64, offset: f64) -> Option<(Option<f64>, Option<f64>)> {
+    pub(crate) fn thin_across(
+        &self,
+        x: P,
+        n: P,
+        reach: f64,
+        offset: f64,
+        soft: f64,
+    ) -> Option<(Option<f64>, Option<f64>)> {
         let at = |d: f64| add(x, scale(n, d));
         let front = self.is_inside_checked(at(offset));
         let back = self.is_inside_checked(at(-offset));
@@ -335,13 +339,16 @@ impl TriangleTree {
         }
         // The inside is on the side of `front` when it is inside.
         let inside = if front { n } else { scale(n, -1.0) };
-        Some((self.thin_along(x, inside, reach, offset), self.thin_along(x, scale(inside, -1.0), reach, offset)))
+        Some((
+            self.thin_along(x, inside, reach, offset, soft),
+            self.thin_along(x, scale(inside, -1.0), reach, offset, soft),
+        ))
     }
 
     /// The first distance within `reach` [mm] at which the inside test along the
     /// ray from `x` in the unit direction `dir` turns from its state at
     /// `offset` (see [`Self::thin_across`]).
-    pub(crate) fn thin_along(&self, x: P, dir: P, reach: f64, offset: f64) -> Option<f64> {
+    pub(crate) fn thin_along(&self, x: P, dir: P, reach: f64, offset: f64, soft: f64) -> Option<f64> {
         let at = |d: f64| add(x, scale(dir, d));
         let start = self.is_inside_checked(at(offset));
         let mut first: Option<f64> = None;
@@ -355,7 +362,7 @@ impl TriangleTree {
                 break;
             }
         }
-        if (self.winding_number(at(offset)) - 0.5).abs() < crate::winding::NEAR_HALF {
+        if (self.winding_number(at(offset)) - 0.5).abs() < soft {
             for k in 1..=8 {
                 let d = reach * k as f64 / 8.0;
                 if first.is_some_and(|f| f <= d) {
