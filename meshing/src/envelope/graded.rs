@@ -775,7 +775,7 @@ mod tests {
     /// (the stuffing can open it; measured 758 within the gap's middle 3/4),
     /// none finer. With a tolerance of 1 mm, nothing is cut below the smallest
     /// size (the gap would be closed: thinner than the tolerance allows to
-    /// resolve). Not asserted: the boxes' edges are cut too (17,790 of the 65,692
+    /// resolve). The lattice is the same on one thread as on two. Not asserted: the boxes' edges are cut too (17,790 of the 65,692
     /// cells below the smallest size are farther than 0.25 from the gap): at an
     /// edge the thin test's ray runs along the other face, a false thin part.
     #[test]
@@ -810,6 +810,14 @@ mod tests {
             .count();
         eprintln!("{below} cells below the smallest size, {inside_gap} vertices inside the gap");
         assert!(below > 0 && inside_gap > 0);
+        // The deep cut does not depend on the thread count: the same integer
+        // vertices and cells on one thread as on two.
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let (again, _) =
+                pool.install(|| GradedLattice::new(&tree, &no_rims, [-0.5; 3], [0.5; 3], h, 1, 0.1, usize::MAX));
+            assert!(again.coords == fine.coords && again.cells == fine.cells, "{threads} threads");
+        }
     }
 
     /// An open flat square (side 1 in z = 0.1): flat, but its border edges (the
