@@ -283,15 +283,21 @@ impl TriangleTree {
     /// fraction of its cost (the mesher calls it for every lattice vertex and
     /// bisection step in the soft field of an open surface).
     pub(crate) fn is_inside_checked(&self, q: P) -> bool {
-        let w = self.winding_number(q);
-        if (w - 0.5).abs() >= crate::winding::NEAR_HALF {
-            return w > 0.5;
+        self.inside_checked_and_fast(q).0
+    }
+
+    /// [`Self::is_inside_checked`] at `q` and the fast winding number there
+    /// ([`Self::winding_number`]), which it computes first.
+    fn inside_checked_and_fast(&self, q: P) -> (bool, f64) {
+        let fast = self.winding_number(q);
+        if (fast - 0.5).abs() >= crate::winding::NEAR_HALF {
+            return (fast > 0.5, fast);
         }
         let w = self.winding_number_to(q, BETA_PRECISE);
         if (w - 0.5).abs() >= NEAR_HALF_PRECISE {
-            return w > 0.5;
+            return (w > 0.5, fast);
         }
-        self.winding_number_exact(q) > 0.5
+        (self.winding_number_exact(q) > 0.5, fast)
     }
 
     /// The closest point of the soup to `p`, its distance and the triangle's input
@@ -332,16 +338,19 @@ impl TriangleTree {
         soft: f64,
     ) -> Option<(Option<f64>, Option<f64>)> {
         let at = |d: f64| add(x, scale(n, d));
-        let front = self.is_inside_checked(at(offset));
-        let back = self.is_inside_checked(at(-offset));
-        if front == back {
+        let front = self.inside_checked_and_fast(at(offset));
+        let back = self.inside_checked_and_fast(at(-offset));
+        if front.0 == back.0 {
             return None;
         }
-        // The inside is on the side of `front` when it is inside.
-        let inside = if front { n } else { scale(n, -1.0) };
+        // The inside is on the side of `front` when it is inside. Each ray starts
+        // at the probe tested above (`x - offset n` is bit for bit `x + offset (-n)`:
+        // negation is exact), so its state and fast winding number are passed on.
+        let (inside, outside) = if front.0 { (front, back) } else { (back, front) };
+        let n_in = if front.0 { n } else { scale(n, -1.0) };
         Some((
-            self.thin_along(x, inside, reach, offset, soft),
-            self.thin_along(x, scale(inside, -1.0), reach, offset, soft),
+            self.thin_along_from(x, n_in, reach, offset, soft, inside),
+            self.thin_along_from(x, scale(n_in, -1.0), reach, offset, soft, outside),
         ))
     }
 
@@ -349,8 +358,15 @@ impl TriangleTree {
     /// ray from `x` in the unit direction `dir` turns from its state at
     /// `offset` (see [`Self::thin_across`]).
     pub(crate) fn thin_along(&self, x: P, dir: P, reach: f64, offset: f64, soft: f64) -> Option<f64> {
+        let start = self.inside_checked_and_fast(add(x, scale(dir, offset)));
+        self.thin_along_from(x, dir, reach, offset, soft, start)
+    }
+
+    /// [`Self::thin_along`] given `(inside, fast winding number)` at `x + offset dir`
+    /// ([`Self::inside_checked_and_fast`]).
+    fn thin_along_from(&self, x: P, dir: P, reach: f64, offset: f64, soft: f64, start: (bool, f64)) -> Option<f64> {
         let at = |d: f64| add(x, scale(dir, d));
-        let start = self.is_inside_checked(at(offset));
+        let (start, fast) = start;
         let mut first: Option<f64> = None;
         for (s, _) in self.segment_crossings(at(offset), at(reach)) {
             let d = offset + s * (reach - offset);
@@ -362,7 +378,7 @@ impl TriangleTree {
                 break;
             }
         }
-        if (self.winding_number(at(offset)) - 0.5).abs() < soft {
+        if (fast - 0.5).abs() < soft {
             for k in 1..=8 {
                 let d = reach * k as f64 / 8.0;
                 if first.is_some_and(|f| f <= d) {
