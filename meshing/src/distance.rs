@@ -132,6 +132,10 @@ pub struct BoundaryDistance {
     /// hole (farther than a sample spacing from the input, nearer to the level
     /// set; module docs) [mm]; 0 when there is none.
     pub hole_cap_mm: f64,
+    /// Largest upper bound of the distance from a mesh boundary sample over a
+    /// hole to the solid's boundary (the level set over the opening; module
+    /// docs) [mm]: how far a cap strays from the level set; 0 when there is none.
+    pub cap_to_level_set_mm: f64,
     /// Fraction of the mesh boundary's samples over a hole.
     pub hole_cap_fraction: f64,
     /// Border edges of the input (after welding within 1e-6 of the diagonal).
@@ -219,11 +223,11 @@ pub fn boundary_distance(boundary: &[[P; 3]], surface: &Surface, spacing: f64) -
     let bounding_tree = TriangleTree::new(items);
 
     // Border edges (reported), and the mesh's distance to the solid's boundary.
-    let borders = hole_patches(surface, 1e-6 * diag, (1e-3 * diag).powi(2));
-    let inside = |q: P| is_inside_exact_near_half(&winding, q);
+    let borders = border_chains(surface, 1e-6 * diag, (1e-3 * diag).powi(2));
+    let inside = |q: P| winding.is_inside_checked(q);
     let to_boundary = mesh_to_solid_boundary(boundary, spacing, &bounding_tree, &inside, LEVEL_SET_PRECISION * diag);
     let (mesh_to_boundary_mm, mesh_to_boundary_at_mm) = to_boundary.farthest;
-    let hole_cap_mm = to_boundary.cap_mm;
+    let (hole_cap_mm, cap_to_level_set_mm) = (to_boundary.cap_mm, to_boundary.cap_to_level_set_mm);
     let (num_cap, num_samples) = (to_boundary.num_cap, to_boundary.num_samples);
     // Nothing bounds the solid (no input triangle has a jump): only the raw figure means anything.
     let (mesh_to_boundary_mm, boundary_to_mesh_mm, mesh_to_boundary_at_mm, boundary_to_mesh_at_mm) =
@@ -237,6 +241,7 @@ pub fn boundary_distance(boundary: &[[P; 3]], surface: &Surface, spacing: f64) -
         mesh_to_boundary_mm,
         boundary_to_mesh_mm,
         hole_cap_mm,
+        cap_to_level_set_mm,
         hole_cap_fraction: if num_samples > 0 { num_cap as f64 / num_samples as f64 } else { 0.0 },
         num_border_edges: borders.num_edges,
         widest_hole_mm: borders.widest_mm,
@@ -248,20 +253,6 @@ pub fn boundary_distance(boundary: &[[P; 3]], surface: &Surface, spacing: f64) -
         mesh_to_boundary_at_mm,
         boundary_to_mesh_at_mm,
     }
-}
-
-/// `w(q) > 1/2`, from the exact sum over every triangle where the fast winding
-/// number is within [`crate::winding::NEAR_HALF`] of 1/2 (its far field errs by
-/// a few hundredths at most), for the level-set probe: as
-/// [`WindingNumber::is_inside_checked`] but with no intermediate tier, so a
-/// sign change it reports near 1/2 is one of the exact winding number (and it
-/// costs one fast evaluation and one exact sum there, instead of three).
-fn is_inside_exact_near_half(winding: &WindingNumber, q: P) -> bool {
-    let w = winding.at(q);
-    if (w - 0.5).abs() >= crate::winding::NEAR_HALF {
-        return w > 0.5;
-    }
-    winding.tree().winding_number_exact(q) > 0.5
 }
 
 /// The precision of the level-set probe's bisection, relative to the diagonal
@@ -276,6 +267,8 @@ struct ToBoundary {
     farthest: (f64, P),
     /// The largest distance to the bounding input of a sample over a hole.
     cap_mm: f64,
+    /// The largest upper bound of a sample over a hole's distance to the level set.
+    cap_to_level_set_mm: f64,
     num_cap: usize,
     num_samples: usize,
 }
@@ -293,7 +286,9 @@ struct ToBoundary {
 /// face's largest `d` is at most that. A sample farther than `spacing` from
 /// the bounding input is over a hole (its nearest boundary point found is on
 /// the level set, left out of the largest bound) where the inside test differs
-/// at `0.9 d` on its two sides, or its probe finds a change nearer than `d`.
+/// at `0.9 d` on its two sides, or its probe finds a change nearer than `d`;
+/// its bound (the largest of which is reported apart) is then its probe's
+/// within `d`, against the largest bound over a hole of the batches before.
 /// The batches are fixed, so the result does not depend on the thread count.
 fn mesh_to_solid_boundary(
     boundary: &[[P; 3]],
@@ -313,12 +308,12 @@ fn mesh_to_solid_boundary(
     let mut order: Vec<usize> = (0..boundary.len()).collect();
     order.sort_by(|&a, &b| face_max[b].total_cmp(&face_max[a]).then(a.cmp(&b)));
     let mut farthest: (f64, P) = (0.0, [0.0; 3]);
-    let (mut cap_mm, mut num_cap): (f64, usize) = (0.0, 0);
+    let (mut cap_mm, mut cap_to_level_set_mm, mut num_cap): (f64, f64, usize) = (0.0, 0.0, 0);
     let mut known: HashMap<[u64; 3], (f64, bool)> = HashMap::new();
     let (mut start, mut size) = (0, 64);
     while start < order.len() && face_max[order[start]] > farthest.0.min(spacing) {
         let end = (start + size).min(order.len());
-        let (target, floor) = (farthest.0, farthest.0.min(spacing));
+        let (target, cap_target, floor) = (farthest.0, cap_to_level_set_mm, farthest.0.min(spacing));
         // The samples farther than `floor`, with their face's normal, in order.
         let candidates: Vec<(P, Option<P>, f64)> = order[start..end]
             .par_iter()
@@ -342,14 +337,16 @@ fn mesh_to_solid_boundary(
         }
         // (bound, over a hole) per fresh point: a point farther than a spacing
         // from the input is over a hole when the inside test differs at 0.9 d
-        // on its two sides (a sign change nearer than the input: the level set).
+        // on its two sides (a sign change nearer than the input: the level set),
+        // its bound then probed against the caps' largest so far.
         let bounds: Vec<(f64, bool)> = fresh
             .par_iter()
             .map(|&i| {
                 let (p, n, d) = candidates[i];
                 let Some(n) = n else { return (f64::INFINITY, false) };
                 if d > spacing && straddles(inside, p, n, 0.9 * d) {
-                    return (0.9 * d, true);
+                    let t = level_set_bound(inside, p, n, d, cap_target.min(d), precision);
+                    return (t.min(0.9 * d), true);
                 }
                 let t = level_set_bound(inside, p, n, d, target.min(d), precision);
                 (t, d > spacing && t < d)
@@ -362,6 +359,7 @@ fn mesh_to_solid_boundary(
             let (t, over_hole) = known[&p.map(f64::to_bits)];
             if over_hole {
                 cap_mm = cap_mm.max(d);
+                cap_to_level_set_mm = cap_to_level_set_mm.max(t);
                 num_cap += 1;
             } else {
                 farthest = farther(farthest, (d.min(t), p));
@@ -369,7 +367,7 @@ fn mesh_to_solid_boundary(
         }
         (start, size) = (end, 2 * size);
     }
-    ToBoundary { farthest, cap_mm, num_cap, num_samples }
+    ToBoundary { farthest, cap_mm, cap_to_level_set_mm, num_cap, num_samples }
 }
 
 /// Whether the inside test differs at `p + s n` and `p - s n`: then the solid's
@@ -392,6 +390,8 @@ fn straddles(inside: &impl Fn(P) -> bool, p: P, n: P, s: f64) -> bool {
 /// surface straight along the normal gives).
 pub(crate) fn level_set_bound(inside: &impl Fn(P) -> bool, p: P, n: P, reach: f64, target: f64, precision: f64) -> f64 {
     let at = |s: f64| inside([p[0] + s * n[0], p[1] + s * n[1], p[2] + s * n[2]]);
+    // Bisection stalls at adjacent floats (at most `EPSILON reach` apart below `reach`).
+    let precision = precision.max(2.0 * f64::EPSILON * reach);
     let quick = 0.9 * target;
     if target > 0.0 && target < reach && straddles(inside, p, n, quick) {
         return quick;
@@ -603,7 +603,7 @@ pub(crate) fn border_edges(surface: &Surface, tolerance: f64) -> Vec<[u32; 3]> {
 /// The border edges of `surface` ([`border_edges`] with `tolerance` [mm])
 /// grouped in connected chains; the widest chain's extent among those whose fan
 /// from their vertices' centroid has an area of at least `min_area` [mm^2].
-fn hole_patches(surface: &Surface, tolerance: f64, min_area: f64) -> Borders {
+fn border_chains(surface: &Surface, tolerance: f64, min_area: f64) -> Borders {
     let border: Vec<(u32, u32)> = border_edges(surface, tolerance).into_iter().map(|[a, b, _]| (a, b)).collect();
     let mut uf = UnionFind::new(surface.vertices.len());
     for &(a, b) in &border {
@@ -632,9 +632,12 @@ fn hole_patches(surface: &Surface, tolerance: f64, min_area: f64) -> Borders {
                 c[d] += p[d] / pts.len() as f64;
             }
         }
-        let fan: Vec<[P; 3]> =
-            edges.iter().map(|&(a, b)| [c, surface.vertices[a as usize], surface.vertices[b as usize]]).collect();
-        let area: f64 = fan.iter().map(|t| 0.5 * norm(cross(sub(t[1], t[0]), sub(t[2], t[0])))).sum();
+        let area: f64 = edges
+            .iter()
+            .map(|&(a, b)| {
+                0.5 * norm(cross(sub(surface.vertices[a as usize], c), sub(surface.vertices[b as usize], c)))
+            })
+            .sum();
         // A chain enclosing (almost) no area (a slit) is not a hole.
         if area >= min_area {
             widest_mm = widest_mm.max(norm(sub(hi, lo)));
@@ -687,6 +690,9 @@ mod tests {
             assert!(t >= along && t < 1.05 * along, "{t}");
             // Out of reach.
             assert_eq!(level_set_bound(&inside, [0.0; 3], n, 0.29, 0.0, precision), f64::INFINITY);
+            // No precision: bisected down to adjacent floats, and it ends.
+            let t = level_set_bound(&inside, [0.0; 3], n, 1.0, 0.0, 0.0);
+            assert!(t >= along * (1.0 - 1e-15) && t <= along + 1e-15, "{n:?}: {t} against {along}");
         }
     }
 
