@@ -765,7 +765,8 @@ fn the_boundary_distance_places_jump_curves_inside_triangles() {
 ///   set over the hole is the flat rim polygon x = cos alpha, and the sphere's
 ///   farthest point above it is the pole, 1 - cos alpha = 0.23396 above the
 ///   polygon's centre (inside the polygon: no sagitta enters). The pole is a
-///   sample, and every sample's figure is an upper bound of its distance, so
+///   mesh vertex (the caps are bounded at the vertices: module docs of
+///   `distance.rs`), and every figure is an upper bound of a distance, so
 ///   the figure is at least 1 - cos alpha (asserted, to 1e-12); each sample
 ///   is probed along a facet's normal, which meets the plane at (x - cos
 ///   alpha) / n_x, at most 0.23418 over the cap's corners (the pole's facets
@@ -1217,8 +1218,8 @@ fn corpus_clean_bunny_meets_every_envelope_gate() {
 /// file's own divergence-theorem volume, which misses the hole's part).
 ///
 /// The cap over the hole is measured apart (`hole_cap_mm`: the mesh boundary
-/// nearer to a patch over the hole than to the input, its distance to the
-/// input), against a closed-form bound. With the holed input closed by a fan
+/// samples farther than a sample spacing from the input where the level set is
+/// nearer, their distance to the input), against a closed-form bound. With the holed input closed by a fan
 /// from its rim's centroid c (inside the rim's convex hull), the winding number
 /// is w = k - Omega/(4 pi), k an integer (the closed surface's) and Omega the
 /// fan's solid angle; from a point outside the hull the fan lies in an open
@@ -1243,8 +1244,9 @@ fn corpus_holed_bunny_meets_every_gate_its_cap_within_its_bound() {
         .fold(0.0, f64::max);
     let finest = bunny_graded().size_mm / 8.0;
     eprintln!(
-        "{name}: cap {:.4} mm ({:.3e} of the diagonal), bound rho {rho:.4} + {finest} mm",
-        q.hole_cap_mm, q.hole_cap_relative
+        "{name}: cap {:.4} mm ({:.3e} of the diagonal), bound rho {rho:.4} + {finest} mm; \
+         from the level set {:.4e} mm ({:.3e})",
+        q.hole_cap_mm, q.hole_cap_relative, q.cap_to_level_set_mm, q.cap_to_level_set_relative
     );
     assert!(q.hole_cap_mm > 0.0 && q.hole_cap_mm <= rho + finest, "{q:?}");
     let extent = {
@@ -1303,6 +1305,10 @@ fn corpus_soup_bunny_meets_every_envelope_gate() {
 #[test]
 fn corpus_degenerate_bunny_meets_every_envelope_gate() {
     let (_, q) = defective_bunny("bad_syn_degenerate_dup.obj");
+    eprintln!(
+        "degenerate: caps {:.3e} mm, fraction {:.3e}, from the level set {:.3e} mm, widest chain {:.3} mm",
+        q.hole_cap_mm, q.hole_cap_fraction, q.cap_to_level_set_mm, q.widest_hole_mm
+    );
     assert_eq!(q.num_border_edges, 32, "{q:?}");
     assert!(q.hole_cap_relative <= 1e-3, "{q:?}");
 }
