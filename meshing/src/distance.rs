@@ -79,7 +79,9 @@
 //! the result does not depend on the thread count. The distance's time grows by
 //! 6 % on the graded bunny, 8 % on the graded teapot, 30 % on the holed bunny
 //! and 3x (0.39 -> 1.24 s) on the graded open scan with a 40 deg hole, whose
-//! cap's rim band needs exact sums (BENCHMARKS.md, session 21).
+//! cap's rim band needs exact sums (BENCHMARKS.md, session 21); bounding the
+//! caps at the mesh's vertices made it 3.3 s there (the machine more loaded:
+//! BENCHMARKS.md, "Review fixes").
 //!
 //! ## Sampling
 //!
