@@ -369,10 +369,12 @@ fn print_table(
             out,
             "hole caps",
             format!(
-                "{:.3e} mm = {:.2e} of the diagonal from the input, {:.2} % of the boundary ({} border edges, \
-                 widest hole {:.3} mm)",
+                "{:.3e} mm = {:.2e} of the diagonal from the input, {:.3e} mm = {:.2e} from the level set \
+                 w = 1/2 closing them, {:.2} % of the boundary ({} border edges, widest hole {:.3} mm)",
                 q.hole_cap_mm,
                 q.hole_cap_relative,
+                q.cap_to_level_set_mm,
+                q.cap_to_level_set_relative,
                 100.0 * q.hole_cap_fraction,
                 q.num_border_edges,
                 q.widest_hole_mm

@@ -39,7 +39,8 @@
 //! self-intersecting input inside the rest, region interfaces and stray faces
 //! are not boundary). The mesh's caps over holes of an open input (farther
 //! than a sample spacing from the input, nearer to the level set) are reported
-//! apart ([`QualityReport::hole_cap_mm`], [`QualityReport::widest_hole_mm`]),
+//! apart ([`QualityReport::hole_cap_mm`], [`QualityReport::widest_hole_mm`]), with
+//! how far they stray from the level set ([`QualityReport::cap_to_level_set_mm`]),
 //! and the raw figure (every input triangle, caps included) beside it. Both surfaces are sampled on a
 //! barycentric grid of spacing at most 1/300 of the diagonal; the sampled maximum
 //! is below the true one by at most a sample spacing.
@@ -255,6 +256,11 @@ pub struct QualityReport {
     pub hole_cap_mm: f64,
     /// `hole_cap_mm / diagonal_mm`.
     pub hole_cap_relative: f64,
+    /// Largest upper bound of the distance from the mesh boundary over the
+    /// input's holes to the level set `w = 1/2` closing them [mm] (0: none).
+    pub cap_to_level_set_mm: f64,
+    /// `cap_to_level_set_mm / diagonal_mm`.
+    pub cap_to_level_set_relative: f64,
     /// Fraction of the mesh boundary's samples over the input's holes.
     pub hole_cap_fraction: f64,
     /// Border edges of the input (after welding within 1e-6 of the diagonal).
@@ -405,6 +411,8 @@ pub fn report(mesh: &TetMesh, surface: &Surface, mesh_time_s: f64) -> QualityRep
         surface_to_mesh_mm: d.boundary_to_mesh_mm,
         hole_cap_mm: d.hole_cap_mm,
         hole_cap_relative: relative(d.hole_cap_mm),
+        cap_to_level_set_mm: d.cap_to_level_set_mm,
+        cap_to_level_set_relative: relative(d.cap_to_level_set_mm),
         hole_cap_fraction: d.hole_cap_fraction,
         num_border_edges: d.num_border_edges,
         widest_hole_mm: d.widest_hole_mm,
