@@ -986,8 +986,11 @@ fn the_teapot_meshes_with_the_proven_bounds() {
 /// exceeds the grading tolerance (the void at the handle's mouth, then the void
 /// between the spout's wall and the cap over its opening): input -> mesh
 /// measured 1.00e-3 (1.005e-3: 0.0412 mm at the spout's tip, a miss of the
-/// issue's 1e-3 by 0.5 %), asserted < 1.1e-3; mesh -> input 1.43e-3 (the
-/// metric's question at the handle's mouth), asserted < 2e-3; dihedral angles
+/// issue's 1e-3 by 0.5 %), asserted < 1.1e-3; mesh -> input 1.43e-3 under
+/// session 20's measure, which counted the samples nearer a hole's fan patch
+/// as caps; the true-boundary measure of session 21 (`distance.rs`) finds the
+/// mesh there 0.06 mm outside the level set at the handle's mouth (1.548e-3 on
+/// session 20's mesh: a miss of the mesher), asserted < 2e-3; dihedral angles
 /// measured 12.05-154.42 deg, asserted in [12, 155]; 1,588,954 tets.
 #[test]
 fn the_graded_teapot_resolves_the_voids_at_the_handles_mouth_and_the_spouts_lip() {
