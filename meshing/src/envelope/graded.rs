@@ -407,11 +407,7 @@ fn thin_across_cell(
 ) -> Option<(Option<f64>, Option<f64>)> {
     let (c, radius, longest) = ball_and_longest(p);
     let (x, t) = surface.closest_point_and_triangle(c, radius)?;
-    let n = cross(sub(t[1], t[0]), sub(t[2], t[0]));
-    let l = norm(n);
-    if l <= 0.0 {
-        return None;
-    }
+    let n = crate::distance::unit_normal(&t)?;
     let x = if inset {
         let g = scale([0, 1, 2].map(|k| t[0][k] + t[1][k] + t[2][k]), 1.0 / 3.0);
         let to_g = sub(g, x);
@@ -424,7 +420,7 @@ fn thin_across_cell(
     } else {
         x
     };
-    surface.thin_across(x, scale(n, 1.0 / l), THIN_FACTOR * longest, offset, soft)
+    surface.thin_across(x, n, THIN_FACTOR * longest, offset, soft)
 }
 
 /// The centroid of a cell with corners `p`, the radius of its ball about it and its longest edge [mm].
