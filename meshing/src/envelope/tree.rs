@@ -195,7 +195,8 @@ struct Node {
     count: u32,
     /// Area-weighted centre of the node's triangles.
     centre: P,
-    /// Largest distance from `centre` to a corner.
+    /// Largest distance from `centre` to a corner of the node's triangles (not of
+    /// its box), infinite when that is not finite: the far field's ball.
     radius: f64,
     /// Σ area vectors.
     area_vector: P,
