@@ -219,24 +219,38 @@ enum Bounding {
 /// boundary is the whole input, and the jump tests and the level-set probes are
 /// skipped (module docs, "A single closed shell").
 pub fn boundary_distance(boundary: &[[P; 3]], surface: &Surface, spacing: f64) -> BoundaryDistance {
-    boundary_distance_on(boundary, surface, spacing, is_single_closed_shell(surface))
+    boundary_distance_on(boundary, surface, spacing, None)
 }
 
 /// [`boundary_distance`], the input taken for a single closed shell (every point
-/// of it bounding the solid, no level set elsewhere) when `single_shell`.
-fn boundary_distance_on(boundary: &[[P; 3]], surface: &Surface, spacing: f64, single_shell: bool) -> BoundaryDistance {
+/// of it bounding the solid, no level set elsewhere) when `single_shell` is
+/// `Some(true)`; `None`: [`is_single_closed_shell`] decides, checked beside the
+/// raw passes (its validation is serial: on the other core).
+fn boundary_distance_on(
+    boundary: &[[P; 3]],
+    surface: &Surface,
+    spacing: f64,
+    single_shell: Option<bool>,
+) -> BoundaryDistance {
     let diag = surface.diagonal();
     let in_tris: Vec<[P; 3]> = surface.triangles.iter().map(|t| t.map(|v| surface.vertices[v as usize])).collect();
-    let out_tree = TriangleTree::new(boundary.to_vec());
-    let in_tree = TriangleTree::new(in_tris.clone());
     let samples = |t: &[P; 3]| grid_points(t, intervals(t, spacing, 24));
-    let raw_mesh_to_surface =
-        boundary.par_iter().map(|t| farthest(samples(t), &in_tree)).reduce(|| (0.0, [0.0; 3]), farther);
-    // Per input triangle (reused below for the triangles that bound the solid whole).
-    let per_input: Vec<(f64, P)> = in_tris.par_iter().map(|t| farthest(samples(t), &out_tree)).collect();
+    let raw_passes = || {
+        let out_tree = TriangleTree::new(boundary.to_vec());
+        let in_tree = TriangleTree::new(in_tris.clone());
+        let raw_mesh_to_surface =
+            boundary.par_iter().map(|t| farthest(samples(t), &in_tree)).reduce(|| (0.0, [0.0; 3]), farther);
+        // Per input triangle (reused below for the triangles that bound the solid whole).
+        let per_input: Vec<(f64, P)> = in_tris.par_iter().map(|t| farthest(samples(t), &out_tree)).collect();
+        let borders = border_chains(surface, 1e-6 * diag, (1e-3 * diag).powi(2));
+        (out_tree, raw_mesh_to_surface, per_input, borders)
+    };
+    let (single_shell, (out_tree, raw_mesh_to_surface, per_input, borders)) = match single_shell {
+        Some(given) => (given, raw_passes()),
+        None => rayon::join(|| is_single_closed_shell(surface), raw_passes),
+    };
     let raw_surface_to_mesh = per_input.iter().copied().fold((0.0, [0.0; 3]), farther);
     let (raw_mesh_to_surface_mm, raw_surface_to_mesh_mm) = (raw_mesh_to_surface.0, raw_surface_to_mesh.0);
-    let borders = border_chains(surface, 1e-6 * diag, (1e-3 * diag).powi(2));
     // The figures from the mesh's largest bound and the bounding input's largest
     // distance, without caps or interior input (set after, where there are).
     let figures = |to_boundary: (f64, P), to_mesh: (f64, P)| BoundaryDistance {
@@ -854,7 +868,7 @@ mod tests {
             assert!(is_single_closed_shell(s));
             let spacing = s.diagonal() / 300.0;
             let fast = boundary_distance(boundary, s, spacing);
-            let general = boundary_distance_on(boundary, s, spacing, false);
+            let general = boundary_distance_on(boundary, s, spacing, Some(false));
             assert_eq!(format!("{fast:?}"), format!("{general:?}"));
             assert!(fast.mesh_to_boundary_mm > 0.0 && fast.boundary_to_mesh_mm > 0.0, "{fast:?}");
             assert_eq!((fast.num_interior_input_triangles, fast.num_partly_interior_input_triangles), (0, 0));
@@ -892,8 +906,8 @@ mod tests {
             assert!(!is_single_closed_shell(s), "{name}");
             let spacing = s.diagonal() / 300.0;
             let chosen = boundary_distance(boundary, s, spacing);
-            let general = boundary_distance_on(boundary, s, spacing, false);
-            let fast = boundary_distance_on(boundary, s, spacing, true);
+            let general = boundary_distance_on(boundary, s, spacing, Some(false));
+            let fast = boundary_distance_on(boundary, s, spacing, Some(true));
             assert_eq!(format!("{chosen:?}"), format!("{general:?}"), "{name}");
             assert_ne!(format!("{fast:?}"), format!("{general:?}"), "{name}");
             eprintln!("{name}: general {general:?}\n  fast {fast:?}");
