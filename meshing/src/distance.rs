@@ -83,6 +83,37 @@
 //! caps at the mesh's vertices made it 3.3 s there (the machine more loaded:
 //! BENCHMARKS.md, "Review fixes").
 //!
+//! ## A single closed shell (session 22)
+//!
+//! When the input is one closed, consistently oriented, outward shell without
+//! self-intersections ([`is_single_closed_shell`]: one edge-connected
+//! component, every edge run once each way, and [`crate::validate::validate`]
+//! with its exact predicates finds no defect), its winding number is exactly 1
+//! inside and 0 outside: it is integer off the surface (a closed oriented
+//! surface), changes by one across each face (no face overlaps another), and a
+//! connected embedded closed surface cuts space into one inside and one outside
+//! (pinches at shared vertices do not change this: pulled apart, the surface
+//! stays connected), the inside at 1 as the volume is positive. So every input
+//! point bounds the solid, and the solid's boundary is the input and nothing
+//! else (no level set elsewhere, no hole). Then [`boundary_distance`] skips the
+//! jump tests (each would answer "all") and the level-set probes: a mesh sample
+//! at distance `d` from the input is at distance `d` from the solid's boundary,
+//! and its probe's bound, an upper bound of that distance, is at least `d` (its
+//! `min(d, t)` is `d`; nor can it straddle the level set nearer than `d`). The
+//! bounding figures are then the raw ones, places included (the raw pass and the
+//! probe order both keep the first sample of the lowest face on a tie), with no
+//! cap and no interior input triangle. The general path gives the same bits
+//! wherever its inside tests are right, as they are away from the surface (the
+//! fast winding number errs by a few hundredths, far from 1/2 here): it would
+//! differ only where a jump test's two points, 1e-7 of the diagonal apart, fall
+//! on the same side of a sheet (features thinner than that), where the fast path
+//! is the right one. Measured: the reports of the conforming bunny (0.3 mm),
+//! fandisk (0.05 mm), armadillo (8 mm) and an icosphere (level 3, 0.2 mm), and
+//! of the envelope meshes of an icosphere (level 5, 0.2 mm), the bunny (2 mm)
+//! and fandisk (0.1 mm), equal before and after, bit for bit (BENCHMARKS.md,
+//! session 22); fandisk's report 3.4 -> 0.78 s. Open, non-manifold,
+//! self-intersecting and multi-component inputs take the general path.
+//!
 //! ## Sampling
 //!
 //! Both surfaces are sampled on a barycentric grid of spacing at most `spacing`
@@ -183,19 +214,67 @@ enum Bounding {
 }
 
 /// The distances between the mesh boundary triangles `boundary` [mm] and the
-/// solid `surface`'s winding number defines, sampled at `spacing` [mm] (module docs).
+/// solid `surface`'s winding number defines, sampled at `spacing` [mm] (module
+/// docs). On a single closed shell ([`is_single_closed_shell`]) the solid's
+/// boundary is the whole input, and the jump tests and the level-set probes are
+/// skipped (module docs, "A single closed shell").
 pub fn boundary_distance(boundary: &[[P; 3]], surface: &Surface, spacing: f64) -> BoundaryDistance {
+    boundary_distance_on(boundary, surface, spacing, None)
+}
+
+/// [`boundary_distance`], the input taken for a single closed shell (every point
+/// of it bounding the solid, no level set elsewhere) when `single_shell` is
+/// `Some(true)`; `None`: [`is_single_closed_shell`] decides, checked beside the
+/// raw passes (its validation is serial: on the other core).
+fn boundary_distance_on(
+    boundary: &[[P; 3]],
+    surface: &Surface,
+    spacing: f64,
+    single_shell: Option<bool>,
+) -> BoundaryDistance {
     let diag = surface.diagonal();
     let in_tris: Vec<[P; 3]> = surface.triangles.iter().map(|t| t.map(|v| surface.vertices[v as usize])).collect();
-    let out_tree = TriangleTree::new(boundary.to_vec());
-    let in_tree = TriangleTree::new(in_tris.clone());
     let samples = |t: &[P; 3]| grid_points(t, intervals(t, spacing, 24));
-    let raw_mesh_to_surface =
-        boundary.par_iter().map(|t| farthest(samples(t), &in_tree)).reduce(|| (0.0, [0.0; 3]), farther);
-    // Per input triangle (reused below for the triangles that bound the solid whole).
-    let per_input: Vec<(f64, P)> = in_tris.par_iter().map(|t| farthest(samples(t), &out_tree)).collect();
+    let raw_passes = || {
+        let out_tree = TriangleTree::new(boundary.to_vec());
+        let in_tree = TriangleTree::new(in_tris.clone());
+        let raw_mesh_to_surface =
+            boundary.par_iter().map(|t| farthest(samples(t), &in_tree)).reduce(|| (0.0, [0.0; 3]), farther);
+        // Per input triangle (reused below for the triangles that bound the solid whole).
+        let per_input: Vec<(f64, P)> = in_tris.par_iter().map(|t| farthest(samples(t), &out_tree)).collect();
+        let borders = border_chains(surface, 1e-6 * diag, (1e-3 * diag).powi(2));
+        (out_tree, raw_mesh_to_surface, per_input, borders)
+    };
+    let (single_shell, (out_tree, raw_mesh_to_surface, per_input, borders)) = match single_shell {
+        Some(given) => (given, raw_passes()),
+        None => rayon::join(|| is_single_closed_shell(surface), raw_passes),
+    };
     let raw_surface_to_mesh = per_input.iter().copied().fold((0.0, [0.0; 3]), farther);
     let (raw_mesh_to_surface_mm, raw_surface_to_mesh_mm) = (raw_mesh_to_surface.0, raw_surface_to_mesh.0);
+    // The figures from the mesh's largest bound and the bounding input's largest
+    // distance, without caps or interior input (set after, where there are).
+    let figures = |to_boundary: (f64, P), to_mesh: (f64, P)| BoundaryDistance {
+        hausdorff_mm: to_boundary.0.max(to_mesh.0),
+        mesh_to_boundary_mm: to_boundary.0,
+        boundary_to_mesh_mm: to_mesh.0,
+        hole_cap_mm: 0.0,
+        cap_to_level_set_mm: 0.0,
+        hole_cap_fraction: 0.0,
+        num_border_edges: borders.num_edges,
+        widest_hole_mm: borders.widest_mm,
+        num_interior_input_triangles: 0,
+        num_partly_interior_input_triangles: 0,
+        raw_hausdorff_mm: raw_mesh_to_surface_mm.max(raw_surface_to_mesh_mm),
+        raw_mesh_to_surface_mm,
+        raw_surface_to_mesh_mm,
+        mesh_to_boundary_at_mm: to_boundary.1,
+        boundary_to_mesh_at_mm: to_mesh.1,
+    };
+    if single_shell {
+        // Every input triangle bounds the solid whole, and the solid's boundary
+        // is the input: the bounding figures are the raw ones (module docs).
+        return figures(raw_mesh_to_surface, raw_surface_to_mesh);
+    }
 
     // The bounding part of the input, and its distance to the mesh.
     let winding = WindingNumber::new(surface);
@@ -219,54 +298,70 @@ pub fn boundary_distance(boundary: &[[P; 3]], surface: &Surface, spacing: f64) -
         .collect();
     let (boundary_to_mesh_mm, boundary_to_mesh_at_mm) = parts.iter().map(|p| p.1).fold((0.0, [0.0; 3]), farther);
     let mut items: Vec<[P; 3]> = Vec::new();
-    let mut parent: Vec<u32> = Vec::new();
     let (mut num_interior, mut num_partly) = (0, 0);
     for (t, (part, _)) in parts.into_iter().enumerate() {
         match part {
             Bounding::All => {
                 items.push(in_tris[t]);
-                parent.push(t as u32);
             }
             Bounding::None => num_interior += 1,
             Bounding::Part(subs) => {
                 num_partly += 1;
-                parent.extend(std::iter::repeat_n(t as u32, subs.len()));
                 items.extend(subs);
             }
         }
     }
     let bounding_tree = TriangleTree::new(items);
 
-    // Border edges (reported), and the mesh's distance to the solid's boundary.
-    let borders = border_chains(surface, 1e-6 * diag, (1e-3 * diag).powi(2));
+    // The mesh's distance to the solid's boundary.
     let inside = |q: P| winding.is_inside_checked(q);
     let to_boundary = mesh_to_solid_boundary(boundary, spacing, &bounding_tree, &inside, LEVEL_SET_PRECISION * diag);
-    let (mesh_to_boundary_mm, mesh_to_boundary_at_mm) = to_boundary.farthest;
-    let (hole_cap_mm, cap_to_level_set_mm) = (to_boundary.cap_mm, to_boundary.cap_to_level_set_mm);
-    let (num_cap, num_samples) = (to_boundary.num_cap, to_boundary.num_samples);
     // Nothing bounds the solid (no input triangle has a jump): only the raw figure means anything.
-    let (mesh_to_boundary_mm, boundary_to_mesh_mm, mesh_to_boundary_at_mm, boundary_to_mesh_at_mm) =
-        if bounding_tree.num_triangles() == 0 {
-            (raw_mesh_to_surface.0, raw_surface_to_mesh.0, raw_mesh_to_surface.1, raw_surface_to_mesh.1)
-        } else {
-            (mesh_to_boundary_mm, boundary_to_mesh_mm, mesh_to_boundary_at_mm, boundary_to_mesh_at_mm)
-        };
-    BoundaryDistance {
-        hausdorff_mm: mesh_to_boundary_mm.max(boundary_to_mesh_mm),
-        mesh_to_boundary_mm,
-        boundary_to_mesh_mm,
-        hole_cap_mm,
-        cap_to_level_set_mm,
-        hole_cap_fraction: if num_samples > 0 { num_cap as f64 / num_samples as f64 } else { 0.0 },
-        num_border_edges: borders.num_edges,
-        widest_hole_mm: borders.widest_mm,
-        num_interior_input_triangles: num_interior,
-        num_partly_interior_input_triangles: num_partly,
-        raw_hausdorff_mm: raw_mesh_to_surface_mm.max(raw_surface_to_mesh_mm),
-        raw_mesh_to_surface_mm,
-        raw_surface_to_mesh_mm,
-        mesh_to_boundary_at_mm,
-        boundary_to_mesh_at_mm,
+    let mut d = if bounding_tree.num_triangles() == 0 {
+        figures(raw_mesh_to_surface, raw_surface_to_mesh)
+    } else {
+        figures(to_boundary.farthest, (boundary_to_mesh_mm, boundary_to_mesh_at_mm))
+    };
+    d.hole_cap_mm = to_boundary.cap_mm;
+    d.cap_to_level_set_mm = to_boundary.cap_to_level_set_mm;
+    let (num_cap, num_samples) = (to_boundary.num_cap, to_boundary.num_samples);
+    d.hole_cap_fraction = if num_samples > 0 { num_cap as f64 / num_samples as f64 } else { 0.0 };
+    d.num_interior_input_triangles = num_interior;
+    d.num_partly_interior_input_triangles = num_partly;
+    d
+}
+
+/// Whether `surface` is one closed, consistently oriented shell, outward, without
+/// self-intersections: one edge-connected component, every edge run once each
+/// way by two triangles, and [`crate::validate::validate`] (exact predicates)
+/// finds no defect, no junction edge and two shells. Its winding number is then
+/// 1 inside and 0 outside, so every point of it bounds the solid `w > 1/2`
+/// (module docs, "A single closed shell"). A cheap test by vertex index comes
+/// first, so an open or non-manifold input is not validated.
+pub fn is_single_closed_shell(surface: &Surface) -> bool {
+    // Each directed edge once, and its reverse too.
+    let mut directed: Vec<u64> = surface
+        .triangles
+        .iter()
+        .flat_map(|t| (0..3).map(move |e| (u64::from(t[e]) << 32) | u64::from(t[(e + 1) % 3])))
+        .collect();
+    directed.sort_unstable();
+    let reverse = |k: u64| k.rotate_right(32);
+    if directed.is_empty()
+        || directed.windows(2).any(|w| w[0] == w[1])
+        || directed.iter().any(|&k| directed.binary_search(&reverse(k)).is_err())
+    {
+        return false;
+    }
+    match crate::validate::validate(surface, &crate::validate::ValidateOptions::default()) {
+        Ok(report) => {
+            report.is_valid()
+                && report.components.len() == 1
+                && report.components[0].closed
+                && report.junction_edges.is_empty()
+                && report.num_shells == 2
+        }
+        Err(_) => false,
     }
 }
 
@@ -721,6 +816,101 @@ mod tests {
             // No precision: bisected down to adjacent floats, and it ends.
             let t = level_set_bound(&inside, [0.0; 3], n, 1.0, 0.0, 0.0);
             assert!(t >= along * (1.0 - 1e-15) && t <= along + 1e-15, "{n:?}: {t} against {along}");
+        }
+    }
+
+    /// A shared OBJ fixture (`<workspace>/../shared/data/meshes`) as one region.
+    fn shared_obj(name: &str) -> Surface {
+        let path = format!("{}/../../shared/data/meshes/{name}", env!("CARGO_MANIFEST_DIR"));
+        let (models, _) = tobj::load_obj(&path, &tobj::LoadOptions { triangulate: true, ..Default::default() })
+            .unwrap_or_else(|e| panic!("{path}: {e}"));
+        let mut s = Surface { region_names: vec!["all".into()], ..Surface::default() };
+        for m in &models {
+            let base = s.vertices.len() as u32;
+            s.vertices.extend(m.mesh.positions.chunks(3).map(|c| [c[0] as f64, c[1] as f64, c[2] as f64]));
+            s.triangles.extend(m.mesh.indices.chunks(3).map(|t| [base + t[0], base + t[1], base + t[2]]));
+        }
+        s.triangle_regions = vec![0; s.triangles.len()];
+        s
+    }
+
+    /// The triangles of `s` with each vertex moved by up to `amplitude` [mm]
+    /// along a pseudo-random direction (the same for every triangle using it:
+    /// a closed boundary crossing the surface, partly inside, partly outside).
+    fn jittered(s: &Surface, amplitude: f64) -> Vec<[P; 3]> {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rand = || {
+            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let moved: Vec<P> = s.vertices.iter().map(|p| p.map(|x| x + amplitude * rand())).collect();
+        s.triangles.iter().map(|t| t.map(|v| moved[v as usize])).collect()
+    }
+
+    /// The fast path on single closed shells gives the general path's figures
+    /// bit for bit (compared as their `Debug` text, places included): the bunny
+    /// (`npm_bunny.obj`, 3,674 triangles) against itself jittered by 1e-3 of
+    /// its diagonal (Hausdorff distance measured 1.53e-3 of the diagonal; the
+    /// general path 1.3 s of the test's 2 s), the unit cube against the box [0.1, 0.9]^3 inside it
+    /// (every mesh sample 0.1 from the cube: ties everywhere, so the place of
+    /// the maximum is the tie rule's) and against itself jittered. Each
+    /// figure is nonzero where it should be (asserted), and the public
+    /// [`boundary_distance`] takes the fast path on each.
+    #[test]
+    fn a_single_closed_shell_gives_the_general_paths_figures_bit_for_bit() {
+        let bunny = shared_obj("npm_bunny.obj");
+        let cube = Surface::cuboid([0.0; 3], [1.0; 3], "cube");
+        let inner = Surface::cuboid([0.1; 3], [0.9; 3], "inner");
+        let inner: Vec<[P; 3]> = inner.triangles.iter().map(|t| t.map(|v| inner.vertices[v as usize])).collect();
+        let cases =
+            [(&bunny, jittered(&bunny, 1e-3 * bunny.diagonal())), (&cube, inner), (&cube, jittered(&cube, 0.05))];
+        for (s, boundary) in &cases {
+            assert!(is_single_closed_shell(s));
+            let spacing = s.diagonal() / 300.0;
+            let fast = boundary_distance(boundary, s, spacing);
+            let general = boundary_distance_on(boundary, s, spacing, Some(false));
+            assert_eq!(format!("{fast:?}"), format!("{general:?}"));
+            assert!(fast.mesh_to_boundary_mm > 0.0 && fast.boundary_to_mesh_mm > 0.0, "{fast:?}");
+            assert_eq!((fast.num_interior_input_triangles, fast.num_partly_interior_input_triangles), (0, 0));
+            eprintln!("{:.3e} of the diagonal: {fast:?}", fast.hausdorff_mm / s.diagonal());
+        }
+    }
+
+    /// The fast path is not taken where the input is not one closed shell, and
+    /// would be wrong there (its figures differ from the general path's,
+    /// asserted): the cube without its top face (the level set closes it:
+    /// the box's own top is over a hole), a cube folded through itself (one
+    /// component, closed and consistently oriented by index, self-intersecting:
+    /// a corner pushed through the opposite face: 5 input triangles bound the
+    /// solid in part) and two overlapping cubes as one region (two components:
+    /// the faces inside the other cube bound nothing). `boundary_distance`
+    /// gives the general figures.
+    #[test]
+    fn the_fast_path_is_not_taken_on_open_or_self_intersecting_input() {
+        let cube = Surface::cuboid([0.0; 3], [1.0; 3], "cube");
+        let cube_tris: Vec<[P; 3]> = cube.triangles.iter().map(|t| t.map(|v| cube.vertices[v as usize])).collect();
+        let mut open = cube.clone();
+        open.triangles.retain(|t| !t.iter().all(|&v| v & 4 != 0));
+        open.triangle_regions.truncate(open.triangles.len());
+        let mut folded = cube.clone();
+        folded.vertices[7] = [0.3, 0.35, -0.6];
+        let mut cubes = cube.clone();
+        let other = Surface::cuboid([0.5, 0.25, 0.25], [1.5, 0.75, 0.75], "other");
+        cubes.vertices.extend(other.vertices);
+        cubes.triangles.extend(other.triangles.iter().map(|t| t.map(|v| v + 8)));
+        cubes.triangle_regions = vec![0; 24];
+        let cubes_tris = jittered(&cubes, 0.0);
+        for (name, s, boundary) in
+            [("open", &open, &cube_tris), ("folded", &folded, &cube_tris), ("cubes", &cubes, &cubes_tris)]
+        {
+            assert!(!is_single_closed_shell(s), "{name}");
+            let spacing = s.diagonal() / 300.0;
+            let chosen = boundary_distance(boundary, s, spacing);
+            let general = boundary_distance_on(boundary, s, spacing, Some(false));
+            let fast = boundary_distance_on(boundary, s, spacing, Some(true));
+            assert_eq!(format!("{chosen:?}"), format!("{general:?}"), "{name}");
+            assert_ne!(format!("{fast:?}"), format!("{general:?}"), "{name}");
+            eprintln!("{name}: general {general:?}\n  fast {fast:?}");
         }
     }
 
