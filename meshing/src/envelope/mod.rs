@@ -19,7 +19,8 @@
 //!    (`graded.rs`): the BCC lattice refined by conforming longest-edge
 //!    bisection down to `size_mm / 2^levels` where the input's chord error at the
 //!    cell's size exceeds [`EnvelopeOptions::grade_tolerance`] (creases, curved
-//!    parts, thin parts, the rims of holes; rims deeper, as the tolerance asks), coarse elsewhere; the same stuffing per tet, with
+//!    parts, thin parts, the rims of holes and blades, edges whose faces meet
+//!    at less than 90°; these deeper, as the tolerance asks), coarse elsewhere; the same stuffing per tet, with
 //!    measured (not proven) warping thresholds, then boundary slivers peeled.
 //! 3. **Regions**: with several input regions (OBJ objects or groups, glTF meshes),
 //!    each region's shell is cut into the mesh as a conforming interface
