@@ -91,6 +91,18 @@
 //! edge, where both sides are inside): the void between the spout's wall and
 //! the cap over its opening starts at `w` = 0.33. Teapot, 0.5 mm, 3 levels:
 //! input -> mesh 3.63e-3 -> 1.00e-3 of the diagonal (971k -> 1.59M tets).
+//! **Blades** (session 22) are cut as rims: an input edge whose two triangles'
+//! normals are more than 90° apart ([`crate::distance::blade_edges`]) bounds
+//! a wedge of solid (or of void) narrower than 90°, thinner than any cell near
+//! its edge, but the input point nearest to such a cell's centroid is mostly
+//! the edge itself, where both probes across the input (along either
+//! triangle's normal) fall outside the wedge: the thin test saw nothing, and
+//! the cells along the teapot spout's lip (faces 49.4° apart) stayed at the
+//! smallest size, the stuffing rounding the lip off by 0.04 mm (0.0412 mm
+//! input -> mesh, the maximum). Among the rims, their cells get the inset
+//! probe and the deep cut: input -> mesh 1.005e-3 -> 9.74e-4 of the diagonal
+//! (1.589M -> 1.600M tets); the teapot has 2 blades, the bunny 18 (ear tips,
+//! base).
 //! Cells meeting no triangle are never cut by the sizing (only by the closure).
 //!
 //! Cells are visited in rounds: each round evaluates the sizing of the cells the
@@ -182,8 +194,8 @@ pub(crate) struct GradeStats {
 impl GradedLattice {
     /// The base lattice (spacing `h` over the box `lo..hi` grown by `h`), refined
     /// down to `h / 2^levels` (at most [`MAX_LEVELS`]) where the chord-error
-    /// estimate of `surface` exceeds `tol` [mm], and where a border edge of the
-    /// input (the first edge of each of `rims`' triangles) passes, while `L / 4`
+    /// estimate of `surface` exceeds `tol` [mm], and where a border edge or a
+    /// blade of the input (the first edge of each of `rims`' triangles) passes, while `L / 4`
     /// exceeds `tol`, down to `h / 2^MAX_LEVELS` (with `levels` > 0). Stops cutting
     /// (leaving the mesh conforming) when it has `max_vertices` vertices.
     #[allow(clippy::too_many_arguments)]
@@ -860,5 +872,82 @@ mod tests {
         assert!(finest_near_rim > 0);
         // Measured: 14336 cells, centroids within 0.066 of the rim (a level-3 cell's ball reaches about 0.06).
         assert!(deepest_off_rim < h / 4.0, "{deepest_off_rim}");
+    }
+
+    /// A triangular prism whose cross-section has angles 40°, 70° and 70°
+    /// (apex edge along z through (0.31, 0.07), back face at x = -0.33): its
+    /// three long edges are blades (normals 140° and 110° apart; the caps' edges,
+    /// at 90°, are not). At the apex the input point nearest to a cell's
+    /// centroid is often the edge itself, where both probes across the input
+    /// are outside (the thin test sees nothing): without the blades some cells
+    /// holding points of the apex edge stay at the smallest size (coarsest
+    /// h / 8 = 0.0625, measured at 41 points of the edge). With them (the
+    /// sizing's `rims`) the cells they pass are cut as at a rim: the probe moves
+    /// into the nearest triangle, the solid is thinner than the cell, and the
+    /// cut goes on while [`GAP_DEPTH`] `L` exceeds the tolerance (0.1 mm):
+    /// coarsest h / 16 = 0.03125 (2.5 * 0.03125 = 0.078 <= 0.1), measured and
+    /// asserted. The same lattice on one thread as on two.
+    #[test]
+    fn a_blades_edge_is_cut_below_the_smallest_cells_like_a_rim() {
+        let (ax, ay, back, half) = (0.31, 0.07, -0.33, 20f64.to_radians());
+        let w = (ax - back) * half.tan();
+        let vertices = vec![
+            [ax, ay, -0.4],
+            [back, ay + w, -0.4],
+            [back, ay - w, -0.4],
+            [ax, ay, 0.4],
+            [back, ay + w, 0.4],
+            [back, ay - w, 0.4],
+        ];
+        // Outward: the caps, then the upper, lower and back faces.
+        let triangles = vec![[0, 2, 1], [3, 4, 5], [0, 1, 4], [0, 4, 3], [0, 3, 5], [0, 5, 2], [1, 2, 5], [1, 5, 4]];
+        let surface = crate::Surface {
+            vertices,
+            triangles: triangles.clone(),
+            triangle_regions: vec![0; triangles.len()],
+            region_names: vec!["prism".into()],
+        };
+        assert!(surface.signed_volume(None) > 0.0);
+        let blades = crate::distance::blade_edges(&surface, 1e-9);
+        assert_eq!(blades.iter().map(|b| [b[0], b[1]]).collect::<Vec<_>>(), vec![[0, 3], [1, 4], [2, 5]]);
+        let tris =
+            |t: &[[u32; 3]]| -> Vec<[P; 3]> { t.iter().map(|t| t.map(|v| surface.vertices[v as usize])).collect() };
+        let tree = TriangleTree::new(tris(&triangles));
+        let rims = TriangleTree::new(tris(&blades));
+        let no_rims = TriangleTree::new(Vec::new());
+        let (h, tol) = (0.5, 0.1);
+        // The coarsest cell holding a point of the apex edge (41 points, z in [-0.3, 0.3]).
+        let near_apex = |g: &GradedLattice| {
+            let mut coarsest: f64 = 0.0;
+            for k in 0..=40 {
+                let x = [ax, ay, -0.3 + 0.6 * k as f64 / 40.0];
+                for t in &g.cells {
+                    let p = t.map(|v| g.position(v));
+                    let v = super::super::stuffing::signed_volume(&p);
+                    let holds = (0..4).all(|i| {
+                        let mut q = p;
+                        q[i] = x;
+                        super::super::stuffing::signed_volume(&q) * v >= 0.0
+                    });
+                    if holds {
+                        coarsest = coarsest.max(centroid_and_longest(&p).1);
+                    }
+                }
+            }
+            coarsest
+        };
+        let (without, _) = GradedLattice::new(&tree, &no_rims, [-0.5; 3], [0.5; 3], h, 1, tol, usize::MAX);
+        let (with, _) = GradedLattice::new(&tree, &rims, [-0.5; 3], [0.5; 3], h, 1, tol, usize::MAX);
+        let (g0, _) = GradedLattice::new(&tree, &no_rims, [-0.5; 3], [0.5; 3], h, 0, tol, usize::MAX);
+        check_conforming(&with, &g0);
+        eprintln!("coarsest on the apex: without the blades {}, with {}", near_apex(&without), near_apex(&with));
+        assert!(near_apex(&without) >= h / 8.0 * (1.0 - 1e-9), "{}", near_apex(&without));
+        assert!(near_apex(&with) <= h / 16.0 * (1.0 + 1e-9), "{}", near_apex(&with));
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let (again, _) =
+                pool.install(|| GradedLattice::new(&tree, &rims, [-0.5; 3], [0.5; 3], h, 1, tol, usize::MAX));
+            assert!(again.coords == with.coords && again.cells == with.cells, "{threads} threads");
+        }
     }
 }

@@ -19,7 +19,8 @@
 //!    (`graded.rs`): the BCC lattice refined by conforming longest-edge
 //!    bisection down to `size_mm / 2^levels` where the input's chord error at the
 //!    cell's size exceeds [`EnvelopeOptions::grade_tolerance`] (creases, curved
-//!    parts, thin parts, the rims of holes; rims deeper, as the tolerance asks), coarse elsewhere; the same stuffing per tet, with
+//!    parts, thin parts, the rims of holes and blades, edges whose faces meet
+//!    at less than 90°; these deeper, as the tolerance asks), coarse elsewhere; the same stuffing per tet, with
 //!    measured (not proven) warping thresholds, then boundary slivers peeled.
 //! 3. **Regions**: with several input regions (OBJ objects or groups, glTF meshes),
 //!    each region's shell is cut into the mesh as a conforming interface
@@ -518,10 +519,14 @@ pub fn envelope_mesh_with_progress(
     let eps = 1e-9 * diag.max(f64::MIN_POSITIVE);
     let (stuffed, grade_bisections) = if options.grade_levels > 0 {
         progress("grading", 0.0);
-        // The input's border edges (hole rims), each with its triangle's third corner.
+        // The input's border edges (hole rims) and blades (edges whose two
+        // triangles' normals are more than 90° apart), each with a third corner
+        // of its triangle: the sizing cuts the cells they pass as at a rim.
+        let weld = 1e-6 * diag;
         let rims = TriangleTree::new(
-            crate::distance::border_edges(surface, 1e-6 * diag)
+            crate::distance::border_edges(surface, weld)
                 .into_iter()
+                .chain(crate::distance::blade_edges(surface, weld))
                 .map(|t| t.map(|v| surface.vertices[v as usize]))
                 .collect(),
         );
