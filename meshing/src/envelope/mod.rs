@@ -413,6 +413,8 @@ pub struct EnvelopeStats {
     pub fit_splits: usize,
     /// Boundary nodes the fitting moved onto input vertices.
     pub fit_snaps: usize,
+    /// Boundary tets outside the solid the fitting removed (carved).
+    pub fit_carved: usize,
     /// Candidates for which the fitting's angle guard refused every split.
     pub fit_refused: usize,
     /// The smallest and largest dihedral angle [deg] of the mesh the final guard
@@ -606,6 +608,7 @@ pub fn envelope_mesh_with_progress(
         stats.fit_splits = f.splits;
         stats.fit_refused = f.refused;
         stats.fit_snaps = f.snaps;
+        stats.fit_carved = f.carved;
     }
 
     // 7. The final angle guard (`guard.rs`): repair, or refuse. First more
