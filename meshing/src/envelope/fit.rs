@@ -14,17 +14,44 @@
 //!
 //! 1. **Candidates**, sorted by distance, largest first: a boundary edge whose
 //!    midpoint, or a boundary triangle whose centroid, is farther than `tol` from
-//!    the input (output -> input; for a triangle its edges, longest first); and
+//!    the solid's true boundary (output -> input; for a triangle its edges,
+//!    longest first), measured as the quality report does
+//!    ([`crate::distance`]): the distance `d` to the input, or where that
+//!    exceeds `tol` the smaller of `d` and the level-set probe along the face's
+//!    normal within `d` ([`crate::distance::level_set_bound`], the exact
+//!    inside test near `w = 1/2`), so a boundary over a cap `w = 1/2` (a hole,
+//!    an open tube's mouth) counts by its distance to the level set, not to the
+//!    hole's rim (before session 22 only `d`: such a boundary was a candidate
+//!    whose split would pull it towards the rim). Unlike the report's, `d` is
+//!    to every input triangle, not to the bounding part only: a boundary inside
+//!    the solid along input that bounds nothing (the teapot spout's wall inside
+//!    the body) is not seen; and
 //!    each input vertex farther than `tol` from the output (input -> output), with
 //!    the edges of the nearest boundary triangle. Vertices of input triangles
 //!    that bound nothing (the caps of overlapping parts inside each other) are
 //!    left out, as in the quality report. After the first round only edges and
 //!    triangles with a node of a changed tet, and the input vertices still far,
 //!    are looked at again.
-//! 2. **Snap** (input -> output): the nearest corner of the nearest boundary
+//! 2. **Carve** (output -> true boundary, session 22): the tet on a boundary
+//!    face farther than `tol` is removed when its centroid is outside the solid
+//!    (the exact inside test), each of its corners is in another tet too and is
+//!    a boundary node or inside the solid (a node inside the mesh that comes to
+//!    the boundary stays where it is: [`Mobility::Fixed`]), and the boundary
+//!    stays manifold at its edges (each then in 0 or 2 boundary faces); the
+//!    faces it exposes that are farther than `tol` are tried next, in order,
+//!    so a void is carved out as deep as it is wider than `2 tol`. This is
+//!    where the stuffing filled a void thinner than its lattice bounded by a
+//!    level set (its lattice vertices warped onto the two walls, a tet with one
+//!    corner inside and three on the walls kept whole): the teapot handle's
+//!    mouth, between the body and the level set over the open tube (BENCHMARKS.md,
+//!    session 22). Removing tets makes no new ones, so the angle guard holds.
+//!    A tet straddling the void with corners inside the solid on both of its
+//!    sides (its centroid inside) is not taken: cutting it along the void
+//!    would be needed (not done).
+//! 3. **Snap** (input -> output): the nearest corner of the nearest boundary
 //!    triangle moves onto the far input vertex, when that is closer than half its
 //!    shortest edge and every tet of it passes the guard below.
-//! 3. **Split** (Rivara's longest-edge propagation): before edge `(a, b)` is split,
+//! 4. **Split** (Rivara's longest-edge propagation): before edge `(a, b)` is split,
 //!    the longer edges of the tets around it are split (up to [`LEPP_DEPTH`]
 //!    levels), so that each tet is cut across its longest edge, which keeps the
 //!    shapes. A split puts a new node on the edge; every tet around the edge is cut

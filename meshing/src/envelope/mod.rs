@@ -33,10 +33,12 @@
 //! 5. **Smoothing** of the worst tets (`smooth.rs`), boundary nodes sliding on the input.
 //! 6. **Boundary fitting** (`fit.rs`, [`EnvelopeOptions::fit_tolerance`], default
 //!    1e-3 of the diagonal): where the boundary is farther than the tolerance
-//!    from the input or the input from it, boundary nodes are snapped onto input
-//!    vertices and edges split (longest-edge propagation, new boundary nodes on
-//!    the input), each step taken only if every tet it makes keeps its dihedral
-//!    angles in [12°, 155°].
+//!    from the solid's true boundary (the input, or the level set `w = 1/2`
+//!    where it leaves the input, as the quality report measures it) or the
+//!    input from it, boundary tets outside the solid are carved off, boundary
+//!    nodes are snapped onto input vertices and edges split (longest-edge
+//!    propagation, new boundary nodes on the input), each step taken only if
+//!    every tet it makes keeps its dihedral angles in [12°, 155°].
 //! 7. **Angle guard** (`guard.rs`): what is still outside [12°, 155°] is smoothed
 //!    again (region-shell interface nodes now sliding along the input), flipped
 //!    (2-3, 3-2), peeled (thin boundary slivers) or split (an edge inside the
