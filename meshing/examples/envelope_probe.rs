@@ -133,8 +133,8 @@ fn main() {
             q.report_time_s
         );
         println!(
-            "  fit: {} rounds, {} splits, {} refused",
-            out.stats.fit_rounds, out.stats.fit_splits, out.stats.fit_refused
+            "  fit: {} rounds, {} splits, {} refused, {} carved",
+            out.stats.fit_rounds, out.stats.fit_splits, out.stats.fit_refused, out.stats.fit_carved
         );
         let outside_angles = out
             .mesh

@@ -886,6 +886,68 @@ fn the_cap_over_an_open_scans_hole_is_measured_apart() {
     }
 }
 
+/// The fitting carves boundary tets outside the solid (session 22): a thin void
+/// bounded by a level set. The 40 deg open scan (the unit sphere, its cap x >
+/// cos 40 deg off: the level set over the hole is the plane x = cos 40 deg,
+/// as in the test above) and a box hovering over the hole, its bottom a gap g
+/// = 0.07 above that plane, on a uniform lattice of 0.1: the slab between the
+/// plane and the box's bottom is outside the solid, and the stuffing fills it
+/// (its lattice vertices warped onto the two walls: tets with one corner
+/// inside and three on the walls are kept whole, as at the teapot handle's
+/// mouth). Every point of the slab is outside both parts, so its distance to
+/// the solid's boundary is, in closed form, the smaller of its height above
+/// the plane and its distance to the box (the sphere is at least 0.08 away).
+/// Over the mesh boundary's vertices, edge midpoints and face centroids in the
+/// slab: unfitted measured 0.0350 (g/2: faces across the slab), asserted at
+/// least 0.4 g; fitted (tolerance 1e-3 of the diagonal 3.51: 3.5e-3), 144
+/// tets carved and the farthest such point measured 4.8e-12 (every boundary
+/// point left in the slab lies on one of its walls, to the bisection of the
+/// level-set cut points), asserted within the tolerance; 12 s.
+/// Where a tet straddles the slab with corners inside both parts (gaps 0.03
+/// to 0.06 on this lattice), carving cannot take it and nothing changes
+/// (measured: the figure stays g/2 with g = 0.05, 0.06).
+#[test]
+fn the_fitting_carves_off_a_void_thinner_than_the_lattice_bounded_by_a_level_set() {
+    let alpha = 40f64.to_radians();
+    let (plane, g) = (alpha.cos(), 0.07);
+    let scan = sphere_zone(0.0, 1.0, &angles(alpha, std::f64::consts::PI, 28), 64);
+    let (lo, hi) = ([plane + g, -0.3, -0.3], [plane + g + 0.25, 0.3, 0.3]);
+    let box_ = Surface::cuboid(lo, hi, "box");
+    let s = soup(&[&scan, &box_]);
+    let tol = 1e-3 * s.diagonal();
+    // The farthest mesh boundary point in the slab from the solid's boundary.
+    let farthest_in_slab = |out: &EnvelopeMesh| -> f64 {
+        let nodes = &out.mesh.nodes;
+        let mut worst: f64 = 0.0;
+        for f in out.mesh.boundary_facets() {
+            let q = f.map(|v| nodes[v as usize]);
+            let mid = |a: [f64; 3], b: [f64; 3], t: f64| [0, 1, 2].map(|k| a[k] + t * (b[k] - a[k]));
+            let centroid = mid(mid(q[0], q[1], 0.5), q[2], 1.0 / 3.0);
+            let points = [q[0], q[1], q[2], mid(q[0], q[1], 0.5), mid(q[1], q[2], 0.5), mid(q[2], q[0], 0.5), centroid];
+            for p in points {
+                if p[0] > plane && p[0] < plane + g {
+                    let to_box = (0..3).map(|k| (lo[k] - p[k]).max(p[k] - hi[k]).max(0.0).powi(2)).sum::<f64>().sqrt();
+                    worst = worst.max((p[0] - plane).min(to_box));
+                }
+            }
+        }
+        worst
+    };
+    let unfitted = envelope_mesh(&s, &EnvelopeOptions { fit_tolerance: 0.0, ..EnvelopeOptions::new(0.1) }).unwrap();
+    let fitted = envelope_mesh(&s, &EnvelopeOptions::new(0.1)).unwrap();
+    let (before, after) = (farthest_in_slab(&unfitted), farthest_in_slab(&fitted));
+    eprintln!(
+        "slab: unfitted {before:.4e}, fitted {after:.4e} (tol {tol:.4e}); {} tets carved, {} -> {} tets",
+        fitted.stats.fit_carved,
+        unfitted.mesh.cells.len(),
+        fitted.mesh.cells.len()
+    );
+    assert!(before >= 0.4 * g, "the stuffing left the slab open: {before}");
+    assert!(fitted.stats.fit_carved > 0);
+    assert!(after <= tol, "{after} against {tol}");
+    assert_conforming(&fitted.mesh);
+}
+
 /// An open scan on the graded lattice (sessions 19, 20): the unit sphere with a
 /// polar cap of angular radius 40 deg cut off (as above). Where the solid leaves
 /// the input for the cap over the hole, its boundary has a crease along the rim
@@ -1093,8 +1155,13 @@ fn the_teapot_meshes_with_the_proven_bounds() {
 /// session 20's measure, which counted the samples nearer a hole's fan patch
 /// as caps; the true-boundary measure of session 21 (`distance.rs`) finds the
 /// mesh there 0.06 mm outside the level set at the handle's mouth (1.548e-3 on
-/// session 20's mesh: a miss of the mesher), asserted < 2e-3; dihedral angles
-/// measured 12.05-154.42 deg, asserted in [12, 155].
+/// session 20's mesh: a miss of the mesher), asserted < 2e-3 then; dihedral
+/// angles measured 12.05-154.42 deg, asserted in [12, 155]. Session 22, the
+/// fitting carves the boundary tets outside the solid there (`fit.rs`: tets
+/// with one corner inside the handle and three on the void's walls, kept whole
+/// by the stuffing): out->in measured 1.4155e-3 alone (0.0580 mm, then at
+/// (8.25, -1.125, 1.5): a mesh boundary inside the solid along the spout's
+/// wall inside the body), asserted < 1.45e-3.
 #[test]
 fn the_graded_teapot_resolves_the_voids_at_the_handles_mouth_and_the_spouts_lip() {
     let s = obj("npm_teapot.obj");
@@ -1112,7 +1179,7 @@ fn the_graded_teapot_resolves_the_voids_at_the_handles_mouth_and_the_spouts_lip(
     assert_conforming(&out.mesh);
     assert!(q.volume_error.abs() < 3e-2, "{}", q.volume_error);
     assert!(q.surface_to_mesh_mm / s.diagonal() < 1e-3, "{q:?}");
-    assert!(q.mesh_to_surface_mm / s.diagonal() < 2e-3, "{q:?}");
+    assert!(q.mesh_to_surface_mm / s.diagonal() < 1.45e-3, "{q:?}");
 }
 
 /// Layers along y: conforming planes, each layer's cells between its planes.

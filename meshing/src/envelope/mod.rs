@@ -34,10 +34,12 @@
 //! 5. **Smoothing** of the worst tets (`smooth.rs`), boundary nodes sliding on the input.
 //! 6. **Boundary fitting** (`fit.rs`, [`EnvelopeOptions::fit_tolerance`], default
 //!    1e-3 of the diagonal): where the boundary is farther than the tolerance
-//!    from the input or the input from it, boundary nodes are snapped onto input
-//!    vertices and edges split (longest-edge propagation, new boundary nodes on
-//!    the input), each step taken only if every tet it makes keeps its dihedral
-//!    angles in [12°, 155°].
+//!    from the solid's true boundary (the input, or the level set `w = 1/2`
+//!    where it leaves the input, as the quality report measures it) or the
+//!    input from it, boundary tets outside the solid are carved off, boundary
+//!    nodes are snapped onto input vertices and edges split (longest-edge
+//!    propagation, new boundary nodes on the input), each step taken only if
+//!    every tet it makes keeps its dihedral angles in [12°, 155°].
 //! 7. **Angle guard** (`guard.rs`): what is still outside [12°, 155°] is smoothed
 //!    again (region-shell interface nodes now sliding along the input), flipped
 //!    (2-3, 3-2), peeled (thin boundary slivers) or split (an edge inside the
@@ -414,6 +416,8 @@ pub struct EnvelopeStats {
     pub fit_splits: usize,
     /// Boundary nodes the fitting moved onto input vertices.
     pub fit_snaps: usize,
+    /// Boundary tets outside the solid the fitting removed (carved).
+    pub fit_carved: usize,
     /// Candidates for which the fitting's angle guard refused every split.
     pub fit_refused: usize,
     /// The smallest and largest dihedral angle [deg] of the mesh the final guard
@@ -611,6 +615,7 @@ pub fn envelope_mesh_with_progress(
         stats.fit_splits = f.splits;
         stats.fit_refused = f.refused;
         stats.fit_snaps = f.snaps;
+        stats.fit_carved = f.carved;
     }
 
     // 7. The final angle guard (`guard.rs`): repair, or refuse. First more
