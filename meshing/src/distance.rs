@@ -111,7 +111,7 @@
 //! fandisk (0.05 mm), armadillo (8 mm) and an icosphere (level 3, 0.2 mm), and
 //! of the envelope meshes of an icosphere (level 5, 0.2 mm), the bunny (2 mm)
 //! and fandisk (0.1 mm), equal before and after, bit for bit (BENCHMARKS.md,
-//! session 22); fandisk's report 3.4 -> 0.78 s. Open, non-manifold,
+//! session 22); fandisk's report 3.41 -> 0.56 s. Open, non-manifold,
 //! self-intersecting and multi-component inputs take the general path.
 //!
 //! ## Sampling
@@ -738,8 +738,13 @@ pub(crate) fn border_edges(surface: &Surface, tolerance: f64) -> Vec<[u32; 3]> {
     border
 }
 
+/// How far below 0 the cosine between a blade's normals must be: a right angle
+/// (a box's edge) is not a blade, whatever the rounding of its normals.
+const BLADE_MARGIN: f64 = 1e-3;
+
 /// The **blades** of `surface` (welded as in [`border_edges`]): edges of
-/// exactly two non-degenerate triangles whose normals are more than 90° apart,
+/// exactly two non-degenerate triangles whose normals are more than 90° apart
+/// (their cosine under `-BLADE_MARGIN`),
 /// so that the solid (or the void) between them is a wedge of less than 90°
 /// (the teapot spout's lip: 130.6° and 113.0° between the normals). There the
 /// input point nearest to a point off the edge is often on the edge itself,
@@ -750,7 +755,7 @@ pub(crate) fn blade_edges(surface: &Surface, tolerance: f64) -> Vec<[u32; 3]> {
     let normal = |t: [u32; 3]| unit_normal(&t.map(|v| surface.vertices[v as usize]));
     let mut blades: Vec<[u32; 3]> = welded_edge_uses(surface, tolerance)
         .into_iter()
-        .filter(|(_, t)| t.len() == 2 && normal(t[0]).zip(normal(t[1])).is_some_and(|(m, n)| dot(m, n) < 0.0))
+        .filter(|(_, t)| t.len() == 2 && normal(t[0]).zip(normal(t[1])).is_some_and(|(m, n)| dot(m, n) < -BLADE_MARGIN))
         .map(|((a, b), t)| [a, b, third(t[0], a, b)])
         .collect();
     blades.sort_unstable();
@@ -825,6 +830,33 @@ mod tests {
             assert!((m.boundary_to_mesh_mm - 3f64.sqrt() * delta).abs() < 1e-12, "{m:?}");
             assert_eq!((m.hole_cap_mm, m.hole_cap_fraction, m.num_border_edges), (0.0, 0.0, 0));
         }
+    }
+
+    /// A box's edges are right angles, not blades, however it is turned (the
+    /// rounding of its normals' cosine, about 1e-16 either way, used to decide
+    /// about half of them); a wedge of 60 degrees is one.
+    #[test]
+    fn a_turned_box_has_no_blades_and_a_sharp_wedge_has() {
+        let cube = Surface::cuboid([0.0; 3], [1.0; 3], "cube");
+        for k in 0..50 {
+            let (a, b) = (0.37 * k as f64, 0.91 * k as f64 + 0.2);
+            let turn = |p: P| {
+                let (x, y, z) = (p[0], p[1] * a.cos() - p[2] * a.sin(), p[1] * a.sin() + p[2] * a.cos());
+                [x * b.cos() - y * b.sin(), x * b.sin() + y * b.cos(), z]
+            };
+            let mut turned = cube.clone();
+            turned.vertices = turned.vertices.iter().map(|&p| turn(p)).collect();
+            assert!(blade_edges(&turned, 1e-9).is_empty(), "turn {k}: {:?}", blade_edges(&turned, 1e-9));
+        }
+        // A triangular prism whose cross-section has a 60 degree corner at the origin.
+        let (c, s3) = (0.5, 0.75f64.sqrt());
+        let mut wedge = Surface::default();
+        for z in [0.0, 1.0] {
+            wedge.vertices.extend([[0.0, 0.0, z], [1.0, 0.0, z], [c, s3, z]]);
+        }
+        wedge.triangles = vec![[0, 2, 1], [3, 4, 5], [0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4], [2, 0, 3], [2, 3, 5]];
+        wedge.triangle_regions = vec![0; 8];
+        assert_eq!(blade_edges(&wedge, 1e-9).len(), 3, "the prism's three long edges");
     }
 
     /// The level-set probe on a field with one sign change at a known place: the

@@ -259,9 +259,11 @@ pub(crate) fn fit(
     stats
 }
 
-/// An upper bound of the distance from `p`, on a boundary face with unit
-/// normal `n`, to the solid's true boundary, as the quality report measures it
-/// ([`crate::distance`]): its distance `d` to the input, or where that exceeds
+/// The fitting's estimate of the distance from `p`, on a boundary face with
+/// unit normal `n`, to the solid's true boundary, as the quality report
+/// measures it ([`crate::distance`]; an upper bound where the nearest input
+/// bounds the solid: `d` counts every input triangle, also those that bound
+/// nothing, which the report leaves out): its distance `d` to the input, or where that exceeds
 /// `tol`, the smaller of `d` and the level-set probe along `n` within `d`
 /// ([`level_set_bound`], to 1e-2 of `tol`; stopped once below `tol`).
 fn to_true_boundary(input: &TriangleTree, p: P, n: Option<P>, tol: f64) -> f64 {
@@ -284,7 +286,7 @@ const LEPP_DEPTH: usize = 4;
 
 struct Work<'a> {
     nodes: &'a mut Vec<P>,
-    /// The cells (none dies: splits keep every slot) and their regions.
+    /// The cells (splits keep every slot; carving kills some) and their regions.
     cells: CellStore,
     mobility: &'a mut Vec<Mobility>,
     input: &'a TriangleTree,
@@ -420,7 +422,8 @@ impl Work<'_> {
             if was {
                 self.boundary.remove(&sorted(*g));
             } else {
-                // Oriented as in the tet beyond it.
+                // Reversed from the removed tet's face (the stored faces are not
+                // consistently oriented; the level-set probe looks both ways).
                 let h = [g[0], g[2], g[1]];
                 self.boundary.insert(sorted(h), h);
                 exposed.push(h);

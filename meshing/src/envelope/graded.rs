@@ -347,8 +347,8 @@ impl Grid for GradedLattice {
     }
 }
 
-/// Whether a border edge of the input (the first edge of one of `rims`'
-/// triangles) passes through the circumscribing ball (centroid, farthest
+/// Whether a rim of the input (a border edge or a blade: the first edge of one
+/// of `rims`' triangles) passes through the circumscribing ball (centroid, farthest
 /// corner) of the cell with corners `p`.
 fn meets_rim(rims: &TriangleTree, p: &[P; 4]) -> bool {
     let (c, radius, _) = ball_and_longest(p);
@@ -358,8 +358,8 @@ fn meets_rim(rims: &TriangleTree, p: &[P; 4]) -> bool {
 }
 
 /// Whether a cell with corners `p` is coarser than the surface near it allows
-/// (see the module docs); `rims`: triangles whose first edge is a border edge of
-/// the input.
+/// (see the module docs); `rims`: triangles whose first edge is a border edge or
+/// a blade of the input.
 fn too_coarse(surface: &TriangleTree, rims: &TriangleTree, p: &[P; 4], tol: f64, offset: f64) -> Cut {
     if chord_too_large(surface, rims, p, tol) {
         Cut::Yes
@@ -395,8 +395,8 @@ fn thinner_than_cell(surface: &TriangleTree, p: &[P; 4], offset: f64) -> bool {
 /// the cell with corners `p` (as in [`thinner_than_cell`]) while the input
 /// surface a closed gap (or a lost part) leaves off the mesh, about
 /// [`GAP_DEPTH`] times the cell's longest edge, exceeds `tol` [mm] (see the
-/// module docs). `on_rim`: the cell meets a border edge of the input, so the
-/// input point nearest to its centroid is often on that edge, where the inside
+/// module docs). `on_rim`: the cell meets a rim of the input (a border edge or a
+/// blade), so the input point nearest to its centroid is often on that edge, where the inside
 /// test agrees on both sides of the input: the probe moves a quarter of the
 /// longest edge into its triangle, towards the triangle's centroid.
 fn thin_left_too_deep(surface: &TriangleTree, p: &[P; 4], tol: f64, offset: f64, on_rim: bool) -> bool {
@@ -451,7 +451,8 @@ fn ball_and_longest(p: &[P; 4]) -> (P, f64, f64) {
 /// The chord-error part of [`too_coarse`] (see the module docs).
 fn chord_too_large(surface: &TriangleTree, rims: &TriangleTree, p: &[P; 4], tol: f64) -> bool {
     let (c, radius, longest) = ball_and_longest(p);
-    // A border edge in the ball: the crease where the solid leaves the input for the cap over a hole.
+    // A rim in the ball: the crease where the solid leaves the input for the cap
+    // over a hole, or a blade's edge.
     if meets_rim(rims, p) {
         return 0.25 * longest > tol;
     }
