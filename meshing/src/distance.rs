@@ -205,8 +205,12 @@ pub struct BoundaryDistance {
     pub boundary_to_mesh_at_mm: [f64; 3],
 }
 
+/// The jump test's offset on each side of an input point, relative to the
+/// input's bounding-box diagonal.
+pub(crate) const JUMP_OFFSET: f64 = 1e-7;
+
 /// How much of one input triangle bounds the solid.
-enum Bounding {
+pub(crate) enum Bounding {
     All,
     None,
     /// Sub-triangles standing for the bounding part.
@@ -278,19 +282,14 @@ fn boundary_distance_on(
 
     // The bounding part of the input, and its distance to the mesh.
     let winding = WindingNumber::new(surface);
-    let delta = 1e-7 * diag;
+    let delta = JUMP_OFFSET * diag;
     let parts: Vec<(Bounding, (f64, P))> = in_tris
         .par_iter()
         .zip(&per_input)
-        .map(|(t, &whole)| {
-            let k = intervals(t, spacing, 24);
-            let jumps = grid_jumps(t, k.div_ceil(2), &winding, delta);
-            if jumps.iter().all(|&j| j) {
-                (Bounding::All, whole)
-            } else if !jumps.iter().any(|&j| j) {
-                (Bounding::None, (0.0, [0.0; 3]))
-            } else {
-                let subs = bounding_part(t, 2 * k, &winding, delta);
+        .map(|(t, &whole)| match bounding(t, spacing, &winding, delta) {
+            Bounding::All => (Bounding::All, whole),
+            Bounding::None => (Bounding::None, (0.0, [0.0; 3])),
+            Bounding::Part(subs) => {
                 let worst = farthest(subs.iter().flatten().copied(), &out_tree);
                 (Bounding::Part(subs), worst)
             }
@@ -601,6 +600,22 @@ fn grid_triangles(k: usize) -> impl Iterator<Item = [usize; 3]> {
             std::iter::once(up).chain(down)
         })
     })
+}
+
+/// How much of input triangle `t` bounds the solid `winding` defines (module
+/// docs): the jump test on a grid of half the intervals of spacing `spacing`
+/// [mm] (at most 24) decides all or none, else [`bounding_part`] on the full grid
+/// of twice that. `delta` [mm]: the jump test's offset.
+pub(crate) fn bounding(t: &[P; 3], spacing: f64, winding: &WindingNumber, delta: f64) -> Bounding {
+    let k = intervals(t, spacing, 24);
+    let jumps = grid_jumps(t, k.div_ceil(2), winding, delta);
+    if jumps.iter().all(|&j| j) {
+        Bounding::All
+    } else if !jumps.iter().any(|&j| j) {
+        Bounding::None
+    } else {
+        Bounding::Part(bounding_part(t, 2 * k, winding, delta))
+    }
 }
 
 /// Whether the winding number jumps at each grid point of `t` (module docs).

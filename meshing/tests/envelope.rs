@@ -1165,7 +1165,12 @@ fn the_teapot_meshes_with_the_proven_bounds() {
 /// (8.25, -1.125, 1.5): a mesh boundary inside the solid along the spout's
 /// wall inside the body), asserted < 1.45e-3. Both together, measured on the
 /// merged code: 1,600,198 tets, in->out 9.7373e-4, out->in 1.4155e-3, volume
-/// -1.199e-2 against the triangles, 12.05-154.42 deg.
+/// -1.199e-2 against the triangles, 12.05-154.42 deg. Session 23: that trench
+/// was dug by the peeling of boundary slivers (`graded.rs`, `peel_slivers`),
+/// whose corners counted as near the boundary when within half the tolerance
+/// of any input triangle, the spout's wall inside the body included; they now
+/// count by the solid's boundary (the bounding part of the input, as the
+/// report measures). Measured: OUTOUTOUT
 #[test]
 fn the_graded_teapot_resolves_the_voids_at_the_handles_mouth_and_the_spouts_lip() {
     let s = obj("npm_teapot.obj");
@@ -1183,7 +1188,12 @@ fn the_graded_teapot_resolves_the_voids_at_the_handles_mouth_and_the_spouts_lip(
     assert_conforming(&out.mesh);
     assert!(q.volume_error.abs() < 3e-2, "{}", q.volume_error);
     assert!(q.surface_to_mesh_mm / s.diagonal() < 1e-3, "{q:?}");
-    assert!(q.mesh_to_surface_mm / s.diagonal() < 1.45e-3, "{q:?}");
+    assert!(q.mesh_to_surface_mm / s.diagonal() < 1e-3, "{q:?}");
+    // The volume gate against the solid, as in `the_teapot_meshes_with_the_proven_bounds`.
+    let solid = solid_volume_by_sampling(&s, 0.3);
+    let error = q.volume_mm3 / solid - 1.0;
+    eprintln!("teapot graded: mesh {:.3} mm^3, solid sampled {solid:.3}, error {error:.3e}", q.volume_mm3);
+    assert!(error.abs() < 1e-2 - 2.1e-3, "{error}");
 }
 
 /// Layers along y: conforming planes, each layer's cells between its planes.

@@ -353,7 +353,7 @@ impl Grid for GradedLattice {
 fn meets_rim(rims: &TriangleTree, p: &[P; 4]) -> bool {
     let (c, radius, _) = ball_and_longest(p);
     let mut on_rim = false;
-    rims.for_each_within(c, radius, |t| on_rim |= norm(sub(closest_on_segment(t[0], t[1], c), c)) <= radius);
+    rims.for_each_within(c, radius, |_, t| on_rim |= norm(sub(closest_on_segment(t[0], t[1], c), c)) <= radius);
     on_rim
 }
 
@@ -459,7 +459,7 @@ fn chord_too_large(surface: &TriangleTree, rims: &TriangleTree, p: &[P; 4], tol:
     let mut normals: Vec<P> = Vec::new();
     let mut sum = [0.0; 3];
     let mut area = 0.0;
-    surface.for_each_within(c, radius, |t| {
+    surface.for_each_within(c, radius, |_, t| {
         let n = cross(sub(t[1], t[0]), sub(t[2], t[0]));
         let l = norm(n);
         if l > 0.0 {
@@ -483,22 +483,38 @@ fn chord_too_large(surface: &TriangleTree, rims: &TriangleTree, p: &[P; 4], tol:
 
 /// Removes the tets with dihedral angles outside [12°, 155°] (score under 1)
 /// that have a face on the boundary and all four corners within `near` [mm] of
-/// the input, in index order, for up to `rounds` rounds (a removal exposes the
-/// next layer): the stuffing on the graded lattice leaves such slivers where
-/// vertices warped onto one flat input triangle (see the module docs). The
-/// exposed faces are within `near` of the input. Unused nodes are dropped.
-/// Returns the number of tets removed.
+/// the solid's boundary, in index order, for up to `rounds` rounds (a removal
+/// exposes the next layer): the stuffing on the graded lattice leaves such
+/// slivers where vertices warped onto one flat input triangle (see the module
+/// docs). The exposed faces are within `near` of the solid's boundary. Unused
+/// nodes are dropped. Returns the number of tets removed.
+///
+/// The solid's boundary is the part of the input where the winding number jumps
+/// across 1/2 ([`crate::distance::bounding`], as the quality report measures
+/// it, on a grid of spacing `near`), not every input triangle: a wall inside the
+/// solid (a spout's end inside a teapot's body, the cap of one sphere inside
+/// another) is not, and a corner near it alone would let the peeling dig a
+/// trench along it. Only the triangles near the corners of candidates are
+/// classified.
 pub(crate) fn peel_slivers(
     nodes: &mut Vec<P>,
     cells: &mut Vec<[u32; 4]>,
-    surface: &TriangleTree,
+    winding: &crate::WindingNumber,
     near: f64,
+    delta: f64,
     rounds: usize,
 ) -> usize {
-    let close: Vec<bool> = nodes.par_iter().map(|&p| surface.closest_point_within(p, near).is_some()).collect();
+    use crate::distance::Bounding;
+    use std::collections::HashMap;
+    let surface = winding.tree();
+    let near_input: Vec<bool> = nodes.par_iter().map(|&p| surface.closest_point_within(p, near).is_some()).collect();
+    // Per input triangle classified so far, its bounding part; per node, whether
+    // the solid's boundary is within `near`.
+    let mut parts: HashMap<u32, Bounding> = HashMap::new();
+    let mut near_boundary: HashMap<u32, bool> = HashMap::new();
     let mut removed = 0;
     for _ in 0..rounds {
-        let mut count = std::collections::HashMap::<[u32; 3], u32>::new();
+        let mut count = HashMap::<[u32; 3], u32>::new();
         for c in cells.iter() {
             for i in 0..4 {
                 let mut f = [c[(i + 1) % 4], c[(i + 2) % 4], c[(i + 3) % 4]];
@@ -513,14 +529,56 @@ pub(crate) fn peel_slivers(
                 count.get(&f) == Some(&1)
             })
         };
-        let bad: Vec<bool> = cells
+        let candidate: Vec<bool> = cells
             .par_iter()
-            .map(|c| c.iter().all(|&v| close[v as usize]) && super::smooth::score(&c.map(|v| nodes[v as usize])) < 1.0)
+            .map(|c| {
+                c.iter().all(|&v| near_input[v as usize])
+                    && on_boundary(c)
+                    && super::smooth::score(&c.map(|v| nodes[v as usize])) < 1.0
+            })
             .collect();
+        // The candidates' corners not yet decided, and the input triangles near them.
+        let mut fresh: Vec<u32> = cells
+            .iter()
+            .zip(&candidate)
+            .filter(|(_, &b)| b)
+            .flat_map(|(c, _)| c.iter().copied())
+            .filter(|v| !near_boundary.contains_key(v))
+            .collect();
+        fresh.sort_unstable();
+        fresh.dedup();
+        let around: Vec<Vec<(u32, [P; 3])>> = fresh
+            .par_iter()
+            .map(|&v| {
+                let mut tris = Vec::new();
+                surface.for_each_within(nodes[v as usize], near, |id, t| tris.push((id, *t)));
+                tris
+            })
+            .collect();
+        let mut unknown: Vec<(u32, [P; 3])> =
+            around.iter().flatten().filter(|(id, _)| !parts.contains_key(id)).copied().collect();
+        unknown.sort_unstable_by_key(|t| t.0);
+        unknown.dedup_by_key(|t| t.0);
+        let classified: Vec<Bounding> =
+            unknown.par_iter().map(|(_, t)| crate::distance::bounding(t, near, winding, delta)).collect();
+        parts.extend(unknown.into_iter().map(|t| t.0).zip(classified));
+        for (&v, ids) in fresh.iter().zip(&around) {
+            let p = nodes[v as usize];
+            let within = |t: &[P; 3]| {
+                let e = sub(super::tree::closest_on_triangle(t, p), p);
+                dot(e, e) <= near * near
+            };
+            let close = ids.iter().any(|(id, _)| match &parts[id] {
+                Bounding::All => true,
+                Bounding::None => false,
+                Bounding::Part(subs) => subs.iter().any(within),
+            });
+            near_boundary.insert(v, close);
+        }
         let before = cells.len();
         let mut k = 0;
         cells.retain(|c| {
-            let drop = bad[k] && on_boundary(c);
+            let drop = candidate[k] && c.iter().all(|v| near_boundary[v]);
             k += 1;
             !drop
         });
@@ -950,5 +1008,65 @@ mod tests {
                 pool.install(|| GradedLattice::new(&tree, &rims, [-0.5; 3], [0.5; 3], h, 1, tol, usize::MAX));
             assert!(again.coords == with.coords && again.cells == with.cells, "{threads} threads");
         }
+    }
+
+    /// Outward triangles of the box `[lo, hi]`.
+    fn box_triangles(lo: P, hi: P) -> Vec<[P; 3]> {
+        let c = |i: usize| [0, 1, 2].map(|k| if i >> k & 1 == 1 { hi[k] } else { lo[k] });
+        // Each face as a quad of corner indices, counter-clockwise seen from outside.
+        let quads = [[0, 4, 6, 2], [1, 3, 7, 5], [0, 1, 5, 4], [2, 6, 7, 3], [0, 2, 3, 1], [4, 5, 7, 6]];
+        quads.iter().flat_map(|q| [[c(q[0]), c(q[1]), c(q[2])], [c(q[0]), c(q[2]), c(q[3])]]).collect()
+    }
+
+    /// A sliver (dihedral angles near 0° and 180°) lying flat on the plane
+    /// `y = y0` over the square `[x0, x0 + a] x [-a/2, a/2]` in z, its corners
+    /// `a / 100` off the plane.
+    fn flat_sliver(x0: f64, y0: f64, a: f64) -> (Vec<P>, Vec<[u32; 4]>) {
+        let d = 0.01 * a;
+        let nodes = vec![
+            [x0, y0 + d, -0.5 * a],
+            [x0 + a, y0 + d, 0.5 * a],
+            [x0 + a, y0 - d, -0.5 * a],
+            [x0, y0 - d, 0.5 * a],
+        ];
+        (nodes, vec![[0, 1, 2, 3]])
+    }
+
+    /// A cube with a bar through its face x = 1 (a spout through a body): the
+    /// bar's wall y = 0.2 runs inside the cube for x < 1 (winding number 1.5
+    /// there) and bounds the solid for x > 1. Boundary slivers (each alone, so
+    /// on the boundary), `near` = 0.01:
+    /// - lying on that wall 0.1 inside the cube: not peeled (the rule before,
+    ///   every corner within `near` of any input triangle, peeled it; on the
+    ///   teapot it dug along the spout's wall inside the body, 0.058 mm deep);
+    /// - on the wall within 0.005 of the crease x = 1, where the wall meets the
+    ///   cube's face (which bounds the solid there): peeled;
+    /// - on the cube's face y = 1 (winding number 1/2): peeled.
+    #[test]
+    fn a_sliver_on_a_wall_inside_the_solid_is_not_peeled_but_one_on_its_boundary_is() {
+        let mut soup = box_triangles([-1.0; 3], [1.0; 3]);
+        soup.extend(box_triangles([0.5, -0.2, -0.2], [1.5, 0.2, 0.2]));
+        let surface = crate::Surface {
+            vertices: soup.iter().flatten().copied().collect(),
+            triangles: (0..soup.len() as u32).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect(),
+            triangle_regions: vec![0; soup.len()],
+            region_names: vec!["soup".into()],
+        };
+        let winding = crate::WindingNumber::new(&surface);
+        assert!((winding.at([0.7, 0.2, 0.0]) - 1.5).abs() < 0.05);
+        assert!((winding.at([-0.7, 1.0, 0.0]) - 0.5).abs() < 0.05);
+        let (near, delta) = (0.01, 1e-9);
+        let peeled = |x0: f64, y0: f64, a: f64| {
+            let (mut nodes, mut cells) = flat_sliver(x0, y0, a);
+            assert!(super::super::smooth::score(&cells[0].map(|v| nodes[v as usize])) < 1.0);
+            let n = peel_slivers(&mut nodes, &mut cells, &winding, near, delta, 10);
+            assert_eq!(cells.len() + n, 1);
+            assert_eq!(nodes.len(), 4 * cells.len());
+            n
+        };
+        assert_eq!(peeled(0.6, 0.2, 0.2), 0, "on the wall inside the solid");
+        assert_eq!(peeled(0.9, 0.2, 0.005), 0, "on the wall 0.095 from the crease");
+        assert_eq!(peeled(0.995, 0.2, 0.005), 1, "on the wall at the crease");
+        assert_eq!(peeled(-0.8, 1.0, 0.2), 1, "on the boundary");
     }
 }

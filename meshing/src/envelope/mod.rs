@@ -571,7 +571,8 @@ pub fn envelope_mesh_with_progress(
     };
     if options.grade_levels > 0 {
         let near = 0.5 * options.grade_tolerance.max(options.fit_tolerance) * diag;
-        stats.peeled_slivers = graded::peel_slivers(&mut mesh.nodes, &mut mesh.cells, winding.tree(), near, 10);
+        let delta = crate::distance::JUMP_OFFSET * diag;
+        stats.peeled_slivers = graded::peel_slivers(&mut mesh.nodes, &mut mesh.cells, &winding, near, delta, 10);
     }
     mesh.cell_regions = vec![0; mesh.cells.len()];
 

@@ -437,9 +437,9 @@ impl TriangleTree {
         best.map(|(c, id)| (c, best_d2.sqrt(), id))
     }
 
-    /// Calls `visit(corners)` for every triangle closer than `radius` to `p`, in
-    /// tree order (deterministic).
-    pub(crate) fn for_each_within(&self, p: P, radius: f64, mut visit: impl FnMut(&[P; 3])) {
+    /// Calls `visit(input index, corners)` for every triangle closer than `radius`
+    /// to `p`, in tree order (deterministic).
+    pub(crate) fn for_each_within(&self, p: P, radius: f64, mut visit: impl FnMut(u32, &[P; 3])) {
         if self.nodes.is_empty() {
             return;
         }
@@ -452,10 +452,10 @@ impl TriangleTree {
             }
             if node.count > 0 {
                 let s = node.first_or_right as usize;
-                for t in &self.tris[s..s + node.count as usize] {
+                for (t, &id) in self.tris[s..s + node.count as usize].iter().zip(&self.ids[s..]) {
                     let e = sub(closest_on_triangle(t, p), p);
                     if dot(e, e) <= r2 {
-                        visit(t);
+                        visit(id, t);
                     }
                 }
             } else {
