@@ -1170,7 +1170,10 @@ fn the_teapot_meshes_with_the_proven_bounds() {
 /// whose corners counted as near the boundary when within half the tolerance
 /// of any input triangle, the spout's wall inside the body included; they now
 /// count by the solid's boundary (the bounding part of the input, as the
-/// report measures). Measured: OUTOUTOUT
+/// report measures). Measured: 1,600,573 tets, 12.05-154.42 deg, out->in
+/// 8.5721e-4 (then at (-6.53, 4.55, 4.28)), in->out 9.7373e-4, both asserted
+/// < 1e-3 (the gate); volume -1.199e-2 against the triangles, -8.56e-4 against
+/// the sampled solid (asserted within 1e-2 less the sampler's bound, 2.1e-3).
 #[test]
 fn the_graded_teapot_resolves_the_voids_at_the_handles_mouth_and_the_spouts_lip() {
     let s = obj("npm_teapot.obj");

@@ -122,11 +122,12 @@
 //! 0.3) none (dihedral angles [13.8°, 151.2°]); smaller thresholds warp less,
 //! so fewer lattice vertices collapse onto one flat input triangle. What such
 //! collapses leave anyway, tets with all four corners within half the tolerance
-//! of the input and angles outside [12°, 155°], are peeled off the boundary
+//! of the solid's boundary (the part of the input that bounds it, not a wall
+//! inside it) and angles outside [12°, 155°], are peeled off the boundary
 //! ([`peel_slivers`]; their exposed faces stay within that distance of the
-//! input), and the smoothing gets a second pass. No angle bound is proven: the
-//! angles are measured (BENCHMARKS.md), and the fitting's guard follows as on
-//! the uniform lattice.
+//! solid's boundary), and the smoothing gets a second pass. No angle bound is
+//! proven: the angles are measured (BENCHMARKS.md), and the fitting's guard
+//! follows as on the uniform lattice.
 
 use rayon::prelude::*;
 
@@ -1023,12 +1024,8 @@ mod tests {
     /// `a / 100` off the plane.
     fn flat_sliver(x0: f64, y0: f64, a: f64) -> (Vec<P>, Vec<[u32; 4]>) {
         let d = 0.01 * a;
-        let nodes = vec![
-            [x0, y0 + d, -0.5 * a],
-            [x0 + a, y0 + d, 0.5 * a],
-            [x0 + a, y0 - d, -0.5 * a],
-            [x0, y0 - d, 0.5 * a],
-        ];
+        let nodes =
+            vec![[x0, y0 + d, -0.5 * a], [x0 + a, y0 + d, 0.5 * a], [x0 + a, y0 - d, -0.5 * a], [x0, y0 - d, 0.5 * a]];
         (nodes, vec![[0, 1, 2, 3]])
     }
 
