@@ -1033,9 +1033,10 @@ mod tests {
     /// bar's wall y = 0.2 runs inside the cube for x < 1 (winding number 1.5
     /// there) and bounds the solid for x > 1. Boundary slivers (each alone, so
     /// on the boundary), `near` = 0.01:
-    /// - lying on that wall 0.1 inside the cube: not peeled (the rule before,
-    ///   every corner within `near` of any input triangle, peeled it; on the
-    ///   teapot it dug along the spout's wall inside the body, 0.058 mm deep);
+    /// - lying on that wall 0.2 to 0.4 inside the cube, or 0.095 to 0.1: not
+    ///   peeled (the rule before, every corner within `near` of any input
+    ///   triangle, peeled both; on the teapot it dug along the spout's wall
+    ///   inside the body, 0.058 mm deep);
     /// - on the wall within 0.005 of the crease x = 1, where the wall meets the
     ///   cube's face (which bounds the solid there): peeled;
     /// - on the cube's face y = 1 (winding number 1/2): peeled.
