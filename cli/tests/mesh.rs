@@ -27,20 +27,28 @@ fn mesh(cwd: &Path, args: &[&str]) -> std::process::Output {
     wagashi_in(cwd, all)
 }
 
+/// `wagashi mesh` of the shared mesh `name` to `out` at `size_mm` with a JSON
+/// report `r.json` and the arguments `more`, in `cwd`, asserted successful: its
+/// standard output and the report.
+fn mesh_with_report(cwd: &Path, name: &str, out: &str, size_mm: &str, more: &[&str]) -> (String, serde_json::Value) {
+    let input = mesh_data(name);
+    let mut args = vec![input.to_str().unwrap(), "-o", out, "--size-mm", size_mm, "--report", "r.json"];
+    args.extend_from_slice(more);
+    let o = mesh(cwd, &args);
+    assert_success(&o);
+    let json = serde_json::from_str(&std::fs::read_to_string(cwd.join("r.json")).unwrap()).unwrap();
+    (stdout(&o), json)
+}
+
 #[test]
 fn the_bunny_to_vtu_with_a_json_report() {
     let dir = tempfile::tempdir().unwrap();
-    let bunny = mesh_data("npm_bunny.obj");
-    let o = mesh(dir.path(), &[bunny.to_str().unwrap(), "-o", "bunny.vtu", "--size-mm", "0.4", "--report", "r.json"]);
-    assert_success(&o);
-    let out = stdout(&o);
+    let (out, json) = mesh_with_report(dir.path(), "npm_bunny.obj", "bunny.vtu", "0.4", &[]);
     for key in
         ["dihedral angles", "radius-edge", "radius ratio", "volume", "Hausdorff", "Hausdorff (raw)", "region", "time"]
     {
         assert!(out.contains(key), "{key} missing:\n{out}");
     }
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("r.json")).unwrap()).unwrap();
     let q = &json["quality"];
     let cells = q["num_cells"].as_u64().unwrap();
     let nodes = q["num_nodes"].as_u64().unwrap();
@@ -88,14 +96,9 @@ fn the_bunny_to_vtu_with_a_json_report() {
 #[test]
 fn a_holed_bunny_reports_its_caps_on_the_level_set() {
     let dir = tempfile::tempdir().unwrap();
-    let hole = mesh_data("bad_syn_hole.obj");
-    let o = mesh(dir.path(), &[hole.to_str().unwrap(), "-o", "h.vtu", "--size-mm", "0.8", "--report", "r.json"]);
-    assert_success(&o);
-    let out = stdout(&o);
+    let (out, json) = mesh_with_report(dir.path(), "bad_syn_hole.obj", "h.vtu", "0.8", &[]);
     let row = out.lines().find(|l| l.trim_start().starts_with("hole caps")).unwrap_or_else(|| panic!("{out}"));
     assert!(row.contains("from the level set") && row.contains("border edges"), "{row}");
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("r.json")).unwrap()).unwrap();
     let q = &json["quality"];
     assert!(q["num_border_edges"].as_u64().unwrap() > 0, "{q}");
     let to_level_set = q["cap_to_level_set_relative"].as_f64().unwrap();
@@ -141,11 +144,7 @@ fn layers_along_y_and_a_defective_input() {
 fn defective_bunnies_give_the_bunny() {
     let dir = tempfile::tempdir().unwrap();
     for name in ["bad_syn_soup_jitter.obj", "bad_syn_flipped10pct.obj"] {
-        let path = mesh_data(name);
-        let o = mesh(dir.path(), &[path.to_str().unwrap(), "-o", "b.msh", "--size-mm", "0.4", "--report", "r.json"]);
-        assert_success(&o);
-        let json: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(dir.path().join("r.json")).unwrap()).unwrap();
+        let (_, json) = mesh_with_report(dir.path(), name, "b.msh", "0.4", &[]);
         // Against the clean bunny's 194.29 mm^3.
         let v = json["quality"]["volume_mm3"].as_f64().unwrap();
         assert!((v / 194.2884 - 1.0).abs() < 1e-2, "{name}: {v}");
@@ -155,15 +154,8 @@ fn defective_bunnies_give_the_bunny() {
 #[test]
 fn conforming_mode_keeps_the_input_boundary_and_refuses_defects() {
     let dir = tempfile::tempdir().unwrap();
-    let bunny = mesh_data("npm_bunny.obj");
-    let o = mesh(
-        dir.path(),
-        &[bunny.to_str().unwrap(), "-o", "b.node", "--size-mm", "0.8", "--mode", "conforming", "--report", "r.json"],
-    );
-    assert_success(&o);
-    assert!(stdout(&o).contains("(conforming, 0.8 mm)"), "{}", stdout(&o));
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("r.json")).unwrap()).unwrap();
+    let (out, json) = mesh_with_report(dir.path(), "npm_bunny.obj", "b.node", "0.8", &["--mode", "conforming"]);
+    assert!(out.contains("(conforming, 0.8 mm)"), "{out}");
     assert_eq!(json["mode"], "conforming");
     assert!(json["quality"]["volume_error"].as_f64().unwrap().abs() <= 1e-9);
     assert!(json["quality"]["hausdorff_relative"].as_f64().unwrap() <= 1e-9);
