@@ -560,7 +560,7 @@ pub fn scaled(material: &Material, factor: f64) -> Material {
             c3_mpa_s: f * c3_mpa_s,
         },
     };
-    Material { rheology, poisson: material.poisson, damage: material.damage }
+    Material { rheology, poisson: material.poisson, damage: material.damage, network: material.network.clone() }
 }
 
 /// The surface turned so that `up_axis` (1 = y, 2 = z) points along +y (a

@@ -231,7 +231,7 @@ impl Effects {
                 c3_mpa_s: c3_mpa_s * sc,
             },
         };
-        Material { rheology, poisson: material.poisson, damage: material.damage }
+        Material { rheology, poisson: material.poisson, damage: material.damage, network: material.network.clone() }
     }
 
     /// For verification: run the material-point path (the inelastic strain, the

@@ -46,6 +46,8 @@
 //! `d_inf = 0` leaves the linear path untouched (bit for bit), unless
 //! [`crate::effects::Effects::force_material_point_path`] is set.
 
+pub mod law;
+pub mod network;
 mod point;
 mod rheology;
 
@@ -106,6 +108,11 @@ pub struct Material {
     pub poisson: f64,
     /// Mullins-type stress softening of the chain (module docs); `None`: none.
     pub damage: Option<MullinsDamage>,
+    /// The finite-strain network ([`network::Network`]) when the material is
+    /// one (`model = "network"`): the press then runs it on the Newton path and
+    /// `rheology` is only the elastic chain of its small-strain modulus (a scale
+    /// for reports; [`Material::network`]).
+    pub network: Option<network::Network>,
 }
 
 impl Material {
@@ -115,7 +122,7 @@ impl Material {
         if !(poisson.is_finite() && poisson > -1.0 && poisson < 0.5) {
             return Err(MaterialError::PoissonOutOfRange { value: poisson });
         }
-        Ok(Self { rheology, poisson, damage: None })
+        Ok(Self { rheology, poisson, damage: None, network: None })
     }
 
     /// The material with the Mullins-type damage `damage` (validated again).
@@ -124,8 +131,25 @@ impl Material {
         Ok(Self { damage: Some(damage), ..self })
     }
 
+    /// A network material; its `rheology` is the elastic chain of the network's
+    /// small-strain modulus (the viscosity of a damper-only network over 1 s).
+    pub fn network(network: network::Network) -> Result<Self, MaterialError> {
+        network.validate().map_err(MaterialError::Network)?;
+        let modulus = law::PointLaw::small_strain_modulus(&network);
+        let e_mpa = if modulus > 0.0 { modulus } else { network.damper_mpa_s.unwrap_or(1.0) };
+        Ok(Self {
+            rheology: Rheology::Elastic { e_mpa },
+            poisson: network.poisson,
+            damage: None,
+            network: Some(network),
+        })
+    }
+
     /// Checks every part: the chain, the Poisson ratio and the damage law.
     pub fn validate(&self) -> Result<(), MaterialError> {
+        if let Some(n) = &self.network {
+            n.validate().map_err(MaterialError::Network)?;
+        }
         Material::new(self.rheology, self.poisson)?;
         if let Some(d) = self.damage {
             MullinsDamage::new(d.d_inf, d.strain_c)?;
@@ -150,6 +174,7 @@ impl Material {
             },
             poisson: 0.3746,
             damage: None,
+            network: None,
         }
     }
 

@@ -58,6 +58,9 @@ pub enum MaterialError {
     /// ([`super::MullinsDamage`]: `d_inf` in [0, [`super::MAX_DAMAGE`]], `strain_c` finite and > 0).
     #[error("Mullins damage {name} = {value}: must lie in {range}")]
     DamageOutOfRange { name: &'static str, value: f64, range: &'static str },
+    /// A network's parameter refused ([`super::network::Network::validate`]).
+    #[error("{0}")]
+    Network(super::network::NetworkError),
 }
 
 /// The relaxation function `G(t) = viscous delta(t) + equilibrium + sum_k a_k exp(-r_k t)`

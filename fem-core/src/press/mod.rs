@@ -21,6 +21,7 @@
 mod contact;
 mod inelastic;
 mod model;
+mod network;
 mod problem;
 mod result;
 mod seed;
@@ -56,6 +57,9 @@ where
     crate::element::Simplex<D, N>: crate::element::ReferenceSimplex<D, N>,
 {
     problem.validate_effects()?;
+    if network::applies(problem) {
+        return network::run(problem, settings, progress);
+    }
     let effective = effects_applied(problem)?;
     let problem = effective.as_ref();
     let mut result = match settings.integrator {

@@ -18,6 +18,9 @@ pub struct StepRecord {
     pub plate_force_n: f64,
     /// The step controller's local error estimate, relative to its tolerance (<= 1 accepted).
     pub error_ratio: f64,
+    /// Newton iterations of the step on the Newton path (network materials,
+    /// `press::network`); 0 on the other paths.
+    pub newton_iterations: usize,
 }
 
 /// The nodal state kept at one time.

@@ -163,6 +163,7 @@ where
                 bottom_force_n: reactions[0],
                 plate_force_n: reactions[1],
                 error_ratio: err,
+                newton_iterations: 0,
             });
             last_record = t;
             progress(Progress { t_s: t, end_s: end, steps: num_steps });

@@ -914,6 +914,7 @@ where
             bottom_force_n,
             plate_force_n,
             error_ratio,
+            newton_iterations: 0,
         });
         if let Some(tracker) = tracker.as_mut() {
             let view = StepView {

@@ -1,0 +1,421 @@
+//! The finite-strain parallel rheological network (`model = "network"`): the
+//! family of Abaqus's PRF, Reese & Govindjee (1998) and Bergström & Boyce
+//! (1998), built so that at small strain it is the seed's chain exactly.
+//!
+//! ## Parts (all in parallel, each on the whole deformation)
+//!
+//! - an optional **equilibrium** network ([`Equilibrium`]): a neo-Hookean or
+//!   exponential isochoric energy with `U(J) = K/2 (J - 1)^2`, optionally with
+//!   Ogden-Roxburgh softening; absent, the material is a fluid like the chain;
+//! - `N >= 0` **viscous networks** ([`ViscousNetwork`]): `F = Fe Fv`, a Hencky
+//!   spring of modulus `E_i` on `Fe` and Newtonian flow of relaxation time
+//!   `tau_i` (Reese-Govindjee with the viscosity proportional to the spring's
+//!   moduli: the flow relaxes the spring's whole log strain, volume included, as
+//!   the seed's Lamé split does);
+//! - an optional parallel Newtonian **damper** of Young-type viscosity `c`
+//!   [MPa s], acting on the rate of the logarithmic strain.
+//!
+//! Every part uses the material's one Poisson ratio.
+//!
+//! ## The viscous update: exact for the chain
+//!
+//! A network's state is its elastic log strain `eps_e`, kept as the inverse
+//! viscous right Cauchy-Green tensor `A = C_v^-1` (so `b_e = F A F^T`) together
+//! with its second Piola-Kirchhoff stress `S_n` at the step's start. With
+//! `x = dt / tau`, `e = exp(-x)` and `phi = (1 - e) / x`, the step's Kirchhoff
+//! stress is
+//!
+//! ```text
+//! tau_{n+1} = phi E_i C1 : log(F A_n F^T)/2  +  (e - phi) (f tau_n f^T + f^-T tau_n f^-1) / 2,
+//! ```
+//!
+//! `f = F F_n^-1` the step's relative deformation (computed from the reference
+//! tensors `S_n = F_n^-1 tau_n F_n^-T` and `M_n = F_n^T tau_n F_n`: `F S_n F^T`
+//! and `F^-T M_n F^-1`). At small strain the first term is
+//! `phi E_i C1 : (e_e,n + de)` and the second `(e - phi) E_i C1 : e_e,n`, so
+//! `tau_{n+1} = E_i C1 : (e e_e,n + phi de)`: the chain's exact exponential
+//! history update (design.md 3.3) for a strain linear in the step. At finite
+//! strain, on a coaxial path whose log strain is linear in the step, the exact
+//! solution of Reese-Govindjee's flow with a Hencky spring carries `tau_n`
+//! unstretched; the mean of the two push-forwards stretches it by
+//! `cosh(2 de) = 1 + O(de^2)` only, so the update is second-order accurate in
+//! the step (measured in `tests/network.rs`), where either push-forward alone is
+//! first order. It is objective (`A_n`, `S_n` and `M_n` live in the reference
+//! configuration) and needs no local iteration. Its stress derives from the
+//! step's potential `phi psi_Hencky(F A_n F^T) + (e - phi)(S_n : C - M_n : C^-1)/4`,
+//! so its tangent is major-symmetric and the global tangent keeps the chain's
+//! symmetric Cholesky factorization. The new state follows from the stress:
+//! `eps_e = C1^-1 : tau / E_i`, `A = F^-1 exp(2 eps_e) F^-T`, `S_n = F^-1 tau F^-T`.
+//!
+//! The damper is a Hencky spring of modulus `c / dt` on the configuration of the
+//! step's start (`A = C_n^-1`): its stress is `c C1 : log(F C_n^-1 F^T)/(2 dt)`,
+//! the chain's `B2 de/dt` at small strain.
+//!
+//! ## The seed's chain as a network
+//!
+//! A chain's relaxation function `G(t) = B2 delta(t) + a exp(-m t) + b exp(-n t)`
+//! (design.md 3.1) is a damper `c = B2` and two viscous networks `(a, 1/m)` and
+//! `(b, 1/n)` ([`Network::from_chain`]); an elastic chain or one with
+//! `G(inf) > 0` adds a neo-Hookean equilibrium network of modulus `G(inf)`.
+//!
+//! ## History layout (per point)
+//!
+//! `[C_n^-1 - I (6), W_max (1), per viscous network: A - I (6), S_n (6)]`,
+//! symmetric tensors as `[xx, yy, zz, xy, xz, yz]`. The configurations are kept
+//! as deviations from the identity, so that small strains keep their precision
+//! ([`hencky`]).
+
+mod equilibrium;
+mod hencky;
+
+pub use equilibrium::{Energy, Equilibrium, Mullins};
+
+use nalgebra::Matrix3;
+
+use crate::material::law::{LawFailure, ParameterSpec, PointLaw, PointResponse, Tangent};
+use crate::material::{phi1, Rheology};
+
+/// A viscous (Maxwell) network: a Hencky spring and Newtonian flow.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ViscousNetwork {
+    /// The spring's Young's modulus [MPa].
+    pub e_mpa: f64,
+    /// The relaxation time `tau` [s] (viscosity over modulus).
+    pub tau_s: f64,
+}
+
+/// The finite-strain network material (module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Network {
+    /// Poisson's ratio of every part, in (-1, 0.5).
+    pub poisson: f64,
+    /// The equilibrium network; `None`: a fluid.
+    pub equilibrium: Option<Equilibrium>,
+    /// The viscous networks.
+    pub viscous: Vec<ViscousNetwork>,
+    /// The damper's Young-type viscosity [MPa s]; `None`: no damper.
+    pub damper_mpa_s: Option<f64>,
+}
+
+/// Why a network was refused.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum NetworkError {
+    /// A parameter outside its bounds.
+    #[error("{key} = {value}: must lie in {range}")]
+    OutOfBounds { key: String, value: f64, range: String },
+    /// Nothing carries stress.
+    #[error("the network has no part: give an equilibrium network, a viscous network or a damper")]
+    Empty,
+}
+
+/// The network's parameter tables: each part's keys, units and bounds, named once.
+pub mod parameters {
+    use super::ParameterSpec;
+
+    const fn spec(
+        key: &'static str,
+        meaning: &'static str,
+        unit: &'static str,
+        lower: f64,
+        lower_open: bool,
+        upper: f64,
+        default: Option<f64>,
+    ) -> ParameterSpec {
+        ParameterSpec { key, meaning, unit, lower, lower_open, upper, default }
+    }
+
+    /// The material's own keys (beside `model = "network"`).
+    pub const MATERIAL: &[ParameterSpec] =
+        &[spec("poisson", "Poisson's ratio of every part", "1", -1.0, true, 0.4999, None)];
+    /// `[equilibrium]`: `energy = "neo-hookean" | "exponential"` and these.
+    pub const EQUILIBRIUM: &[ParameterSpec] = &[
+        spec("E_MPa", "Young's modulus at small strain", "MPa", 0.0, true, 1e4, None),
+        spec("stiffening", "b of the exponential energy", "1", 0.0, true, 100.0, None),
+    ];
+    /// `[equilibrium.mullins]`: Ogden-Roxburgh softening.
+    pub const MULLINS: &[ParameterSpec] = &[
+        spec("r", "1 - 1/r is the most softening", "1", 1.0, true, 1e3, None),
+        spec("m_MPa", "energy scale of the softening", "MPa", 0.0, true, 1e3, None),
+        spec("beta", "growth of the scale with W_max", "1", 0.0, false, 1e3, Some(0.0)),
+    ];
+    /// `[[viscous]]`: one viscous network each.
+    pub const VISCOUS: &[ParameterSpec] = &[
+        spec("E_MPa", "the spring's Young's modulus", "MPa", 0.0, true, 1e4, None),
+        spec("tau_s", "relaxation time", "s", 0.0, true, 1e9, None),
+    ];
+    /// `[damper]`.
+    pub const DAMPER: &[ParameterSpec] =
+        &[spec("c_MPa_s", "Young-type viscosity of the parallel damper", "MPa s", 0.0, true, 1e6, None)];
+
+    /// The spec of `key` in `table`.
+    pub fn find(table: &[ParameterSpec], key: &str) -> Option<ParameterSpec> {
+        table.iter().find(|s| s.key == key).copied()
+    }
+}
+
+const HISTORY_BASE: usize = 7;
+const HISTORY_PER_NETWORK: usize = 12;
+
+fn sym_to(m: &Matrix3<f64>, out: &mut [f64]) {
+    out[..6].copy_from_slice(&[m[(0, 0)], m[(1, 1)], m[(2, 2)], m[(0, 1)], m[(0, 2)], m[(1, 2)]]);
+}
+
+fn sym_from(v: &[f64]) -> Matrix3<f64> {
+    Matrix3::new(v[0], v[3], v[4], v[3], v[1], v[5], v[4], v[5], v[2])
+}
+
+impl Network {
+    /// The seed's chain `rheology` with Poisson ratio `poisson` as a network
+    /// (module docs): equal to the chain at small strain.
+    pub fn from_chain(rheology: &Rheology, poisson: f64) -> Self {
+        let k = rheology.relaxation();
+        let viscous =
+            (0..k.num_terms).map(|i| ViscousNetwork { e_mpa: k.amplitudes[i], tau_s: 1.0 / k.rates[i] }).collect();
+        let equilibrium = (k.equilibrium > 0.0).then_some(Equilibrium {
+            energy: Energy::NeoHookean,
+            e_mpa: k.equilibrium,
+            mullins: None,
+        });
+        let damper_mpa_s = (k.viscous > 0.0).then_some(k.viscous);
+        Self { poisson, equilibrium, viscous, damper_mpa_s }
+    }
+
+    /// Checks every parameter against its table.
+    pub fn validate(&self) -> Result<(), NetworkError> {
+        use parameters::*;
+        let check = |table: &[ParameterSpec], key: &str, value: f64, prefix: &str| {
+            let s = find(table, key).expect("the key is in its table");
+            if s.accepts(value) {
+                Ok(())
+            } else {
+                Err(NetworkError::OutOfBounds { key: format!("{prefix}{key}"), value, range: s.range() })
+            }
+        };
+        check(MATERIAL, "poisson", self.poisson, "")?;
+        if let Some(eq) = &self.equilibrium {
+            check(EQUILIBRIUM, "E_MPa", eq.e_mpa, "equilibrium.")?;
+            if let Energy::Exponential { stiffening } = eq.energy {
+                check(EQUILIBRIUM, "stiffening", stiffening, "equilibrium.")?;
+            }
+            if let Some(m) = eq.mullins {
+                check(MULLINS, "r", m.r, "equilibrium.mullins.")?;
+                check(MULLINS, "m_MPa", m.m_mpa, "equilibrium.mullins.")?;
+                check(MULLINS, "beta", m.beta, "equilibrium.mullins.")?;
+            }
+        }
+        for (i, v) in self.viscous.iter().enumerate() {
+            let prefix = format!("viscous[{i}].");
+            check(VISCOUS, "E_MPa", v.e_mpa, &prefix)?;
+            check(VISCOUS, "tau_s", v.tau_s, &prefix)?;
+        }
+        if let Some(c) = self.damper_mpa_s {
+            check(DAMPER, "c_MPa_s", c, "damper.")?;
+        }
+        if self.equilibrium.is_none() && self.viscous.is_empty() && self.damper_mpa_s.is_none() {
+            return Err(NetworkError::Empty);
+        }
+        Ok(())
+    }
+}
+
+impl PointLaw for Network {
+    fn name(&self) -> &'static str {
+        "network"
+    }
+
+    fn history_len(&self) -> usize {
+        HISTORY_BASE + HISTORY_PER_NETWORK * self.viscous.len()
+    }
+
+    fn initial_history(&self, h: &mut [f64]) {
+        // Every tensor is kept as its deviation from the identity (`C_n^-1 - I`,
+        // `A - I`) or is a stress: all zero at rest.
+        h.fill(0.0);
+    }
+
+    fn small_strain_modulus(&self) -> f64 {
+        self.equilibrium.map_or(0.0, |e| e.e_mpa) + self.viscous.iter().map(|v| v.e_mpa).sum::<f64>()
+    }
+
+    fn update(&self, h: &Matrix3<f64>, dt_s: f64, old: &[f64], new: &mut [f64]) -> Result<PointResponse, LawFailure> {
+        let f = Matrix3::identity() + h;
+        let tr = h.trace();
+        let j = 1.0 + tr + 0.5 * (tr * tr - (h * h).trace()) + h.determinant();
+        if !(j > 0.0) {
+            return Err(LawFailure::Inverted { det: j });
+        }
+        let f_inv = f.try_inverse().ok_or(LawFailure::Inverted { det: j })?;
+        let f_inv_t = f_inv.transpose();
+        let lame = hencky::unit_lame(self.poisson);
+        let mut p = Matrix3::zeros();
+        let mut tangent = Tangent::zeros();
+        new.copy_from_slice(old);
+
+        if let Some(eq) = &self.equilibrium {
+            let (pe, te, w_max) = eq.respond(h, &f_inv_t, self.poisson, old[6]);
+            p += pe;
+            tangent += te;
+            new[6] = w_max;
+        }
+        for (i, v) in self.viscous.iter().enumerate() {
+            let o = HISTORY_BASE + HISTORY_PER_NETWORK * i;
+            let a_dev = sym_from(&old[o..o + 6]);
+            let s_n = sym_from(&old[o + 6..o + 12]);
+            let x = dt_s / v.tau_s;
+            let (decay, phi) = ((-x).exp(), phi1(x));
+            let (ps, ts, _) = hencky::spring(h, &f_inv_t, &a_dev, v.e_mpa, lame);
+            // The old stress carried into the current frame: the mean of its push
+            // forward as a contravariant (F S_n F^T) and as a covariant
+            // (F^-T M_n F^-1, M_n = C_n S_n C_n) tensor, as Kirchhoff stresses.
+            let c_n = (Matrix3::identity() + sym_from(&old[0..6])).try_inverse().ok_or(LawFailure::NonFinite)?;
+            let m_n = c_n * s_n * c_n;
+            let c_inv = f_inv * f_inv_t;
+            let w = 0.5 * (decay - phi);
+            let pv = ps * phi + (f * s_n + f_inv_t * m_n * c_inv) * w;
+            tangent += ts * phi;
+            for k in 0..3 {
+                for l in 0..3 {
+                    let mut df = Matrix3::zeros();
+                    df[(k, l)] = 1.0;
+                    let d_finv_t = -f_inv_t * df.transpose() * f_inv_t;
+                    let d_c_inv = d_finv_t.transpose() * f_inv_t + f_inv * d_finv_t;
+                    let dp = (df * s_n + d_finv_t * m_n * c_inv + f_inv_t * m_n * d_c_inv) * w;
+                    for i in 0..3 {
+                        for jj in 0..3 {
+                            tangent[(3 * i + jj, 3 * k + l)] += dp[(i, jj)];
+                        }
+                    }
+                }
+            }
+            p += pv;
+            // The new state from the stress: A - I = F^-1 (b_e - I) F^-T + (C^-1 - I).
+            let tau = hencky::symmetrize(&(pv * f.transpose()));
+            let eps_e = hencky::hooke_inverse(v.e_mpa, lame, &tau);
+            let b_e_dev = hencky::sym_exp_m1(&(eps_e * 2.0));
+            let a_new = f_inv * b_e_dev * f_inv_t + hencky::inverse_right_deviation(h, &f_inv);
+            sym_to(&hencky::symmetrize(&a_new), &mut new[o..o + 6]);
+            sym_to(&hencky::symmetrize(&(f_inv * tau * f_inv_t)), &mut new[o + 6..o + 12]);
+        }
+        if let Some(c) = self.damper_mpa_s {
+            let c_n_inv_dev = sym_from(&old[0..6]);
+            let (pd, td, _) = hencky::spring(h, &f_inv_t, &c_n_inv_dev, c / dt_s, lame);
+            p += pd;
+            tangent += td;
+        }
+        sym_to(&hencky::inverse_right_deviation(h, &f_inv), &mut new[0..6]);
+        if !(p.iter().all(|x| x.is_finite()) && tangent.iter().all(|x| x.is_finite())) {
+            return Err(LawFailure::NonFinite);
+        }
+        Ok(PointResponse { stress: p, tangent })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::law::tangent_by_differences;
+
+    fn full() -> Network {
+        Network {
+            poisson: 0.35,
+            equilibrium: Some(Equilibrium {
+                energy: Energy::Exponential { stiffening: 1.5 },
+                e_mpa: 0.02,
+                mullins: Some(Mullins { r: 2.5, m_mpa: 2e-3, beta: 0.1 }),
+            }),
+            viscous: vec![ViscousNetwork { e_mpa: 0.015, tau_s: 2.0 }, ViscousNetwork { e_mpa: 0.01, tau_s: 40.0 }],
+            damper_mpa_s: Some(5e-3),
+        }
+    }
+
+    /// A history after a few steps along a non-proportional path, so that every
+    /// state is away from the identity.
+    fn loaded_history(net: &Network) -> (Vec<f64>, Matrix3<f64>) {
+        let mut h = vec![0.0; net.history_len()];
+        net.initial_history(&mut h);
+        let mut next = h.clone();
+        let mut f = Matrix3::identity();
+        for s in 1..=4 {
+            let t = s as f64 * 0.25;
+            f = Matrix3::new(
+                1.0 + 0.1 * t,
+                0.15 * t,
+                0.0,
+                0.02 * t,
+                1.0 - 0.3 * t,
+                0.05 * t * t,
+                0.0,
+                0.01,
+                1.0 + 0.08 * t,
+            );
+            net.update(&(f - Matrix3::identity()), 0.7, &h, &mut next).unwrap();
+            std::mem::swap(&mut h, &mut next);
+        }
+        (h, f)
+    }
+
+    #[test]
+    fn the_networks_tangent_matches_central_differences_with_every_part() {
+        let net = full();
+        let (h, f_last) = loaded_history(&net);
+        // Unloading a little from the last state: the softened branch of Mullins.
+        let f = f_last * 0.98 + Matrix3::new(0.0, 0.01, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        let mut scratch = h.clone();
+        let r = net.update(&(f - Matrix3::identity()), 0.3, &h, &mut scratch).unwrap();
+        let stress = |f: &Matrix3<f64>| {
+            let mut s = h.clone();
+            net.update(&(f - Matrix3::identity()), 0.3, &h, &mut s).unwrap().stress
+        };
+        let fd = tangent_by_differences(&f, 1e-6, &stress);
+        let err = (r.tangent - fd).amax() / r.tangent.amax();
+        assert!(err < 1e-6, "tangent error {err:.3e}");
+        assert!((r.tangent - r.tangent.transpose()).amax() < 1e-12 * r.tangent.amax(), "major symmetry");
+    }
+
+    /// Objectivity: a superposed rotation `Q F` rotates the stress, `P -> Q P`,
+    /// and leaves the history (reference quantities) unchanged.
+    #[test]
+    fn a_superposed_rotation_rotates_the_stress() {
+        let net = full();
+        let (h, f) = loaded_history(&net);
+        let q = nalgebra::Rotation3::from_euler_angles(0.3, -1.1, 2.0).into_inner();
+        let f1 = f * 1.01;
+        let (mut n1, mut n2) = (h.clone(), h.clone());
+        let p = net.update(&(f1 - Matrix3::identity()), 0.5, &h, &mut n1).unwrap().stress;
+        let pq = net.update(&(q * f1 - Matrix3::identity()), 0.5, &h, &mut n2).unwrap().stress;
+        assert!((pq - q * p).amax() < 1e-13 * p.amax(), "{:.3e}", (pq - q * p).amax());
+        for (a, b) in n1.iter().zip(&n2) {
+            assert!((a - b).abs() < 1e-12 * (1.0 + a.abs()));
+        }
+    }
+
+    /// A hold at a fixed deformation relaxes each viscous network's stress by
+    /// `exp(-dt / tau)` exactly.
+    #[test]
+    fn a_hold_relaxes_each_network_exponentially() {
+        let net = Network {
+            poisson: 0.3,
+            equilibrium: None,
+            viscous: vec![ViscousNetwork { e_mpa: 0.02, tau_s: 3.0 }],
+            damper_mpa_s: None,
+        };
+        let f = Matrix3::new(1.1, 0.05, 0.0, 0.0, 0.6, 0.0, 0.0, 0.0, 1.2);
+        let mut h = vec![0.0; net.history_len()];
+        net.initial_history(&mut h);
+        let mut h1 = h.clone();
+        let p0 = net.update(&(f - Matrix3::identity()), 0.5, &h, &mut h1).unwrap().stress;
+        let mut h2 = h1.clone();
+        let p1 = net.update(&(f - Matrix3::identity()), 2.0, &h1, &mut h2).unwrap().stress;
+        let want = p0 * (-2.0f64 / 3.0).exp();
+        assert!((p1 - want).amax() < 1e-12 * p0.amax(), "{:.3e}", (p1 - want).amax());
+    }
+
+    #[test]
+    fn the_table_refuses_out_of_bounds_values() {
+        let mut net = full();
+        net.viscous[1].tau_s = -1.0;
+        assert_eq!(net.validate().unwrap_err().to_string(), "viscous[1].tau_s = -1: must lie in (0, 1000000000]");
+        let empty = Network { poisson: 0.3, equilibrium: None, viscous: vec![], damper_mpa_s: None };
+        assert_eq!(empty.validate(), Err(NetworkError::Empty));
+    }
+}

@@ -1,0 +1,660 @@
+//! The Newton path: quasi-static steps of a body whose regions run a
+//! finite-strain law behind the constitutive seam ([`crate::material::law`]),
+//! such as the network model ([`crate::material::network`]).
+//!
+//! ## Kinematics
+//!
+//! Total Lagrangian on P1 cells: per cell the deformation gradient is
+//! `F = I + sum_a u_a (x) grad N_a`, embedded in 3 x 3 (plane strain:
+//! `F_zz = 1`; axisymmetric: `F_θθ = 1 + u_r / r` at the centroid, the hoop row of
+//! [`crate::element`]). Writing `F - I = G u_e` with the cell's `9 x N D`
+//! operator `G` (row `3 i + J`), the nodal forces are `f_e = w G^T P` and the
+//! tangent `K_e = w G^T A G` (`P` the first Piola-Kirchhoff stress, `A = dP/dF`,
+//! `w` the cell's weight). The seam's laws have major-symmetric tangents, so the
+//! global tangent is symmetric and factored by the chain's own sparse Cholesky
+//! (its symbolic factorization made once per constraint set and reused).
+//!
+//! A chain region in the same body (a layered specimen mixing the two) runs as
+//! its network equivalent ([`crate::material::network::Network::from_chain`]):
+//! the chain itself at small strain. Plane stress is refused (its `F_zz` would
+//! need a local iteration); use plane strain, axisymmetric or 3D.
+//!
+//! ## A step
+//!
+//! Newton-Raphson with the consistent tangent and a backtracking line search on
+//! the residual's norm: from the previous step's end, extrapolated along its
+//! velocity, with the held dofs at the step's prescribed values, until the
+//! free rows' out-of-balance force is below [`TOLERANCE`] of the force scale
+//! (the largest reaction so far, at least that of the current iterate). A step
+//! that does not converge in [`MAX_ITERATIONS`], or whose law fails (an inverted
+//! cell), is retried at a quarter of its length; below [`MIN_STEP_FRACTION`] of
+//! the trial the run ends with an error naming the step, the time, the element
+//! and the law.
+//!
+//! ## Step control
+//!
+//! Steps land on every kink of the protocol, on the release and on every
+//! requested snapshot time. Inside a segment the local error of a step is
+//! estimated by the distance between the converged displacement and its linear
+//! extrapolation from the previous step (second-order predictor), relative to
+//! `rtol` times the displacement scale; the next step is scaled by
+//! `0.9 / sqrt(ratio)` (between 0.25 and 2), and a step with a ratio over 1 is
+//! redone shorter. The first step after a kink starts at a fiftieth of its
+//! segment (at most `max_dt`) and is accepted on convergence alone.
+
+use std::time::Instant;
+
+use nalgebra::{DMatrix, DVector, Matrix3, SVector};
+use rayon::prelude::*;
+
+use super::model::Model;
+use super::stepper::emit_markers;
+use super::{Integrator, MarkerTrack, PressError, PressProblem, PressResult, Progress, Settings, Snapshot, StepRecord};
+use crate::assembly::{assemble_blocks, assemble_vector};
+use crate::element::{CellGeometry, Formulation, ReferenceSimplex, Simplex};
+use crate::material::law::{LawFailure, PointLaw};
+use crate::material::network::Network;
+use crate::solve::ReducedSystem;
+
+/// Converged at this out-of-balance force, relative to the force scale.
+pub(crate) const TOLERANCE: f64 = 1e-10;
+/// The most Newton iterations of one step.
+pub(crate) const MAX_ITERATIONS: usize = 30;
+/// The shortest step, as a share of the trial's duration.
+pub(crate) const MIN_STEP_FRACTION: f64 = 1e-9;
+/// Halvings of the line search.
+const LINE_SEARCH_HALVINGS: usize = 10;
+
+/// Whether `problem` runs on the Newton path: some region is a network material.
+pub(crate) fn applies<const D: usize, const N: usize, const S: usize>(problem: &PressProblem<D, N, S>) -> bool {
+    problem.materials.iter().any(|m| m.network.is_some())
+}
+
+/// Refuses what the Newton path cannot run, naming both sides.
+fn check<const D: usize, const N: usize, const S: usize>(
+    problem: &PressProblem<D, N, S>,
+    settings: &Settings,
+) -> Result<(), PressError> {
+    let bad = |what: &str| Err(PressError::BadSettings(format!("the network model cannot run {what}")));
+    if settings.integrator != Integrator::QuasiStatic {
+        return bad(&format!("with the {:?} integrator (use the quasi-static one)", settings.integrator));
+    }
+    if let Formulation::PlaneStress { .. } = problem.formulation {
+        return bad("in plane stress (use plane strain, axisymmetric or 3D)");
+    }
+    if !problem.tools.is_empty() {
+        return bad("with contact tools yet (use the plate and support of the protocol)");
+    }
+    if !problem.effects.is_null() {
+        return bad("with the diagnosis's effects");
+    }
+    if problem.materials.iter().any(|m| m.damage.is_some()) {
+        return bad("beside a chain with Mullins damage (give the network's own `[equilibrium.mullins]`)");
+    }
+    Ok(())
+}
+
+/// Per region: the law it runs.
+fn region_laws<const D: usize, const N: usize, const S: usize>(problem: &PressProblem<D, N, S>) -> Vec<Network> {
+    problem
+        .materials
+        .iter()
+        .map(|m| m.network.clone().unwrap_or_else(|| Network::from_chain(&m.rheology, m.poisson)))
+        .collect()
+}
+
+/// The cell operator `G` (`F - I = G u_e`), `9 x N D`, node-major dofs.
+fn deformation_operator<const D: usize, const N: usize>(g: &CellGeometry<D, N>) -> DMatrix<f64> {
+    let mut op = DMatrix::zeros(9, N * D);
+    for a in 0..N {
+        for i in 0..D {
+            for j in 0..D {
+                op[(3 * i + j, a * D + i)] = g.gradients[(a, j)];
+            }
+        }
+        // Axisymmetric: F_θθ = 1 + hoop * sum_a u_r,a (zero hoop otherwise).
+        op[(8, a * D)] += g.gradients.hoop;
+    }
+    op
+}
+
+/// One cell's response at `u`.
+struct CellResponse {
+    force: DVector<f64>,
+    stiffness: DMatrix<f64>,
+    stress: Matrix3<f64>,
+    f: Matrix3<f64>,
+}
+
+/// The whole body's response at a displacement.
+struct Evaluation {
+    cells: Vec<CellResponse>,
+    history: Vec<f64>,
+    internal: Vec<f64>,
+}
+
+/// A failed evaluation: the cell and why.
+struct CellFailure {
+    element: usize,
+    failure: LawFailure,
+}
+
+struct Newton<'m, 'p, const D: usize, const N: usize, const S: usize> {
+    model: &'m Model<'p, D, N, S>,
+    laws: Vec<Network>,
+    operators: Vec<DMatrix<f64>>,
+    offsets: Vec<usize>,
+}
+
+impl<const D: usize, const N: usize, const S: usize> Newton<'_, '_, D, N, S>
+where
+    Simplex<D, N>: ReferenceSimplex<D, N>,
+{
+    fn law_of(&self, e: usize) -> &Network {
+        &self.laws[self.model.problem.mesh.cell_regions[e] as usize]
+    }
+
+    /// Every cell's stress and tangent at `u` after a step of `dt` from `history`.
+    fn evaluate(&self, u: &[f64], dt: f64, history: &[f64], with_tangent: bool) -> Result<Evaluation, CellFailure> {
+        let mesh = &self.model.problem.mesh;
+        let mut new_history = history.to_vec();
+        let chunks = split_by_offsets(&mut new_history, &self.offsets);
+        let cells = chunks
+            .into_par_iter()
+            .enumerate()
+            .map(|(e, new)| {
+                let g = &self.model.geometry[e];
+                let op = &self.operators[e];
+                let ue = DVector::from_iterator(
+                    N * D,
+                    mesh.cells[e].iter().flat_map(|&v| (0..D).map(move |k| u[v as usize * D + k])),
+                );
+                let grad = op * &ue;
+                let h = Matrix3::from_fn(|i, j| grad[3 * i + j]);
+                let f = Matrix3::identity() + h;
+                let old = &history[self.offsets[e]..self.offsets[e + 1]];
+                let response =
+                    self.law_of(e).update(&h, dt, old, new).map_err(|failure| CellFailure { element: e, failure })?;
+                let p = DVector::from_iterator(9, (0..9).map(|r| response.stress[(r / 3, r % 3)]));
+                let force = op.tr_mul(&p) * g.weight;
+                let stiffness = if with_tangent {
+                    let a = DMatrix::from_iterator(9, 9, response.tangent.iter().copied());
+                    op.tr_mul(&(a * op)) * g.weight
+                } else {
+                    DMatrix::zeros(0, 0)
+                };
+                Ok(CellResponse { force, stiffness, stress: response.stress, f })
+            })
+            .collect::<Result<Vec<_>, CellFailure>>()?;
+        let per_cell: Vec<[SVector<f64, D>; N]> = cells
+            .iter()
+            .map(|c| std::array::from_fn(|a| SVector::<f64, D>::from_fn(|k, _| c.force[a * D + k])))
+            .collect();
+        let mut internal = vec![0.0; u.len()];
+        assemble_vector::<D, N>(&self.model.topology, &per_cell, &mut internal);
+        Ok(Evaluation { cells, history: new_history, internal })
+    }
+
+    fn tangent(&self, eval: &Evaluation) -> Vec<f64> {
+        let block = |e: usize, a: usize, b: usize| {
+            let k = &eval.cells[e].stiffness;
+            nalgebra::SMatrix::<f64, D, D>::from_fn(|r, c| k[(a * D + r, b * D + c)])
+        };
+        assemble_blocks::<D, N>(&self.model.topology, &self.model.pattern, &self.model.problem.mesh.cells, &block)
+    }
+}
+
+/// Splits `buf` into the consecutive slices `offsets[i]..offsets[i + 1]`.
+fn split_by_offsets<'a>(mut buf: &'a mut [f64], offsets: &[usize]) -> Vec<&'a mut [f64]> {
+    let mut out = Vec::with_capacity(offsets.len().saturating_sub(1));
+    for w in offsets.windows(2) {
+        let (head, tail) = buf.split_at_mut(w[1] - w[0]);
+        out.push(head);
+        buf = tail;
+    }
+    out
+}
+
+/// The accepted state at a step's end.
+#[derive(Clone)]
+struct State {
+    t: f64,
+    u: Vec<f64>,
+    history: Vec<f64>,
+    /// Cauchy stress per cell, Voigt order of the formulation.
+    stress: Vec<f64>,
+}
+
+/// What a converged step gives.
+struct Converged {
+    u: Vec<f64>,
+    history: Vec<f64>,
+    internal: Vec<f64>,
+    stress: Vec<f64>,
+    residual: f64,
+    factorizations: usize,
+    iterations: usize,
+}
+
+/// Why a step attempt failed (retried shorter).
+enum StepFailure {
+    Law { element: usize, failure: LawFailure },
+    NotConverged { residual: f64, element: usize },
+    Singular(crate::solve::SolveError),
+}
+
+/// Runs a problem with network materials on the Newton path.
+pub(crate) fn run<const D: usize, const N: usize, const S: usize>(
+    problem: &PressProblem<D, N, S>,
+    settings: &Settings,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<PressResult, PressError>
+where
+    Simplex<D, N>: ReferenceSimplex<D, N>,
+{
+    check(problem, settings)?;
+    let model = Model::new(problem)?;
+    let laws = region_laws(problem);
+    let mesh = &problem.mesh;
+    let operators: Vec<DMatrix<f64>> = model.geometry.iter().map(deformation_operator::<D, N>).collect();
+    let mut offsets = Vec::with_capacity(mesh.num_cells() + 1);
+    offsets.push(0);
+    for &r in &mesh.cell_regions {
+        offsets.push(offsets.last().unwrap() + laws[r as usize].history_len());
+    }
+    let newton = Newton { model: &model, laws, operators, offsets };
+    let mut history = vec![0.0; *newton.offsets.last().unwrap()];
+    for (e, h) in split_by_offsets(&mut history, &newton.offsets).into_iter().enumerate() {
+        newton.law_of(e).initial_history(h);
+    }
+
+    let protocol = &problem.protocol;
+    let end = protocol.end_s;
+    let mut landings: Vec<f64> = protocol.kinks();
+    landings.extend(problem.snapshot_times.iter().copied().filter(|&t| t > 0.0 && t < end));
+    landings.sort_by(f64::total_cmp);
+    landings.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * b.abs().max(1.0));
+    let max_dt = settings.max_dt_s.unwrap_or(end / 20.0);
+    let min_dt = MIN_STEP_FRACTION * end;
+
+    // Symbolic factorizations per constraint set (attached, released).
+    let mut systems: [Option<ReducedSystem>; 2] = [None, None];
+    let system_for = |systems: &mut [Option<ReducedSystem>; 2], released: bool| -> Result<(), PressError> {
+        let i = released as usize;
+        if systems[i].is_none() {
+            let c = if released { &model.released } else { &model.attached };
+            systems[i] = Some(
+                ReducedSystem::new(&model.pattern, &c.held, Some(&model.node_order))
+                    .map_err(|e| model.singular(0, 0.0, e))?,
+            );
+        }
+        Ok(())
+    };
+
+    let mut state = State { t: 0.0, u: vec![0.0; model.num_dofs()], history, stress: vec![0.0; mesh.num_cells() * S] };
+    let mut velocity = vec![0.0; model.num_dofs()];
+    let mut steps: Vec<StepRecord> = Vec::new();
+    let mut snapshots = Vec::new();
+    let mut tracks: Vec<MarkerTrack> =
+        problem.markers.iter().map(|m| MarkerTrack { name: m.name.clone(), samples: Vec::new() }).collect();
+    let mut marker_next = vec![0usize; problem.markers.len()];
+    emit_markers(&model, &mut tracks, &mut marker_next, &state.u, &state.u, 0.0, 0.0, true);
+    let mut factorizations = 0usize;
+    let mut largest_force: f64 = 0.0;
+    let mut after_kink = true;
+    let mut dt_next = f64::NAN;
+    let mut retry_dt: Option<f64> = None;
+    let keep = |t: f64| {
+        let near = |x: f64| (t - x).abs() <= 1e-9 * x.abs().max(1.0);
+        near(protocol.release_s.min(end)) || near(end) || problem.snapshot_times.iter().any(|&s| near(s))
+    };
+    let replay = settings.step_ends_s.clone();
+    let mut replay_index = 0usize;
+
+    while state.t < end * (1.0 - 1e-12) {
+        let next_landing = landings.iter().copied().find(|&k| k > state.t * (1.0 + 1e-12) + 1e-15).unwrap_or(end);
+        let mut dt = if let Some(ends) = &replay {
+            let t1 = *ends.get(replay_index).ok_or_else(|| {
+                PressError::BadSettings(format!("the replayed step ends stop at t = {} s before the end", state.t))
+            })?;
+            t1 - state.t
+        } else if let Some(fixed) = settings.fixed_dt_s {
+            fixed
+        } else if let Some(retry) = retry_dt {
+            retry
+        } else if after_kink || !dt_next.is_finite() {
+            ((next_landing - state.t) / 50.0).min(max_dt)
+        } else {
+            dt_next.min(max_dt)
+        };
+        if replay.is_none() && state.t + dt > next_landing - 1e-9 * dt {
+            dt = next_landing - state.t;
+        }
+        let step_index = steps.len() + 1;
+        let t1 = state.t + dt;
+        let released = t1 > protocol.release_s * (1.0 + 1e-12);
+        system_for(&mut systems, released)?;
+        let system = systems[released as usize].as_ref().unwrap();
+        let constraints = if released { &model.released } else { &model.attached };
+        let clock = Instant::now();
+
+        // Predictor: the previous step's velocity; after a kink, the step-start
+        // tangent's response to the held dofs' increment.
+        let mut u0 = state.u.clone();
+        if !after_kink {
+            for (x, v) in u0.iter_mut().zip(&velocity) {
+                *x += v * dt;
+            }
+        }
+        model.prescribe(constraints, t1, &mut u0);
+        let attempt = if after_kink {
+            tangent_predictor(&newton, system, &constraints.held, &state.u, u0, dt, &state.history)
+                .map(|(u, n)| {
+                    factorizations += n;
+                    u
+                })
+                .and_then(|u0| solve_step(&newton, system, &constraints.held, u0, dt, &state.history, largest_force))
+        } else {
+            solve_step(&newton, system, &constraints.held, u0, dt, &state.history, largest_force)
+        };
+        let converged = match attempt {
+            Ok(c) => c,
+            Err(failure) => {
+                if replay.is_some() || settings.fixed_dt_s.is_some() || dt * 0.25 < min_dt {
+                    return Err(final_failure(failure, step_index, t1, &newton, &model));
+                }
+                retry_dt = Some(dt * 0.25);
+                continue;
+            }
+        };
+        factorizations += converged.factorizations;
+        // Error control on the predictor's distance.
+        let free_error = if after_kink {
+            0.0
+        } else {
+            let mut e: f64 = 0.0;
+            for d in 0..model.num_dofs() {
+                if !constraints.held[d] {
+                    let pred = state.u[d] + velocity[d] * dt;
+                    e = e.max((converged.u[d] - pred).abs());
+                }
+            }
+            0.5 * e
+        };
+        let ratio = free_error / (settings.rtol * model.displacement_scale);
+        let controlled = replay.is_none() && settings.fixed_dt_s.is_none();
+        if controlled && ratio > 1.0 && dt * 0.25 >= min_dt {
+            retry_dt = Some(dt * (0.9 / ratio.sqrt()).clamp(0.25, 0.9));
+            continue;
+        }
+        // Accept.
+        retry_dt = None;
+        let [bottom, plate] = reactions(&model, &converged.internal, released);
+        largest_force = largest_force.max(bottom.abs()).max(plate.abs());
+        for d in 0..model.num_dofs() {
+            velocity[d] = (converged.u[d] - state.u[d]) / dt;
+        }
+        emit_markers(&model, &mut tracks, &mut marker_next, &state.u, &converged.u, state.t, t1, false);
+        state = State { t: t1, u: converged.u, history: converged.history, stress: converged.stress };
+        steps.push(StepRecord {
+            t_s: t1,
+            dt_s: dt,
+            solve_s: clock.elapsed().as_secs_f64(),
+            residual: converged.residual,
+            refactored: converged.factorizations > 0,
+            bottom_force_n: bottom,
+            plate_force_n: plate,
+            error_ratio: ratio,
+            newton_iterations: converged.iterations,
+        });
+        if keep(t1) {
+            snapshots.push(Snapshot { t_s: t1, displacement: state.u.clone(), cell_stress: state.stress.clone() });
+        }
+        let landed = (t1 - next_landing).abs() <= 1e-12 * next_landing.abs().max(1.0);
+        after_kink = landed;
+        if landed {
+            velocity.iter_mut().for_each(|v| *v = 0.0);
+        }
+        dt_next = if ratio > 0.0 { dt * (0.9 / ratio.sqrt()).clamp(0.25, 2.0) } else { dt * 2.0 };
+        if replay.is_some() {
+            replay_index += 1;
+        }
+        progress(Progress { t_s: t1, end_s: end, steps: steps.len() });
+    }
+    let num_free_dofs = systems.iter().flatten().map(|s| s.num_free()).max().unwrap_or(0);
+    let factor_nonzeros = systems.iter().flatten().map(|s| s.factor_nonzeros()).max().unwrap_or(0);
+    Ok(PressResult {
+        dim: D,
+        num_stress: S,
+        steps,
+        snapshots,
+        markers: tracks,
+        num_factorizations: factorizations,
+        contact_solves: 0,
+        factor_nonzeros,
+        num_free_dofs,
+        tools: Vec::new(),
+        segments: Vec::new(),
+        force_offset: None,
+    })
+}
+
+/// The bottom and plate reactions (compression positive) from the internal force.
+fn reactions<const D: usize, const N: usize, const S: usize>(
+    model: &Model<'_, D, N, S>,
+    internal: &[f64],
+    released: bool,
+) -> [f64; 2]
+where
+    Simplex<D, N>: ReferenceSimplex<D, N>,
+{
+    let mesh = &model.problem.mesh;
+    let sum = |set: &str| -> f64 {
+        mesh.node_sets.get(set).map_or(0.0, |nodes| {
+            nodes.iter().map(|&i| internal[i as usize * D + 1] - model.body_force[i as usize * D + 1]).sum()
+        })
+    };
+    let bottom = sum("bottom");
+    let plate = if released { 0.0 } else { -sum("top") };
+    [bottom, plate]
+}
+
+/// Newton's iteration of one step from `u` (held dofs already prescribed).
+fn solve_step<const D: usize, const N: usize, const S: usize>(
+    newton: &Newton<'_, '_, D, N, S>,
+    system: &ReducedSystem,
+    held: &[bool],
+    mut u: Vec<f64>,
+    dt: f64,
+    history: &[f64],
+    largest_force: f64,
+) -> Result<Converged, StepFailure>
+where
+    Simplex<D, N>: ReferenceSimplex<D, N>,
+{
+    let model = newton.model;
+    let body = &model.body_force;
+    let law_err = |c: CellFailure| StepFailure::Law { element: c.element, failure: c.failure };
+    let residual_of = |eval: &Evaluation| -> (Vec<f64>, f64, f64) {
+        let mut r = vec![0.0; system.num_free()];
+        let mut held_norm: f64 = 0.0;
+        for d in 0..eval.internal.len() {
+            let x = body[d] - eval.internal[d];
+            if held[d] {
+                held_norm = held_norm.max(x.abs());
+            } else {
+                r[system.free_of_dof[d] as usize] = x;
+            }
+        }
+        let norm = r.iter().map(|x| x * x).sum::<f64>().sqrt();
+        (r, norm, held_norm)
+    };
+    let mut eval = newton.evaluate(&u, dt, history, true).map_err(law_err)?;
+    let (mut r, mut norm, held_norm) = residual_of(&eval);
+    let mut scale = largest_force.max(held_norm).max(f64::MIN_POSITIVE);
+    let mut factorizations = 0;
+    for iteration in 0..MAX_ITERATIONS {
+        if norm <= TOLERANCE * scale {
+            let stress = cauchy_stresses::<S>(&eval, model.problem.formulation);
+            return Ok(Converged {
+                u,
+                history: eval.history,
+                internal: eval.internal,
+                stress,
+                residual: norm / scale,
+                factorizations,
+                iterations: iteration,
+            });
+        }
+        let k = newton.tangent(&eval);
+        let (factor, n) = factor_shifted(system, &k, &model.diagonal_positions)?;
+        factorizations += n;
+        let mut du = r.clone();
+        factor.solve_in_place(&mut du);
+        // Backtracking line search on the residual's norm.
+        let mut alpha = 1.0;
+        let mut accepted = None;
+        for _ in 0..=LINE_SEARCH_HALVINGS {
+            let mut trial = u.clone();
+            for (i, &d) in system.dof_of_free.iter().enumerate() {
+                trial[d as usize] += alpha * du[i];
+            }
+            if let Ok(e) = newton.evaluate(&trial, dt, history, true) {
+                let (r1, n1, h1) = residual_of(&e);
+                if n1 < (1.0 - 1e-4 * alpha) * norm || alpha < 1e-3 {
+                    accepted = Some((trial, e, r1, n1, h1));
+                    break;
+                }
+            }
+            alpha *= 0.5;
+        }
+        let Some((trial, e, r1, n1, h1)) = accepted else {
+            break;
+        };
+        u = trial;
+        eval = e;
+        r = r1;
+        norm = n1;
+        scale = scale.max(h1);
+    }
+    // The element at the largest out-of-balance force.
+    let (mut worst, mut worst_dof) = (0.0, 0usize);
+    for (i, &d) in system.dof_of_free.iter().enumerate() {
+        if r[i].abs() > worst {
+            worst = r[i].abs();
+            worst_dof = d as usize;
+        }
+    }
+    let element = model.cell_of_node(worst_dof / D).unwrap_or(0);
+    Err(StepFailure::NotConverged { residual: norm / scale, element })
+}
+
+/// Factors the tangent `k`; where it is not positive definite (compressive
+/// stresses soften the geometric part, e.g. a layer crushed by the held dofs'
+/// jump at a kink), factors `k + beta |diag k|` with the least `beta` of 1e-3,
+/// 1e-2, 0.1, 1 that is: a descent direction for the line search, at the price
+/// of linear convergence while it lasts. Returns the factorizations made.
+fn factor_shifted<'s>(
+    system: &'s ReducedSystem,
+    k: &[f64],
+    diagonal_positions: &[usize],
+) -> Result<(crate::solve::Factor<'s>, usize), StepFailure> {
+    match system.factor(&[(1.0, k)], None) {
+        Ok(f) => Ok((f, 1)),
+        Err(first) => {
+            let diag: Vec<f64> = diagonal_positions.iter().map(|&p| k[p].abs()).collect();
+            for (i, beta) in [1e-3, 1e-2, 0.1, 1.0].into_iter().enumerate() {
+                let shift: Vec<f64> = diag.iter().map(|d| beta * d).collect();
+                if let Ok(f) = system.factor(&[(1.0, k)], Some(&shift)) {
+                    return Ok((f, i + 2));
+                }
+            }
+            Err(StepFailure::Singular(first))
+        }
+    }
+}
+
+/// The displacement after a kink, predicted by the tangent at the step's start
+/// `u_start` (an equilibrium): the held dofs move to their values in `u0`, the
+/// free ones by `K_ff^-1 (r_free - K_fh du_held)`. Returns it and the
+/// factorizations made.
+fn tangent_predictor<const D: usize, const N: usize, const S: usize>(
+    newton: &Newton<'_, '_, D, N, S>,
+    system: &ReducedSystem,
+    held: &[bool],
+    u_start: &[f64],
+    mut u0: Vec<f64>,
+    dt: f64,
+    history: &[f64],
+) -> Result<(Vec<f64>, usize), StepFailure>
+where
+    Simplex<D, N>: ReferenceSimplex<D, N>,
+{
+    let model = newton.model;
+    let eval = newton
+        .evaluate(u_start, dt, history, true)
+        .map_err(|c| StepFailure::Law { element: c.element, failure: c.failure })?;
+    let k = newton.tangent(&eval);
+    let jump: Vec<f64> = (0..u0.len()).map(|d| if held[d] { u0[d] - u_start[d] } else { 0.0 }).collect();
+    let mut coupling = vec![0.0; u0.len()];
+    model.pattern.mul_vec(&k, &jump, &mut coupling);
+    let mut rhs: Vec<f64> = system
+        .dof_of_free
+        .iter()
+        .map(|&d| model.body_force[d as usize] - eval.internal[d as usize] - coupling[d as usize])
+        .collect();
+    let (factor, n) = factor_shifted(system, &k, &model.diagonal_positions)?;
+    factor.solve_in_place(&mut rhs);
+    for (i, &d) in system.dof_of_free.iter().enumerate() {
+        u0[d as usize] = u_start[d as usize] + rhs[i];
+    }
+    Ok((u0, n))
+}
+
+/// The error of a step that failed at its shortest length.
+fn final_failure<const D: usize, const N: usize, const S: usize>(
+    failure: StepFailure,
+    step: usize,
+    time_s: f64,
+    newton: &Newton<'_, '_, D, N, S>,
+    model: &Model<'_, D, N, S>,
+) -> PressError
+where
+    Simplex<D, N>: ReferenceSimplex<D, N>,
+{
+    match failure {
+        StepFailure::Law { element, failure: LawFailure::Inverted { det } } => {
+            PressError::Inverted { step, time_s, element, ratio: det }
+        }
+        StepFailure::Law { element, failure } => PressError::NotConverged {
+            step,
+            time_s,
+            detail: format!("element {element} (law {}): {failure}", newton.law_of(element).name()),
+        },
+        StepFailure::NotConverged { residual, element } => PressError::NotConverged {
+            step,
+            time_s,
+            detail: format!(
+                "Newton's iteration stopped at a residual of {residual:.3e} of the force scale; largest out-of-balance \
+                 force at element {element} (law {})",
+                newton.law_of(element).name()
+            ),
+        },
+        StepFailure::Singular(e) => model.singular(step, time_s, e),
+    }
+}
+
+/// The Cauchy stress `sigma = P F^T / J` per cell in the formulation's Voigt order.
+fn cauchy_stresses<const S: usize>(eval: &Evaluation, formulation: Formulation) -> Vec<f64> {
+    let mut out = Vec::with_capacity(eval.cells.len() * S);
+    for c in &eval.cells {
+        let sigma = c.stress * c.f.transpose() / c.f.determinant();
+        let voigt: Vec<f64> = match (formulation, S) {
+            (_, 6) => vec![sigma[(0, 0)], sigma[(1, 1)], sigma[(2, 2)], sigma[(0, 1)], sigma[(0, 2)], sigma[(1, 2)]],
+            (Formulation::Axisymmetric, 4) => vec![sigma[(0, 0)], sigma[(1, 1)], sigma[(2, 2)], sigma[(0, 1)]],
+            _ => vec![sigma[(0, 0)], sigma[(1, 1)], sigma[(0, 1)]],
+        };
+        out.extend(voigt);
+    }
+    out
+}

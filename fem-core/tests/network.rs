@@ -1,0 +1,201 @@
+//! The network model on the Newton path against closed forms and the chain.
+
+use fem_core::material::network::{Energy, Equilibrium, Network, ViscousNetwork};
+use fem_core::material::Material;
+use fem_core::mesh;
+use fem_core::press::{self, Attachment, PressResult, Protocol, Settings, SolidPress};
+
+/// A push to `depth` mm over `push_s`, then a hold until `end_s` (no release
+/// before the end), frictionless plates.
+fn frictionless(depth: f64, push_s: f64, end_s: f64) -> Protocol {
+    Protocol {
+        waypoints: vec![[0.0, 0.0], [push_s, depth]],
+        release_s: end_s,
+        end_s,
+        plate: Attachment::Frictionless,
+        support: Attachment::Frictionless,
+        gravity: false,
+    }
+}
+
+fn run(problem: &SolidPress, settings: &Settings) -> PressResult {
+    press::simulate(problem, settings, &mut |_| {}).unwrap()
+}
+
+/// Uniaxial stress of the compressible neo-Hookean energy
+/// `mu/2 (I1bar - 3) + K/2 (J - 1)^2` at the axial stretch `lambda`, written
+/// here from the energy (not the engine's code): the lateral stretch `l` solves
+/// `P_xx = 0` by bisection, and the nominal axial stress is returned.
+fn neo_hookean_uniaxial(e: f64, nu: f64, lambda: f64) -> f64 {
+    let mu = e / (2.0 * (1.0 + nu));
+    let k = e / (3.0 * (1.0 - 2.0 * nu));
+    let p = |l: f64, along: f64| {
+        let j = lambda * l * l;
+        let i1 = lambda * lambda + 2.0 * l * l;
+        mu * j.powf(-2.0 / 3.0) * (along - i1 / (3.0 * along)) + k * (j - 1.0) * j / along
+    };
+    let (mut lo, mut hi) = (0.5, 3.0);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if p(mid, mid) > 0.0 {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    p(0.5 * (lo + hi), lambda)
+}
+
+/// A neo-Hookean block between frictionless plates, pushed to 50 % strain, on
+/// an unstructured-looking tetrahedral mesh: the deformation is homogeneous, so
+/// the force equals the closed form at every step end to the solver's tolerance.
+#[test]
+fn a_neo_hookean_block_in_uniaxial_compression_follows_the_closed_form_to_50_percent() {
+    let (e, nu) = (0.03, 0.3);
+    let net = Network {
+        poisson: nu,
+        equilibrium: Some(Equilibrium { energy: Energy::NeoHookean, e_mpa: e, mullins: None }),
+        viscous: vec![],
+        damper_mpa_s: None,
+    };
+    let h = 10.0;
+    let problem = SolidPress::new_3d(
+        mesh::block([12.0, h, 8.0], 4.0, "m").unwrap(),
+        vec![Material::network(net).unwrap()],
+        frictionless(5.0, 10.0, 10.0),
+    )
+    .unwrap();
+    let result = run(&problem, &Settings::default());
+    let area = 12.0 * 8.0;
+    let mut worst: f64 = 0.0;
+    let peak = neo_hookean_uniaxial(e, nu, 0.5).abs() * area;
+    for s in &result.steps {
+        let lambda = 1.0 - problem.protocol.displacement(s.t_s) / h;
+        let want = -neo_hookean_uniaxial(e, nu, lambda) * area;
+        worst = worst.max((s.bottom_force_n - want).abs() / peak);
+        worst = worst.max((s.plate_force_n - want).abs() / peak);
+    }
+    eprintln!(
+        "neo-Hookean uniaxial: {} steps, worst force error {worst:.3e} of the peak {peak:.5} N",
+        result.steps.len()
+    );
+    assert!(worst < 1e-8, "worst {worst:.3e}");
+    assert!((result.steps.last().unwrap().t_s - 10.0).abs() < 1e-12);
+}
+
+/// The seed's Table II material 1 as a network against the chain itself on a
+/// glued block (an inhomogeneous field), on the chain's own step ends. The
+/// network differs from the chain by its finite-strain kinematics alone, a
+/// relative difference of the order of the strain: measured at 1e-4 and 1e-6
+/// strain, it must fall in proportion.
+#[test]
+fn the_seeds_chain_as_a_network_equals_the_chain_at_small_strain() {
+    let chain = Material::seed_mat1_force();
+    let net = Material::network(Network::from_chain(&chain.rheology, chain.poisson)).unwrap();
+    let (w, h, t) = (58.0, 59.5, 12.0);
+    let mut gaps = Vec::new();
+    for strain in [1e-4, 1e-6] {
+        let depth = strain * h;
+        let protocol = Protocol::ramp_hold_release(depth / 28.87, 28.87, 210.93, 400.0);
+        let m = mesh::block([w, h, t], 12.0, "m").unwrap();
+        let linear = SolidPress::new_3d(m.clone(), vec![chain.clone()], protocol.clone()).unwrap();
+        let reference = run(&linear, &Settings::default());
+        let settings =
+            Settings { step_ends_s: Some(reference.steps.iter().map(|s| s.t_s).collect()), ..Settings::default() };
+        let finite = SolidPress::new_3d(m, vec![net.clone()], protocol).unwrap();
+        let result = run(&finite, &settings);
+        let peak = reference.peak_force();
+        let gap = reference
+            .steps
+            .iter()
+            .zip(&result.steps)
+            .map(|(a, b)| (a.bottom_force_n - b.bottom_force_n).abs() / peak)
+            .fold(0.0, f64::max);
+        eprintln!("strain {strain:.0e}: peak {peak:.6e} N, largest difference {gap:.3e} of the peak");
+        gaps.push(gap);
+    }
+    // The difference is the kinematics' O(strain): at most a few strains, and it
+    // falls by the strain's factor (100) within 10 %.
+    assert!(gaps[0] < 3e-4, "{gaps:?}");
+    assert!(gaps[1] < 3e-6, "{gaps:?}");
+    let ratio = gaps[0] / gaps[1];
+    assert!((ratio / 100.0 - 1.0).abs() < 0.1, "ratio {ratio}");
+}
+
+/// One viscous network on a homogeneous uniaxial stress path: the engine
+/// against an independent integration in principal log strains written here
+/// (RK4 on the Maxwell ODE `d eps_e/dt = d eps/dt - eps_e / tau` per principal
+/// direction, the lateral strain from zero lateral Kirchhoff stress), at three
+/// step sizes: the error falls at second order.
+#[test]
+fn a_viscous_network_in_uniaxial_compression_converges_to_an_independent_integration() {
+    let (e, nu, tau) = (0.02, 0.3, 2.0);
+    let net = Network {
+        poisson: nu,
+        equilibrium: None,
+        viscous: vec![ViscousNetwork { e_mpa: e, tau_s: tau }],
+        damper_mpa_s: None,
+    };
+    let h = 10.0;
+    let (depth, push_s, end_s) = (5.0, 4.0, 8.0);
+    let protocol = frictionless(depth, push_s, end_s);
+    // Reference: eps_y(t) = ln(1 - d(t)/h); lateral eps_x(t) unknown. Kirchhoff
+    // stress tau = E (l1 tr(eps_e) I + 2 m1 eps_e); lateral zero stress
+    // l1 tr + 2 m1 eps_ex = 0 with the elastic strains following the ODE: since the
+    // flow is proportional, the lateral elastic strain is -nu times the axial
+    // one at all times, so only the axial elastic strain needs integrating:
+    // d ee/dt = d eps_y/dt - ee / tau, and the axial Kirchhoff stress is E ee.
+    let eps_rate = |t: f64| {
+        if t < push_s {
+            let v = depth / push_s;
+            -v / (h - v * t)
+        } else {
+            0.0
+        }
+    };
+    let reference = |t_end: f64| {
+        let n = 200_000;
+        let dt = t_end / n as f64;
+        let mut ee = 0.0;
+        for i in 0..n {
+            let t = i as f64 * dt;
+            let f = |t: f64, x: f64| eps_rate(t) - x / tau;
+            let k1 = f(t, ee);
+            let k2 = f(t + dt / 2.0, ee + dt / 2.0 * k1);
+            let k3 = f(t + dt / 2.0, ee + dt / 2.0 * k2);
+            let k4 = f(t + dt, ee + dt * k3);
+            ee += dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+        }
+        // Nominal stress = Kirchhoff / axial stretch.
+        let stretch = 1.0 - protocol.displacement(t_end) / h;
+        e * ee / stretch
+    };
+    let area = 6.0 * 6.0;
+    let times = [push_s, end_s];
+    let want: Vec<f64> = times.iter().map(|&t| -reference(t) * area).collect();
+    let mut errors = Vec::new();
+    for n in [8usize, 16, 32] {
+        let problem = SolidPress::new_3d(
+            mesh::block([6.0, h, 6.0], 3.0, "m").unwrap(),
+            vec![Material::network(net.clone()).unwrap()],
+            protocol.clone(),
+        )
+        .unwrap();
+        let settings = Settings { fixed_dt_s: Some(push_s / n as f64), ..Settings::default() };
+        let result = run(&problem, &settings);
+        let err = times
+            .iter()
+            .zip(&want)
+            .map(|(&t, &w)| {
+                let s = result.steps.iter().find(|s| (s.t_s - t).abs() < 1e-9).expect("a step lands there");
+                (s.bottom_force_n - w).abs() / want[0].abs()
+            })
+            .fold(0.0, f64::max);
+        eprintln!("viscous network, {n} steps per push: error {err:.3e} of the peak");
+        errors.push(err);
+    }
+    let orders: Vec<f64> = errors.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
+    eprintln!("orders {orders:?}");
+    assert!(orders.iter().all(|&p| p > 1.8 && p < 2.3), "orders {orders:?}");
+    assert!(errors[2] < 1e-3, "{errors:?}");
+}
