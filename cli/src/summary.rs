@@ -172,6 +172,7 @@ mod tests {
             bottom_force_n: 1.5,
             plate_force_n: 1.25,
             error_ratio: 0.1,
+            newton_iterations: 0,
         };
         let csv = steps_csv(&[step.clone(), StepRecord { refactored: false, ..step }]);
         let lines: Vec<&str> = csv.lines().collect();
