@@ -10,6 +10,8 @@
 //! | `four-element`  | `E1_MPa, c1_MPa_s, E2_MPa, c3_MPa_s` (E2 the series spring) |
 //! | `five-element`  | `E1_MPa, E2_MPa, c1_MPa_s, c2_MPa_s, c3_MPa_s`     |
 //!
+//! | `network`       | `[equilibrium]`, `[[viscous]]`, `[damper]` (below)  |
+//!
 //! Every parameter is optional when reading, so that identification can take a
 //! material that gives only its model and the parameters to hold fixed; a key
 //! outside the model's set is refused. Converting to an engine material
@@ -27,10 +29,45 @@
 //! runs them on the quasi-static integrator, with the constrained plate or with
 //! contact tools, also with machine compliance (not with a material-point effect).
 
+//! ## `model = "network"`: the finite-strain network
+//!
+//! The parts of [`fem_core::material::network`], each an optional sub-table; at
+//! least one is given. Their keys, units and bounds come from the law's own
+//! parameter tables ([`fem_core::material::network::parameters`]):
+//!
+//! ```toml
+//! [materials.gel]
+//! model = "network"
+//! poisson = 0.45                 # of every part, in (-1, 0.4999]
+//! [materials.gel.equilibrium]    # absent: a fluid, like the seed's chain
+//! energy = "exponential"         # or "neo-hookean"
+//! E_MPa = 0.03                   # Young's modulus at small strain
+//! stiffening = 0.5               # b of mu/(2b) [exp(b (I1bar - 3)) - 1] (exponential only)
+//! [materials.gel.equilibrium.mullins]  # Ogden-Roxburgh softening (optional)
+//! r = 2.0                        # > 1: the most softening is 1 - 1/r
+//! m_MPa = 0.001                  # its energy scale
+//! beta = 0.1                     # its growth with the largest energy (default 0)
+//! [[materials.gel.viscous]]      # a Maxwell network: Hencky spring and Newtonian flow
+//! E_MPa = 0.02
+//! tau_s = 3.0                    # relaxation time
+//! [[materials.gel.viscous]]
+//! E_MPa = 0.01
+//! tau_s = 60.0
+//! [materials.gel.damper]         # a parallel Newtonian damper
+//! c_MPa_s = 0.005
+//! ```
+//!
+//! A chain material runs beside network materials as its network equivalent
+//! (the chain itself at small strain; [`fem_core::material::network::Network::from_chain`]).
+//! `wagashi press` runs network materials on the Newton path (quasi-static, 3D,
+//! plane strain or axisymmetric, with the protocol's plate and support).
+
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
 
+use fem_core::material::law::ParameterSpec;
+use fem_core::material::network::{Energy, Equilibrium, Mullins, Network, ViscousNetwork};
 use fem_core::material::{Material, MaterialError, MullinsDamage, Rheology};
 use serde::{Deserialize, Serialize};
 
@@ -49,6 +86,9 @@ pub enum Model {
     FourElement,
     /// Two Voigt elements `(E1, c1)`, `(E2, c2)` and a dashpot `c3` in series.
     FiveElement,
+    /// The finite-strain network ([`fem_core::material::network`]): its parts in
+    /// the sub-tables `[equilibrium]`, `[[viscous]]` and `[damper]` (module docs).
+    Network,
 }
 
 impl Model {
@@ -59,6 +99,7 @@ impl Model {
             Model::ThreeElement => "three-element",
             Model::FourElement => "four-element",
             Model::FiveElement => "five-element",
+            Model::Network => "network",
         }
     }
 
@@ -69,6 +110,9 @@ impl Model {
             Model::ThreeElement => &["E1_MPa", "c1_MPa_s", "c3_MPa_s"],
             Model::FourElement => &["E1_MPa", "c1_MPa_s", "E2_MPa", "c3_MPa_s"],
             Model::FiveElement => &["E1_MPa", "E2_MPa", "c1_MPa_s", "c2_MPa_s", "c3_MPa_s"],
+            // Its parameters live in its sub-tables, each read through the law's
+            // own table (fem_core::material::network::parameters).
+            Model::Network => &[],
         }
     }
 }
@@ -110,6 +154,16 @@ pub struct MaterialSpec {
     /// Mullins-type damage: the characteristic equivalent strain, > 0 (module docs).
     #[serde(rename = "mullins_strain_c", default, skip_serializing_if = "Option::is_none")]
     pub mullins_strain_c: Option<f64>,
+    /// `network`: the equilibrium network (`energy`, `E_MPa`, `stiffening`, and
+    /// the sub-table `[mullins]`); absent: a fluid.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub equilibrium: Option<toml::Table>,
+    /// `network`: the viscous networks, one `[[viscous]]` table each (`E_MPa`, `tau_s`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub viscous: Vec<toml::Table>,
+    /// `network`: the parallel damper (`c_MPa_s`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub damper: Option<toml::Table>,
     /// Where the table was read: the file's map and the table's key path.
     #[serde(skip)]
     pub(crate) origin: Option<Origin>,
@@ -134,6 +188,7 @@ impl PartialEq for MaterialSpec {
             && self.poisson == other.poisson
             && self.parameters() == other.parameters()
             && (self.mullins_d_inf, self.mullins_strain_c) == (other.mullins_d_inf, other.mullins_strain_c)
+            && (&self.equilibrium, &self.viscous, &self.damper) == (&other.equilibrium, &other.viscous, &other.damper)
     }
 }
 
@@ -158,12 +213,18 @@ impl MaterialSpec {
             c3_mpa_s: None,
             mullins_d_inf: None,
             mullins_strain_c: None,
+            equilibrium: None,
+            viscous: Vec::new(),
+            damper: None,
             origin: None,
         }
     }
 
     /// The spec of an engine material (every parameter given).
     pub fn from_material(material: &Material) -> Self {
+        if let Some(net) = &material.network {
+            return Self::from_network(net);
+        }
         let mut s = match material.rheology {
             Rheology::Elastic { e_mpa } => Self { e_mpa: Some(e_mpa), ..Self::new(Model::Elastic) },
             Rheology::ThreeElement { e1_mpa, c1_mpa_s, c3_mpa_s } => Self {
@@ -194,6 +255,97 @@ impl MaterialSpec {
             s.mullins_strain_c = Some(d.strain_c);
         }
         s
+    }
+
+    /// The spec of a network material.
+    pub fn from_network(net: &Network) -> Self {
+        let table = |pairs: &[(&str, f64)]| -> toml::Table {
+            pairs.iter().map(|(k, v)| (k.to_string(), toml::Value::Float(*v))).collect()
+        };
+        let equilibrium = net.equilibrium.map(|eq| {
+            let mut t = table(&[("E_MPa", eq.e_mpa)]);
+            let energy = match eq.energy {
+                Energy::NeoHookean => "neo-hookean",
+                Energy::Exponential { stiffening } => {
+                    t.insert("stiffening".into(), toml::Value::Float(stiffening));
+                    "exponential"
+                }
+            };
+            t.insert("energy".into(), toml::Value::String(energy.into()));
+            if let Some(m) = eq.mullins {
+                t.insert("mullins".into(), toml::Value::Table(table(&[("r", m.r), ("m_MPa", m.m_mpa), ("beta", m.beta)])));
+            }
+            t
+        });
+        Self {
+            poisson: Some(net.poisson),
+            equilibrium,
+            viscous: net.viscous.iter().map(|v| table(&[("E_MPa", v.e_mpa), ("tau_s", v.tau_s)])).collect(),
+            damper: net.damper_mpa_s.map(|c| table(&[("c_MPa_s", c)])),
+            ..Self::new(Model::Network)
+        }
+    }
+
+    /// The network of a `network` material, read through the law's parameter
+    /// tables: `Err((key path inside the material, cause))` for an unknown,
+    /// missing, mistyped or out-of-bounds key. Needs `poisson`.
+    pub fn to_network(&self) -> Result<Network, (String, String)> {
+        use fem_core::material::network::parameters::{DAMPER, EQUILIBRIUM, MATERIAL, MULLINS, VISCOUS};
+        let poisson = self.poisson.ok_or_else(|| ("poisson".to_string(), "missing".to_string()))?;
+        let mspec = MATERIAL[0];
+        if !mspec.accepts(poisson) {
+            return Err(("poisson".into(), format!("{poisson} is outside {} for a network", mspec.range())));
+        }
+        let equilibrium = match &self.equilibrium {
+            None => None,
+            Some(t) => {
+                let energy = match t.get("energy") {
+                    None => return Err(("equilibrium.energy".into(), "missing (neo-hookean or exponential)".into())),
+                    Some(toml::Value::String(s)) if s == "neo-hookean" => "neo-hookean",
+                    Some(toml::Value::String(s)) if s == "exponential" => "exponential",
+                    Some(other) => {
+                        return Err((
+                            "equilibrium.energy".into(),
+                            format!("{other} is not an energy (neo-hookean or exponential)"),
+                        ))
+                    }
+                };
+                let mut allowed: Vec<&str> = vec!["energy", "E_MPa", "mullins"];
+                if energy == "exponential" {
+                    allowed.push("stiffening");
+                }
+                let values = read_table(t, EQUILIBRIUM, &allowed, "equilibrium")?;
+                let e_mpa = values["E_MPa"];
+                let energy = if energy == "exponential" {
+                    Energy::Exponential { stiffening: values["stiffening"] }
+                } else {
+                    Energy::NeoHookean
+                };
+                let mullins = match t.get("mullins") {
+                    None => None,
+                    Some(toml::Value::Table(m)) => {
+                        let keys: Vec<&str> = MULLINS.iter().map(|s| s.key).collect();
+                        let v = read_table(m, MULLINS, &keys, "equilibrium.mullins")?;
+                        Some(Mullins { r: v["r"], m_mpa: v["m_MPa"], beta: v["beta"] })
+                    }
+                    Some(_) => return Err(("equilibrium.mullins".into(), "must be a table".into())),
+                };
+                Some(Equilibrium { energy, e_mpa, mullins })
+            }
+        };
+        let mut viscous = Vec::new();
+        for (i, t) in self.viscous.iter().enumerate() {
+            let keys: Vec<&str> = VISCOUS.iter().map(|s| s.key).collect();
+            let v = read_table(t, VISCOUS, &keys, &format!("viscous[{i}]"))?;
+            viscous.push(ViscousNetwork { e_mpa: v["E_MPa"], tau_s: v["tau_s"] });
+        }
+        let damper_mpa_s = match &self.damper {
+            None => None,
+            Some(t) => Some(read_table(t, DAMPER, &["c_MPa_s"], "damper")?["c_MPa_s"]),
+        };
+        let net = Network { poisson, equilibrium, viscous, damper_mpa_s };
+        net.validate().map_err(|e| ("".to_string(), e.to_string()))?;
+        Ok(net)
     }
 
     /// Every parameter key with its value, whether or not it belongs to the model.
@@ -229,6 +381,10 @@ impl MaterialSpec {
     pub fn to_rheology(&self) -> Result<Rheology, MissingParameter> {
         let need = |key: &'static str| self.get(key).ok_or(MissingParameter { key });
         Ok(match self.model {
+            Model::Network => {
+                let net = self.to_network().map_err(|_| MissingParameter { key: "network" })?;
+                Material::network(net).map_err(|_| MissingParameter { key: "network" })?.rheology
+            }
             Model::Elastic => Rheology::Elastic { e_mpa: need("E_MPa")? },
             Model::ThreeElement => Rheology::ThreeElement {
                 e1_mpa: need("E1_MPa")?,
@@ -254,6 +410,13 @@ impl MaterialSpec {
     /// The engine material (not yet validated by the engine), when every parameter
     /// of the model and `poisson` are given.
     pub fn to_material(&self) -> Result<Material, MissingParameter> {
+        if self.model == Model::Network {
+            self.poisson.ok_or(MissingParameter { key: "poisson" })?;
+            // A bundle's materials were read through `validate`, which names the
+            // key; here only an unchecked spec can fail.
+            let net = self.to_network().map_err(|_| MissingParameter { key: "network" })?;
+            return Material::network(net).map_err(|_| MissingParameter { key: "network" });
+        }
         let rheology = self.to_rheology()?;
         let poisson = self.poisson.ok_or(MissingParameter { key: "poisson" })?;
         let damage = match (self.mullins_d_inf, self.mullins_strain_c) {
@@ -262,7 +425,7 @@ impl MaterialSpec {
             (Some(_), None) => return Err(MissingParameter { key: "mullins_strain_c" }),
             (None, Some(_)) => return Err(MissingParameter { key: "mullins_d_inf" }),
         };
-        Ok(Material { rheology, poisson, damage })
+        Ok(Material { rheology, poisson, damage, network: None })
     }
 
     /// The file this table was read from and the line of `key` in it (of the
@@ -286,6 +449,25 @@ impl MaterialSpec {
                 cause,
             },
         };
+        let network_tables = self.equilibrium.is_some() || !self.viscous.is_empty() || self.damper.is_some();
+        if self.model == Model::Network {
+            if let Some((key, _)) = self.parameters().into_iter().find(|(_, v)| v.is_some()) {
+                return Err(err(key, "not a key of the network model (its parts: [equilibrium], [[viscous]], [damper])".into()));
+            }
+            if self.mullins_d_inf.is_some() || self.mullins_strain_c.is_some() {
+                return Err(err("mullins_d_inf", "a network softens through [equilibrium.mullins]".into()));
+            }
+            if self.poisson.is_some() {
+                return self
+                    .to_network()
+                    .map(|_| ())
+                    .map_err(|(key, cause)| err(if key.is_empty() { "model" } else { &key }, cause));
+            }
+            return Ok(());
+        } else if network_tables {
+            let key = if self.equilibrium.is_some() { "equilibrium" } else if self.damper.is_some() { "damper" } else { "viscous" };
+            return Err(err(key, format!("only a network material has it (model = \"network\", not {})", self.model.as_str())));
+        }
         let keys = self.model.keys();
         for (key, value) in self.parameters() {
             let Some(v) = value else { continue };
@@ -322,6 +504,39 @@ impl MaterialSpec {
         }
         Ok(())
     }
+}
+
+/// Reads the keys of one sub-table through the law's parameter `table`: each
+/// key in `allowed` (the non-numeric ones are the caller's), numbers within
+/// their bounds, required ones present, defaults filled in.
+fn read_table(
+    t: &toml::Table,
+    table: &[ParameterSpec],
+    allowed: &[&str],
+    prefix: &str,
+) -> Result<BTreeMap<&'static str, f64>, (String, String)> {
+    for key in t.keys() {
+        if !allowed.contains(&key.as_str()) {
+            return Err((format!("{prefix}.{key}"), format!("not a key here (its keys: {})", allowed.join(", "))));
+        }
+    }
+    let mut out = BTreeMap::new();
+    for spec in table.iter().filter(|s| allowed.contains(&s.key)) {
+        let value = match t.get(spec.key) {
+            None => match spec.default {
+                Some(d) => d,
+                None => return Err((format!("{prefix}.{}", spec.key), format!("missing ({}, {})", spec.meaning, spec.unit))),
+            },
+            Some(toml::Value::Float(x)) => *x,
+            Some(toml::Value::Integer(i)) => *i as f64,
+            Some(other) => return Err((format!("{prefix}.{}", spec.key), format!("{other} is not a number"))),
+        };
+        if !spec.accepts(value) {
+            return Err((format!("{prefix}.{}", spec.key), format!("{value} is outside {}", spec.range())));
+        }
+        out.insert(spec.key, value);
+    }
+    Ok(out)
 }
 
 /// A `--materials FILE`: only `[materials.NAME]` tables.

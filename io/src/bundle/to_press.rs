@@ -70,6 +70,7 @@ impl Bundle {
                     MaterialError::NotPositive { name, .. } => format!("{name}_MPa_s"),
                     MaterialError::PoissonOutOfRange { .. } => "poisson".to_string(),
                     MaterialError::DamageOutOfRange { name, .. } => format!("mullins_{name}"),
+                    MaterialError::Network(_) => "model".to_string(),
                 };
                 let field = format!("materials.{region}.{key}");
                 match self.experiment.materials.get(region).and_then(|s| s.location(&key)) {
