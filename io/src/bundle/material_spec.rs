@@ -273,7 +273,10 @@ impl MaterialSpec {
             };
             t.insert("energy".into(), toml::Value::String(energy.into()));
             if let Some(m) = eq.mullins {
-                t.insert("mullins".into(), toml::Value::Table(table(&[("r", m.r), ("m_MPa", m.m_mpa), ("beta", m.beta)])));
+                t.insert(
+                    "mullins".into(),
+                    toml::Value::Table(table(&[("r", m.r), ("m_MPa", m.m_mpa), ("beta", m.beta)])),
+                );
             }
             t
         });
@@ -452,7 +455,10 @@ impl MaterialSpec {
         let network_tables = self.equilibrium.is_some() || !self.viscous.is_empty() || self.damper.is_some();
         if self.model == Model::Network {
             if let Some((key, _)) = self.parameters().into_iter().find(|(_, v)| v.is_some()) {
-                return Err(err(key, "not a key of the network model (its parts: [equilibrium], [[viscous]], [damper])".into()));
+                return Err(err(
+                    key,
+                    "not a key of the network model (its parts: [equilibrium], [[viscous]], [damper])".into(),
+                ));
             }
             if self.mullins_d_inf.is_some() || self.mullins_strain_c.is_some() {
                 return Err(err("mullins_d_inf", "a network softens through [equilibrium.mullins]".into()));
@@ -465,8 +471,17 @@ impl MaterialSpec {
             }
             return Ok(());
         } else if network_tables {
-            let key = if self.equilibrium.is_some() { "equilibrium" } else if self.damper.is_some() { "damper" } else { "viscous" };
-            return Err(err(key, format!("only a network material has it (model = \"network\", not {})", self.model.as_str())));
+            let key = if self.equilibrium.is_some() {
+                "equilibrium"
+            } else if self.damper.is_some() {
+                "damper"
+            } else {
+                "viscous"
+            };
+            return Err(err(
+                key,
+                format!("only a network material has it (model = \"network\", not {})", self.model.as_str()),
+            ));
         }
         let keys = self.model.keys();
         for (key, value) in self.parameters() {
@@ -525,7 +540,12 @@ fn read_table(
         let value = match t.get(spec.key) {
             None => match spec.default {
                 Some(d) => d,
-                None => return Err((format!("{prefix}.{}", spec.key), format!("missing ({}, {})", spec.meaning, spec.unit))),
+                None => {
+                    return Err((
+                        format!("{prefix}.{}", spec.key),
+                        format!("missing ({}, {})", spec.meaning, spec.unit),
+                    ))
+                }
             },
             Some(toml::Value::Float(x)) => *x,
             Some(toml::Value::Integer(i)) => *i as f64,
