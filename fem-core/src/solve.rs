@@ -169,8 +169,20 @@ impl ReducedSystem {
     /// the exact elimination of dofs held at given values (their coupling moved to
     /// the right-hand side beforehand), without a new symbolic factorization: the
     /// pattern is the same, and the cut entries stay exact zeros in the factor.
-    pub fn factor_decoupled(&self, terms: &[(f64, &[f64])], decoupled: &[bool]) -> Result<Factor<'_>, SolveError> {
+    ///
+    /// `extra_diagonal` (per dof) is added to the diagonal, as in [`Self::factor`].
+    pub fn factor_decoupled(
+        &self,
+        terms: &[(f64, &[f64])],
+        decoupled: &[bool],
+        extra_diagonal: Option<&[f64]>,
+    ) -> Result<Factor<'_>, SolveError> {
         let mut vals: Vec<f64> = self.positions.iter().map(|&p| terms.iter().map(|(c, a)| c * a[p]).sum()).collect();
+        if let Some(extra) = extra_diagonal {
+            for (j, &q) in self.diagonal.iter().enumerate() {
+                vals[q] += extra[self.dof_of_free[j] as usize];
+            }
+        }
         for j in 0..self.num_free() {
             let cut_column = decoupled[self.dof_of_free[j] as usize];
             for q in self.col_ptr[j]..self.col_ptr[j + 1] {
@@ -345,7 +357,7 @@ mod tests {
         // The same held dofs cut off a system that leaves them free.
         let sys = ReducedSystem::new(&pat, &bottom, None).unwrap();
         let mut x: Vec<f64> = sys.dof_of_free.iter().map(|&d| rhs[d as usize]).collect();
-        sys.factor_decoupled(&[(1.0, &k)], &cut).unwrap().solve_in_place(&mut x);
+        sys.factor_decoupled(&[(1.0, &k)], &cut, None).unwrap().solve_in_place(&mut x);
         let scale = x_ref.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         assert!(scale > 1e-3);
         for (i, &d) in reduced.dof_of_free.iter().enumerate() {

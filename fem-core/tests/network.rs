@@ -199,3 +199,61 @@ fn a_viscous_network_in_uniaxial_compression_converges_to_an_independent_integra
     assert!(orders.iter().all(|&p| p > 1.8 && p < 2.3), "orders {orders:?}");
     assert!(errors[2] < 1e-3, "{errors:?}");
 }
+
+/// A double compression with a plate tool that leaves the specimen and touches
+/// it again, on a neo-Hookean cylinder's axisymmetric section: while the plate
+/// pushes, the unilateral contact gives the constrained frictionless plate's
+/// forces; the contact area is the top face's, pi R^2; once the plate has risen
+/// above the (elastic, fully recovered) top, the force is zero; the second stroke
+/// repeats the first.
+#[test]
+fn a_plate_tool_leaves_an_elastic_network_cylinder_and_touches_it_again() {
+    use fem_core::press::{AxisymmetricPress, Tool, ToolContact};
+    let net = Network {
+        poisson: 0.3,
+        equilibrium: Some(Equilibrium { energy: Energy::Exponential { stiffening: 1.0 }, e_mpa: 0.03, mullins: None }),
+        viscous: vec![],
+        damper_mpa_s: None,
+    };
+    let (r, h) = (4.0, 8.0);
+    let section = mesh::axisymmetric_section(r, h, 1.0, "m").unwrap();
+    let strokes = vec![[0.0, 0.0], [10.0, 3.0], [15.0, -0.5], [20.0, 0.0], [30.0, 3.0]];
+    let mut protocol = frictionless(3.0, 10.0, 30.0);
+    protocol.waypoints = strokes.clone();
+    let mut with_tool = AxisymmetricPress::new_axisymmetric(
+        section.clone(),
+        vec![Material::network(net.clone()).unwrap()],
+        protocol.clone(),
+    )
+    .unwrap();
+    with_tool.tools =
+        vec![Tool::plate_above("plate", [-r, 0.0, -r], [r, h, r], &strokes, ToolContact::Frictionless, f64::INFINITY)];
+    let settings = Settings { fixed_dt_s: Some(0.5), ..Settings::default() };
+    let result = press::simulate(&with_tool, &settings, &mut |_| {}).unwrap();
+    // The constrained plate on the first push.
+    let mut push = frictionless(3.0, 10.0, 10.0);
+    push.waypoints = vec![[0.0, 0.0], [10.0, 3.0]];
+    let constrained =
+        AxisymmetricPress::new_axisymmetric(section, vec![Material::network(net).unwrap()], push).unwrap();
+    let reference = press::simulate(&constrained, &settings, &mut |_| {}).unwrap();
+    let peak = reference.peak_force();
+    for s in &reference.steps {
+        let c = result.steps.iter().find(|x| (x.t_s - s.t_s).abs() < 1e-9).unwrap();
+        assert!((c.plate_force_n - s.plate_force_n).abs() < 1e-8 * peak, "t = {}", s.t_s);
+        assert!((c.bottom_force_n - s.bottom_force_n).abs() < 1e-8 * peak, "t = {}", s.t_s);
+    }
+    let track = &result.tools[0];
+    let at = |t: f64| track.samples.iter().find(|x| (x.t_s - t).abs() < 1e-9).unwrap();
+    let top_area = std::f64::consts::PI * r * r;
+    // Touching from the first step: the whole top face, deformed (it grows as the
+    // cylinder bulges, so the first step's is within its strain of pi R^2).
+    assert!((at(0.5).area_mm2 / top_area - 1.0).abs() < 0.02, "area {}", at(0.5).area_mm2);
+    // Above the specimen: no force, no area; the second stroke repeats the first.
+    assert_eq!(at(15.0).area_mm2, 0.0);
+    assert_eq!(at(15.0).normal_n, 0.0);
+    for t in [5.0, 10.0] {
+        let (a, b) = (at(t).normal_n, at(t + 20.0).normal_n);
+        assert!((a - b).abs() < 1e-6 * peak, "t = {t}: {a} vs {b}");
+    }
+    eprintln!("double compression: peak {peak:.6} N, {} steps", result.steps.len());
+}

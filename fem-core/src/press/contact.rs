@@ -248,6 +248,11 @@ pub struct ToolSample {
 }
 
 impl ToolSample {
+    /// A sample at `t_s` with no contact.
+    pub(crate) fn default_at(t_s: f64) -> Self {
+        Self { t_s, force_n: [0.0; 3], normal_n: 0.0, tangential_n: 0.0, area_mm2: 0.0, nodes: Vec::new() }
+    }
+
     /// Whether some node touches the tool.
     pub(crate) fn touches(&self) -> bool {
         self.area_mm2 > 0.0

@@ -49,7 +49,10 @@ use rayon::prelude::*;
 
 use super::model::Model;
 use super::stepper::emit_markers;
-use super::{Integrator, MarkerTrack, PressError, PressProblem, PressResult, Progress, Settings, Snapshot, StepRecord};
+use super::{
+    Integrator, MarkerTrack, PressError, PressProblem, PressResult, Progress, Settings, Snapshot, StepRecord, Tool,
+    ToolContact, ToolSample, ToolShape, ToolTrack,
+};
 use crate::assembly::{assemble_blocks, assemble_vector};
 use crate::element::{CellGeometry, Formulation, ReferenceSimplex, Simplex};
 use crate::material::law::{LawFailure, PointLaw};
@@ -82,8 +85,13 @@ fn check<const D: usize, const N: usize, const S: usize>(
     if let Formulation::PlaneStress { .. } = problem.formulation {
         return bad("in plane stress (use plane strain, axisymmetric or 3D)");
     }
-    if !problem.tools.is_empty() {
-        return bad("with contact tools yet (use the plate and support of the protocol)");
+    for tool in &problem.tools {
+        if FlatPlate::of(tool).is_none() {
+            return bad(&format!(
+                "with tool `{}`: its contact tools are flat, unrotated, frictionless plates (plate tools and floors)",
+                tool.name
+            ));
+        }
     }
     if !problem.effects.is_null() {
         return bad("with the diagnosis's effects");
@@ -101,6 +109,34 @@ fn region_laws<const D: usize, const N: usize, const S: usize>(problem: &PressPr
         .iter()
         .map(|m| m.network.clone().unwrap_or_else(|| Network::from_chain(&m.rheology, m.poisson)))
         .collect()
+}
+
+/// A flat, unrotated, frictionless plate tool: unilateral contact on the
+/// `y` dofs of the boundary nodes it reaches (an active set, below).
+#[derive(Debug, Clone, Copy)]
+struct FlatPlate {
+    /// Pressing down from above (its lower face) or a floor (its upper face).
+    above: bool,
+    half_height: f64,
+}
+
+impl FlatPlate {
+    fn of(tool: &Tool) -> Option<Self> {
+        let ToolShape::Plate { half_extents } = tool.shape else { return None };
+        let flat = tool.keyframes.iter().all(|k| k.rotation_rad == [0.0; 3]);
+        (flat && tool.contact == ToolContact::Frictionless)
+            .then_some(Self { above: !tool.floor, half_height: half_extents[1] })
+    }
+
+    /// The height of the pressing face at `t` [mm].
+    fn face_y(&self, tool: &Tool, t: f64) -> f64 {
+        let y = tool.pose_at(t).0[1];
+        if self.above {
+            y - self.half_height
+        } else {
+            y + self.half_height
+        }
+    }
 }
 
 /// The cell operator `G` (`F - I = G u_e`), `9 x N D`, node-major dofs.
@@ -223,6 +259,143 @@ struct State {
     history: Vec<f64>,
     /// Cauchy stress per cell, Voigt order of the formulation.
     stress: Vec<f64>,
+    /// Per node: the plate tool holding it, or [`FREE`].
+    holder: Vec<u8>,
+}
+
+/// A node no tool holds.
+const FREE: u8 = u8::MAX;
+/// The most active-set passes of one step.
+const MAX_CONTACT_PASSES: usize = 30;
+
+/// The nodes on the mesh's boundary, sorted.
+fn boundary_nodes<const D: usize, const N: usize>(mesh: &crate::mesh::SimplexMesh<D, N>) -> Vec<u32>
+where
+    Simplex<D, N>: ReferenceSimplex<D, N>,
+{
+    let mut nodes: Vec<u32> = mesh.boundary_facets().into_iter().flatten().collect();
+    nodes.sort_unstable();
+    nodes.dedup();
+    nodes
+}
+
+/// The `y` dofs of the nodes a tool holds.
+fn cut_dofs<const D: usize>(holder: &[u8]) -> Vec<bool> {
+    let mut cut = vec![false; holder.len() * D];
+    for (n, &h) in holder.iter().enumerate() {
+        if h != FREE {
+            cut[n * D + 1] = true;
+        }
+    }
+    cut
+}
+
+/// The active-set update after a converged pass: a boundary node that has
+/// passed a plate's face is held by it; a held node whose reaction pulls on the
+/// plate is let go. Returns whether anything changed.
+fn update_contact<const D: usize, const N: usize, const S: usize>(
+    model: &Model<'_, D, N, S>,
+    plates: &[FlatPlate],
+    faces: &[Option<f64>],
+    candidates: &[u32],
+    c: &Converged,
+    holder: &mut [u8],
+    largest_force: f64,
+) -> bool
+where
+    Simplex<D, N>: ReferenceSimplex<D, N>,
+{
+    let mesh = &model.problem.mesh;
+    let gap_tolerance = 1e-10 * model.displacement_scale;
+    let force_tolerance = 1e-10 * largest_force.max(f64::MIN_POSITIVE);
+    let mut changed = false;
+    for &node in candidates {
+        let n = node as usize;
+        let dof = n * D + 1;
+        let y = mesh.nodes[n][1] + c.u[dof];
+        match holder[n] {
+            FREE => {
+                for (i, (plate, face)) in plates.iter().zip(faces).enumerate() {
+                    let Some(face) = *face else { continue };
+                    let passed = if plate.above { y > face + gap_tolerance } else { y < face - gap_tolerance };
+                    if passed {
+                        holder[n] = i as u8;
+                        changed = true;
+                        break;
+                    }
+                }
+            }
+            h => {
+                // The reaction on the body: positive y pulls it up.
+                let reaction = c.internal[dof] - model.body_force[dof];
+                let pulls =
+                    if plates[h as usize].above { reaction > force_tolerance } else { reaction < -force_tolerance };
+                if pulls {
+                    holder[n] = FREE;
+                    changed = true;
+                }
+            }
+        }
+    }
+    changed
+}
+
+/// Tool `i`'s sample at the step's end: the force the specimen puts on it and
+/// the deformed area of the boundary facets whose nodes it all holds.
+fn tool_sample<const D: usize, const N: usize, const S: usize>(
+    model: &Model<'_, D, N, S>,
+    c: &Converged,
+    holder: &[u8],
+    i: usize,
+    t: f64,
+    keep_nodes: bool,
+) -> ToolSample
+where
+    Simplex<D, N>: ReferenceSimplex<D, N>,
+{
+    let mesh = &model.problem.mesh;
+    let mut force_y = 0.0;
+    let mut nodes = Vec::new();
+    for (n, &h) in holder.iter().enumerate() {
+        if h as usize == i {
+            let dof = n * D + 1;
+            force_y += model.body_force[dof] - c.internal[dof];
+            nodes.push(n as u32);
+        }
+    }
+    let position = |v: u32| -> [f64; 3] {
+        let mut p = [0.0; 3];
+        for k in 0..D {
+            p[k] = mesh.nodes[v as usize][k] + c.u[v as usize * D + k];
+        }
+        p
+    };
+    let mut area = 0.0;
+    for facet in mesh.boundary_facets() {
+        if !facet.iter().all(|&v| holder[v as usize] as usize == i) {
+            continue;
+        }
+        let p: Vec<[f64; 3]> = facet.iter().map(|&v| position(v)).collect();
+        area += if D == 3 {
+            let a = nalgebra::Vector3::from(p[1]) - nalgebra::Vector3::from(p[0]);
+            let b = nalgebra::Vector3::from(p[2]) - nalgebra::Vector3::from(p[0]);
+            0.5 * a.cross(&b).norm()
+        } else {
+            let length = ((p[1][0] - p[0][0]).powi(2) + (p[1][1] - p[0][1]).powi(2)).sqrt();
+            match model.problem.formulation {
+                Formulation::Axisymmetric => std::f64::consts::PI * (p[0][0] + p[1][0]) * length,
+                f => f.thickness() * length,
+            }
+        };
+    }
+    ToolSample {
+        t_s: t,
+        force_n: [0.0, force_y, 0.0],
+        normal_n: force_y.abs(),
+        tangential_n: 0.0,
+        area_mm2: area,
+        nodes: if keep_nodes { nodes } else { Vec::new() },
+    }
 }
 
 /// What a converged step gives.
@@ -239,6 +412,7 @@ struct Converged {
 /// Why a step attempt failed (retried shorter).
 enum StepFailure {
     Law { element: usize, failure: LawFailure },
+    ContactNotSettled { tool: usize, nodes: Vec<u32> },
     NotConverged { residual: f64, element: usize },
     Singular(crate::solve::SolveError),
 }
@@ -272,6 +446,16 @@ where
     let end = protocol.end_s;
     let mut landings: Vec<f64> = protocol.kinks();
     landings.extend(problem.snapshot_times.iter().copied().filter(|&t| t > 0.0 && t < end));
+    for tool in &problem.tools {
+        landings.extend(tool.kinks(end));
+    }
+    let plates: Vec<FlatPlate> = problem.tools.iter().map(|t| FlatPlate::of(t).expect("checked")).collect();
+    let candidates = boundary_nodes(mesh);
+    let mut tool_tracks: Vec<ToolTrack> = problem
+        .tools
+        .iter()
+        .map(|t| ToolTrack { name: t.name.clone(), samples: vec![ToolSample::default_at(0.0)] })
+        .collect();
     landings.sort_by(f64::total_cmp);
     landings.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * b.abs().max(1.0));
     let max_dt = settings.max_dt_s.unwrap_or(end / 20.0);
@@ -291,7 +475,13 @@ where
         Ok(())
     };
 
-    let mut state = State { t: 0.0, u: vec![0.0; model.num_dofs()], history, stress: vec![0.0; mesh.num_cells() * S] };
+    let mut state = State {
+        t: 0.0,
+        u: vec![0.0; model.num_dofs()],
+        history,
+        stress: vec![0.0; mesh.num_cells() * S],
+        holder: vec![FREE; mesh.num_nodes()],
+    };
     let mut velocity = vec![0.0; model.num_dofs()];
     let mut steps: Vec<StepRecord> = Vec::new();
     let mut snapshots = Vec::new();
@@ -338,8 +528,9 @@ where
         let constraints = if released { &model.released } else { &model.attached };
         let clock = Instant::now();
 
-        // Predictor: the previous step's velocity; after a kink, the step-start
-        // tangent's response to the held dofs' increment.
+        // Predictor: the previous step's velocity; after a kink, and whenever the
+        // contact's active set changes, the tangent's response to the held dofs'
+        // increments.
         let mut u0 = state.u.clone();
         if !after_kink {
             for (x, v) in u0.iter_mut().zip(&velocity) {
@@ -347,15 +538,54 @@ where
             }
         }
         model.prescribe(constraints, t1, &mut u0);
-        let attempt = if after_kink {
-            tangent_predictor(&newton, system, &constraints.held, &state.u, u0, dt, &state.history)
-                .map(|(u, n)| {
-                    factorizations += n;
-                    u
-                })
-                .and_then(|u0| solve_step(&newton, system, &constraints.held, u0, dt, &state.history, largest_force))
-        } else {
-            solve_step(&newton, system, &constraints.held, u0, dt, &state.history, largest_force)
+        let faces: Vec<Option<f64>> = problem
+            .tools
+            .iter()
+            .zip(&plates)
+            .map(|(tool, plate)| (t1 <= tool.release_s * (1.0 + 1e-12)).then(|| plate.face_y(tool, t1)))
+            .collect();
+        let mut holder: Vec<u8> =
+            state.holder.iter().map(|&h| if h != FREE && faces[h as usize].is_none() { FREE } else { h }).collect();
+        let mut start = state.u.clone();
+        let mut predict = after_kink;
+        let mut passes = 0;
+        let attempt = loop {
+            let cut = cut_dofs::<D>(&holder);
+            for (node, &h) in holder.iter().enumerate() {
+                if h != FREE {
+                    u0[node * D + 1] = faces[h as usize].unwrap() - mesh.nodes[node][1];
+                }
+            }
+            let step = StepSystem { system, held: &constraints.held, cut: &cut, dt, history: &state.history };
+            let solved = if predict {
+                tangent_predictor(&newton, &step, &start, u0)
+                    .map(|(u, n)| {
+                        factorizations += n;
+                        u
+                    })
+                    .and_then(|u0| solve_step(&newton, &step, u0, largest_force))
+            } else {
+                solve_step(&newton, &step, u0, largest_force)
+            };
+            let c = match solved {
+                Ok(c) => c,
+                Err(e) => break Err(e),
+            };
+            if plates.is_empty()
+                || !update_contact(&model, &plates, &faces, &candidates, &c, &mut holder, largest_force)
+            {
+                break Ok(c);
+            }
+            passes += 1;
+            if passes > MAX_CONTACT_PASSES {
+                let tool = holder.iter().copied().find(|&h| h != FREE).unwrap_or(0) as usize;
+                let nodes = (0..holder.len() as u32).filter(|&n| holder[n as usize] == tool as u8).collect();
+                break Err(StepFailure::ContactNotSettled { tool, nodes });
+            }
+            factorizations += c.factorizations;
+            start = c.u.clone();
+            u0 = c.u;
+            predict = true;
         };
         let converged = match attempt {
             Ok(c) => c,
@@ -389,13 +619,26 @@ where
         }
         // Accept.
         retry_dt = None;
-        let [bottom, plate] = reactions(&model, &converged.internal, released);
+        let [mut bottom, mut plate] = reactions(&model, &converged.internal, released);
+        if !plates.is_empty() {
+            let keep_nodes = keep(t1);
+            plate = 0.0;
+            for (i, track) in tool_tracks.iter_mut().enumerate() {
+                let sample = tool_sample(&model, &converged, &holder, i, t1, keep_nodes);
+                if plates[i].above {
+                    plate += sample.force_n[1];
+                } else if problem.protocol.support == super::Attachment::Free {
+                    bottom -= sample.force_n[1];
+                }
+                track.samples.push(sample);
+            }
+        }
         largest_force = largest_force.max(bottom.abs()).max(plate.abs());
         for d in 0..model.num_dofs() {
             velocity[d] = (converged.u[d] - state.u[d]) / dt;
         }
         emit_markers(&model, &mut tracks, &mut marker_next, &state.u, &converged.u, state.t, t1, false);
-        state = State { t: t1, u: converged.u, history: converged.history, stress: converged.stress };
+        state = State { t: t1, u: converged.u, history: converged.history, stress: converged.stress, holder };
         steps.push(StepRecord {
             t_s: t1,
             dt_s: dt,
@@ -433,7 +676,7 @@ where
         contact_solves: 0,
         factor_nonzeros,
         num_free_dofs,
-        tools: Vec::new(),
+        tools: tool_tracks,
         segments: Vec::new(),
         force_offset: None,
     })
@@ -459,19 +702,28 @@ where
     [bottom, plate]
 }
 
+/// What one step's solves share: the system of its constraint set, the dofs it
+/// holds and those contact holds, the step size and the history at its start.
+#[derive(Clone, Copy)]
+struct StepSystem<'a> {
+    system: &'a ReducedSystem,
+    held: &'a [bool],
+    cut: &'a [bool],
+    dt: f64,
+    history: &'a [f64],
+}
+
 /// Newton's iteration of one step from `u` (held dofs already prescribed).
 fn solve_step<const D: usize, const N: usize, const S: usize>(
     newton: &Newton<'_, '_, D, N, S>,
-    system: &ReducedSystem,
-    held: &[bool],
+    step: &StepSystem<'_>,
     mut u: Vec<f64>,
-    dt: f64,
-    history: &[f64],
     largest_force: f64,
 ) -> Result<Converged, StepFailure>
 where
     Simplex<D, N>: ReferenceSimplex<D, N>,
 {
+    let StepSystem { system, held, cut, dt, history } = *step;
     let model = newton.model;
     let body = &model.body_force;
     let law_err = |c: CellFailure| StepFailure::Law { element: c.element, failure: c.failure };
@@ -480,7 +732,7 @@ where
         let mut held_norm: f64 = 0.0;
         for d in 0..eval.internal.len() {
             let x = body[d] - eval.internal[d];
-            if held[d] {
+            if held[d] || cut[d] {
                 held_norm = held_norm.max(x.abs());
             } else {
                 r[system.free_of_dof[d] as usize] = x;
@@ -507,7 +759,7 @@ where
             });
         }
         let k = newton.tangent(&eval);
-        let (factor, n) = factor_shifted(system, &k, &model.diagonal_positions)?;
+        let (factor, n) = factor_shifted(system, &k, &model.diagonal_positions, cut)?;
         factorizations += n;
         let mut du = r.clone();
         factor.solve_in_place(&mut du);
@@ -554,18 +806,31 @@ where
 /// jump at a kink), factors `k + beta |diag k|` with the least `beta` of 1e-3,
 /// 1e-2, 0.1, 1 that is: a descent direction for the line search, at the price
 /// of linear convergence while it lasts. Returns the factorizations made.
+///
+/// The dofs marked in `cut` (held by contact) are cut off the matrix
+/// ([`ReducedSystem::factor_decoupled`]): a zero right-hand side there keeps
+/// them where they are.
 fn factor_shifted<'s>(
     system: &'s ReducedSystem,
     k: &[f64],
     diagonal_positions: &[usize],
+    cut: &[bool],
 ) -> Result<(crate::solve::Factor<'s>, usize), StepFailure> {
-    match system.factor(&[(1.0, k)], None) {
+    let any_cut = cut.iter().any(|&c| c);
+    let factor = |shift: Option<&[f64]>| {
+        if any_cut {
+            system.factor_decoupled(&[(1.0, k)], cut, shift)
+        } else {
+            system.factor(&[(1.0, k)], shift)
+        }
+    };
+    match factor(None) {
         Ok(f) => Ok((f, 1)),
         Err(first) => {
             let diag: Vec<f64> = diagonal_positions.iter().map(|&p| k[p].abs()).collect();
             for (i, beta) in [1e-3, 1e-2, 0.1, 1.0].into_iter().enumerate() {
                 let shift: Vec<f64> = diag.iter().map(|d| beta * d).collect();
-                if let Ok(f) = system.factor(&[(1.0, k)], Some(&shift)) {
+                if let Ok(f) = factor(Some(&shift)) {
                     return Ok((f, i + 2));
                 }
             }
@@ -580,33 +845,40 @@ fn factor_shifted<'s>(
 /// factorizations made.
 fn tangent_predictor<const D: usize, const N: usize, const S: usize>(
     newton: &Newton<'_, '_, D, N, S>,
-    system: &ReducedSystem,
-    held: &[bool],
+    step: &StepSystem<'_>,
     u_start: &[f64],
     mut u0: Vec<f64>,
-    dt: f64,
-    history: &[f64],
 ) -> Result<(Vec<f64>, usize), StepFailure>
 where
     Simplex<D, N>: ReferenceSimplex<D, N>,
 {
+    let StepSystem { system, held, cut, dt, history } = *step;
     let model = newton.model;
     let eval = newton
         .evaluate(u_start, dt, history, true)
         .map_err(|c| StepFailure::Law { element: c.element, failure: c.failure })?;
     let k = newton.tangent(&eval);
-    let jump: Vec<f64> = (0..u0.len()).map(|d| if held[d] { u0[d] - u_start[d] } else { 0.0 }).collect();
+    let jump: Vec<f64> = (0..u0.len()).map(|d| if held[d] || cut[d] { u0[d] - u_start[d] } else { 0.0 }).collect();
     let mut coupling = vec![0.0; u0.len()];
     model.pattern.mul_vec(&k, &jump, &mut coupling);
     let mut rhs: Vec<f64> = system
         .dof_of_free
         .iter()
-        .map(|&d| model.body_force[d as usize] - eval.internal[d as usize] - coupling[d as usize])
+        .map(|&d| {
+            let d = d as usize;
+            if cut[d] {
+                0.0
+            } else {
+                model.body_force[d] - eval.internal[d] - coupling[d]
+            }
+        })
         .collect();
-    let (factor, n) = factor_shifted(system, &k, &model.diagonal_positions)?;
+    let (factor, n) = factor_shifted(system, &k, &model.diagonal_positions, cut)?;
     factor.solve_in_place(&mut rhs);
     for (i, &d) in system.dof_of_free.iter().enumerate() {
-        u0[d as usize] = u_start[d as usize] + rhs[i];
+        if !cut[d as usize] {
+            u0[d as usize] = u_start[d as usize] + rhs[i];
+        }
     }
     Ok((u0, n))
 }
@@ -641,6 +913,9 @@ where
             ),
         },
         StepFailure::Singular(e) => model.singular(step, time_s, e),
+        StepFailure::ContactNotSettled { tool, nodes } => {
+            PressError::ContactNotSettled { step, time_s, tool: model.problem.tools[tool].name.clone(), nodes }
+        }
     }
 }
 

@@ -640,7 +640,7 @@ where
                                     .map(|(g, &c)| (if single_group { 1.0 } else { c }, g.stiffness.as_slice()))
                                     .collect();
                                 let factor = system
-                                    .factor_decoupled(&terms, &cut)
+                                    .factor_decoupled(&terms, &cut, None)
                                     .map_err(|e| model.singular(step_index + 1, t1, e))?;
                                 factorizations.set(factorizations.get() + 1);
                                 refactored.set(true);
