@@ -116,8 +116,21 @@ impl Unknown {
 
     /// Default bounds and scale: moduli in [1e-5, 1e2] MPa and viscosities in
     /// [1e-5, 1e5] MPa s on a log scale; Poisson's ratio in [0, 0.499], linear.
+    ///
+    /// A network's keys ([`wagashi_io::bundle::NETWORK_KEYS`]): moduli in
+    /// [1e-5, 1e2] MPa, relaxation times in [1e-3, 1e5] s, the damper in
+    /// [1e-6, 1e4] MPa s and the exponential's stiffening in [1e-3, 50], all on a
+    /// log scale; Mullins's `r` in [1.01, 50] (log), `m` in [1e-6, 1] MPa (log),
+    /// `beta` in [0, 5] (linear).
     pub fn spec(&self) -> ParameterSpec {
+        let label = self.label();
         match self.key {
+            k if k.ends_with(".tau_s") => ParameterSpec::log(label, 1e-3, 1e5),
+            k if k.ends_with(".c_MPa_s") => ParameterSpec::log(label, 1e-6, 1e4),
+            k if k.ends_with(".stiffening") => ParameterSpec::log(label, 1e-3, 50.0),
+            k if k.ends_with("mullins.r") => ParameterSpec::log(label, 1.01, 50.0),
+            k if k.ends_with("mullins.m_MPa") => ParameterSpec::log(label, 1e-6, 1.0),
+            k if k.ends_with("mullins.beta") => ParameterSpec::linear(label, 0.0, 5.0),
             "poisson" => ParameterSpec::linear(self.label(), 0.0, 0.499),
             k if k.ends_with("_MPa_s") => ParameterSpec::log(self.label(), 1e-5, 1e5),
             _ => ParameterSpec::log(self.label(), 1e-5, 1e2),
@@ -135,7 +148,7 @@ pub fn set_parameter(spec: &mut MaterialSpec, key: &str, value: f64) -> bool {
         "c1_MPa_s" => &mut spec.c1_mpa_s,
         "c2_MPa_s" => &mut spec.c2_mpa_s,
         "c3_MPa_s" => &mut spec.c3_mpa_s,
-        _ => return false,
+        _ => return spec.set_network_parameter(key, value),
     };
     *slot = Some(value);
     true
@@ -149,6 +162,7 @@ fn merge_spec(old: &mut MaterialSpec, new: &MaterialSpec) -> Result<(), (&'stati
     let pairs = |s: &MaterialSpec| {
         let mut v: Vec<(&'static str, Option<f64>)> = vec![("poisson", s.poisson)];
         v.extend(s.parameters());
+        v.extend(wagashi_io::bundle::NETWORK_KEYS.iter().map(|&k| (k, s.get(k))));
         v.push(("mullins_d_inf", s.mullins_d_inf));
         v.push(("mullins_strain_c", s.mullins_strain_c));
         v
@@ -409,7 +423,7 @@ impl Campaign {
         for (name, spec) in materials.iter_mut() {
             let s = start.get(name);
             let mut keys: Vec<&'static str> = vec!["poisson"];
-            keys.extend(spec.model.keys().iter().copied());
+            keys.extend(spec.parameter_keys());
             for key in keys {
                 let started = s.and_then(|s| s.get(key));
                 if spec.get(key).is_none() || started.is_some() {
@@ -505,6 +519,19 @@ fn default_starts(materials: &mut BTreeMap<String, MaterialSpec>, unknowns: &[Un
         }
         let v = match u.key {
             "poisson" => 0.3,
+            // A network: the apparent modulus shared by the equilibrium and the
+            // viscous networks, relaxation times spread by decades, a mild
+            // stiffening and softening, a slow damper.
+            "equilibrium.E_MPa" => 0.5 * e,
+            "equilibrium.stiffening" => 1.0,
+            "equilibrium.mullins.r" => 3.0,
+            "equilibrium.mullins.m_MPa" => 0.05 * e,
+            "equilibrium.mullins.beta" => 0.1,
+            k if k.starts_with("viscous[") && k.ends_with(".E_MPa") => 0.25 * e,
+            k if k.starts_with("viscous[") && k.ends_with(".tau_s") => {
+                10f64.powi(k.as_bytes()["viscous[".len()] as i32 - b'0' as i32)
+            }
+            "damper.c_MPa_s" => 0.1 * e,
             "E_MPa" => e,
             "E1_MPa" | "E2_MPa" => 2.0 * e,
             "c1_MPa_s" => 2.0 * e * 0.1,
@@ -651,14 +678,20 @@ impl<'c> Objective<'c> {
         let problem = trial.with_materials(materials.clone());
         // Effects without forward sensitivities, and contact tools: forward
         // differences (module docs).
-        let differenced =
-            problem.effects().check_sensitivities().is_err() || problem.has_tools() || problem.has_damage();
-        // The free unknowns that act on this trial, as engine parameters.
-        let mut acting: Vec<(usize, SensitivityParameter)> = Vec::new();
+        let differenced = problem.effects().check_sensitivities().is_err()
+            || problem.has_tools()
+            || problem.has_damage()
+            || problem.has_network();
+        // The free unknowns that act on this trial: with forward sensitivities,
+        // as engine parameters; differenced, every unknown of a material the
+        // trial holds (a network's parameters have no engine parameter).
+        let mut acting: Vec<(usize, Option<SensitivityParameter>)> = Vec::new();
         if want_jacobian {
             for (col, &i) in self.free.iter().enumerate() {
                 let u = &self.campaign.unknowns[i];
-                if let Some(parameter) = sensitivity_parameter(u, &trial.region_material, &materials) {
+                let parameter = sensitivity_parameter(u, &trial.region_material, &materials);
+                let on_trial = trial.region_material.contains(&u.material);
+                if parameter.is_some() || (differenced && on_trial) {
                     acting.push((col, parameter));
                 }
             }
@@ -669,7 +702,8 @@ impl<'c> Objective<'c> {
             let r = simulate_any(&problem, settings, &mut |_| {});
             (r.map_err(|e| EvalError::with_source(format!("trial {}", trial.name), e))?, None)
         } else {
-            let params: Vec<SensitivityParameter> = acting.iter().map(|a| a.1.clone()).collect();
+            let params: Vec<SensitivityParameter> =
+                acting.iter().map(|a| a.1.clone().expect("an engine parameter unless differenced")).collect();
             let (r, s) = simulate_any_with_sensitivities(&problem, settings, &params, &mut |_| {})
                 .map_err(|e| EvalError::with_source(format!("trial {}", trial.name), e))?;
             (r, Some(s))

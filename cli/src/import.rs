@@ -141,10 +141,12 @@ pub struct CommonArgs {
     pub model: ModelArg,
 
     /// How the plate and the support hold the specimen (tool_contact and support).
-    /// Default glued: the food sticks to the plates in these tests, and the
-    /// plates' friction is not known.
-    #[arg(long, value_enum, default_value_t = ContactArg::Glued)]
-    pub contact: ContactArg,
+    /// Default: glued for --stroke 1 and 2 (the food sticks to the plates in these
+    /// tests, and the plates' friction is not known); frictionless for --stroke
+    /// all, whose plate leaves the specimen between the strokes and touches it
+    /// again (a glued plate would pull it back up).
+    #[arg(long, value_enum)]
+    pub contact: Option<ContactArg>,
 
     /// Which part of the test: 1 (first touch to the end of the first unloading),
     /// 2 (the second stroke's window, times from the first touch) or all (the
@@ -174,6 +176,10 @@ pub enum ModelArg {
     ThreeElement,
     /// Hookean solid.
     Elastic,
+    /// The finite-strain network, in its default structure: an exponential
+    /// equilibrium network with Ogden-Roxburgh softening, two viscous networks
+    /// and a damper (every parameter unknown; `beta` of the softening held at 0).
+    Network,
     /// No [materials] table.
     None,
 }
@@ -243,11 +249,14 @@ pub fn run(args: &ImportArgs) -> anyhow::Result<()> {
                 ModelArg::FourElement => Some(Model::FourElement),
                 ModelArg::ThreeElement => Some(Model::ThreeElement),
                 ModelArg::Elastic => Some(Model::Elastic),
+                ModelArg::Network => Some(Model::Network),
                 ModelArg::None => None,
             },
             contact: match common.contact {
-                ContactArg::Glued => Contact::Glued,
-                ContactArg::Frictionless => Contact::Frictionless,
+                Some(ContactArg::Glued) => Contact::Glued,
+                Some(ContactArg::Frictionless) => Contact::Frictionless,
+                None if common.stroke == StrokeArg::All => Contact::Frictionless,
+                None => Contact::Glued,
             },
             stroke: match common.stroke {
                 StrokeArg::One => StrokeChoice::First,

@@ -259,6 +259,16 @@ impl AnyPress {
         }
     }
 
+    /// Whether a material is a network (run on the Newton path, which carries
+    /// no forward sensitivities: its derivatives are taken by differences).
+    pub fn has_network(&self) -> bool {
+        match self {
+            AnyPress::Plane(p) => p.materials.iter().any(|m| m.network.is_some()),
+            AnyPress::Solid(p) => p.materials.iter().any(|m| m.network.is_some()),
+            AnyPress::Axisymmetric(p) => p.materials.iter().any(|m| m.network.is_some()),
+        }
+    }
+
     /// The problem's effects.
     pub fn effects(&self) -> &Effects {
         match self {

@@ -117,6 +117,30 @@ impl Model {
     }
 }
 
+/// The most viscous networks a network material's flat parameter keys reach
+/// ([`NETWORK_KEYS`]).
+pub const MAX_VISCOUS_NETWORKS: usize = 4;
+
+/// A network material's parameters as flat keys, the paths of their sub-table
+/// keys (`equilibrium.E_MPa`, `viscous[1].tau_s`): what identification names
+/// and frees. [`MaterialSpec::parameter_keys`] gives those of a material's parts.
+pub const NETWORK_KEYS: &[&str] = &[
+    "equilibrium.E_MPa",
+    "equilibrium.stiffening",
+    "equilibrium.mullins.r",
+    "equilibrium.mullins.m_MPa",
+    "equilibrium.mullins.beta",
+    "viscous[0].E_MPa",
+    "viscous[0].tau_s",
+    "viscous[1].E_MPa",
+    "viscous[1].tau_s",
+    "viscous[2].E_MPa",
+    "viscous[2].tau_s",
+    "viscous[3].E_MPa",
+    "viscous[3].tau_s",
+    "damper.c_MPa_s",
+];
+
 /// One material as a bundle writes it. Parameters are optional (see the module docs).
 ///
 /// Equality compares the model and the values only, not where the table was read.
@@ -218,6 +242,31 @@ impl MaterialSpec {
             damper: None,
             origin: None,
         }
+    }
+
+    /// A material of `model` with every parameter unknown: [`Self::new`], and for
+    /// a network its default structure: an exponential equilibrium network with
+    /// Ogden-Roxburgh softening (`beta` given as 0: the softening's scale does not
+    /// grow with the largest energy), two viscous networks and a damper. Why this
+    /// structure: the real double compressions this project holds (fungi steak)
+    /// load on a J-shaped curve (the exponential energy), keep 0.8-0.9 of the
+    /// first stroke's peak in the second at any speed (softening, not viscosity;
+    /// a plastic set would reload to the same stress at the same strain), and
+    /// drop fast on unloading (two viscous networks and a damper); design.md 3.6
+    /// gives a 1D fit of this family.
+    pub fn skeleton(model: Model) -> Self {
+        let mut s = Self::new(model);
+        if model == Model::Network {
+            let mut eq = toml::Table::new();
+            eq.insert("energy".into(), toml::Value::String("exponential".into()));
+            let mut mullins = toml::Table::new();
+            mullins.insert("beta".into(), toml::Value::Float(0.0));
+            eq.insert("mullins".into(), toml::Value::Table(mullins));
+            s.equilibrium = Some(eq);
+            s.viscous = vec![toml::Table::new(), toml::Table::new()];
+            s.damper = Some(toml::Table::new());
+        }
+        s
     }
 
     /// The spec of an engine material (every parameter given).
@@ -336,6 +385,12 @@ impl MaterialSpec {
                 Some(Equilibrium { energy, e_mpa, mullins })
             }
         };
+        if self.viscous.len() > MAX_VISCOUS_NETWORKS {
+            return Err((
+                format!("viscous[{MAX_VISCOUS_NETWORKS}]"),
+                format!("at most {MAX_VISCOUS_NETWORKS} viscous networks"),
+            ));
+        }
         let mut viscous = Vec::new();
         for (i, t) in self.viscous.iter().enumerate() {
             let keys: Vec<&str> = VISCOUS.iter().map(|s| s.key).collect();
@@ -363,17 +418,85 @@ impl MaterialSpec {
         ]
     }
 
+    /// The parameter keys of this material: its model's, or, for a network, the
+    /// [`NETWORK_KEYS`] of the parts it has (`poisson` not included).
+    pub fn parameter_keys(&self) -> Vec<&'static str> {
+        if self.model != Model::Network {
+            return self.model.keys().to_vec();
+        }
+        NETWORK_KEYS.iter().copied().filter(|k| self.network_slot(k).is_some()).collect()
+    }
+
+    /// The sub-table and key of a network key whose part this material has:
+    /// `(table path, key)`; the exponential's `stiffening` only with that energy,
+    /// Mullins keys only with a `[mullins]` table.
+    fn network_slot<'k>(&self, key: &'k str) -> Option<(Vec<String>, &'k str)> {
+        let (path, leaf) = key.rsplit_once('.')?;
+        let parts: Vec<String> = path.split('.').map(str::to_string).collect();
+        self.network_table(&parts)?;
+        let exponential =
+            matches!(self.equilibrium.as_ref()?.get("energy"), Some(toml::Value::String(e)) if e == "exponential");
+        if leaf == "stiffening" && !(path == "equilibrium" && exponential) {
+            return None;
+        }
+        Some((parts, leaf))
+    }
+
+    fn network_table(&self, parts: &[String]) -> Option<&toml::Table> {
+        let first = parts.first()?;
+        let mut table = if let Some(i) = first.strip_prefix("viscous[").and_then(|r| r.strip_suffix(']')) {
+            self.viscous.get(i.parse::<usize>().ok()?)?
+        } else if first == "equilibrium" {
+            self.equilibrium.as_ref()?
+        } else if first == "damper" {
+            self.damper.as_ref()?
+        } else {
+            return None;
+        };
+        for p in &parts[1..] {
+            table = table.get(p)?.as_table()?;
+        }
+        Some(table)
+    }
+
+    /// Sets a network key of a part this material has; false otherwise.
+    pub fn set_network_parameter(&mut self, key: &str, value: f64) -> bool {
+        let Some((parts, leaf)) = self.network_slot(key) else { return false };
+        let first = &parts[0];
+        let mut table = if let Some(i) = first.strip_prefix("viscous[").and_then(|r| r.strip_suffix(']')) {
+            let Ok(i) = i.parse::<usize>() else { return false };
+            &mut self.viscous[i]
+        } else if first == "equilibrium" {
+            self.equilibrium.as_mut().expect("the slot exists")
+        } else {
+            self.damper.as_mut().expect("the slot exists")
+        };
+        for p in &parts[1..] {
+            table = table.get_mut(p).and_then(toml::Value::as_table_mut).expect("the slot exists");
+        }
+        table.insert(leaf.to_string(), toml::Value::Float(value));
+        true
+    }
+
     /// The value of parameter `key` (`poisson` included), if given.
     pub fn get(&self, key: &str) -> Option<f64> {
         if key == "poisson" {
             return self.poisson;
+        }
+        if self.model == Model::Network {
+            let (parts, leaf) = self.network_slot(key)?;
+            return match self.network_table(&parts)?.get(leaf)? {
+                toml::Value::Float(x) => Some(*x),
+                toml::Value::Integer(i) => Some(*i as f64),
+                _ => None,
+            };
         }
         self.parameters().into_iter().find(|(k, _)| *k == key).and_then(|(_, v)| v)
     }
 
     /// The model's keys (then `poisson`) that this material does not give.
     pub fn missing(&self) -> Vec<&'static str> {
-        let mut out: Vec<&'static str> = self.model.keys().iter().copied().filter(|k| self.get(k).is_none()).collect();
+        let mut out: Vec<&'static str> = self.parameter_keys().into_iter().filter(|k| self.get(k).is_none()).collect();
         if self.poisson.is_none() {
             out.push("poisson");
         }
@@ -463,13 +586,21 @@ impl MaterialSpec {
             if self.mullins_d_inf.is_some() || self.mullins_strain_c.is_some() {
                 return Err(err("mullins_d_inf", "a network softens through [equilibrium.mullins]".into()));
             }
-            if self.poisson.is_some() {
-                return self
-                    .to_network()
-                    .map(|_| ())
-                    .map_err(|(key, cause)| err(if key.is_empty() { "model" } else { &key }, cause));
+            // Every key is checked; absent parameters are unknowns (identification
+            // fills them), so the parts are read with placeholders in their place.
+            let mut filled = self.clone();
+            for key in self.missing() {
+                if key != "poisson" {
+                    filled.set_network_parameter(key, placeholder(key));
+                }
             }
-            return Ok(());
+            if filled.poisson.is_none() {
+                filled.poisson = Some(0.3);
+            }
+            return filled
+                .to_network()
+                .map(|_| ())
+                .map_err(|(key, cause)| err(if key.is_empty() { "model" } else { &key }, cause));
         } else if network_tables {
             let key = if self.equilibrium.is_some() {
                 "equilibrium"
@@ -518,6 +649,16 @@ impl MaterialSpec {
             }
         }
         Ok(())
+    }
+}
+
+/// A value inside a network key's bounds, standing for an unknown while the
+/// rest of the material is checked.
+fn placeholder(key: &str) -> f64 {
+    if key.ends_with(".r") {
+        2.0
+    } else {
+        1.0
     }
 }
 

@@ -407,7 +407,7 @@ pub fn to_bundle(raw: &RawTest, options: &ImportOptions) -> Result<ImportedTrial
         },
         materials: options
             .model
-            .map(|m| [(options.material.clone(), crate::bundle::MaterialSpec::new(m))].into_iter().collect())
+            .map(|m| [(options.material.clone(), crate::bundle::MaterialSpec::skeleton(m))].into_iter().collect())
             .unwrap_or_default(),
         protocol: ProtocolSpec {
             tool: Tool::Plate,
