@@ -12,6 +12,16 @@
 //! hold `u_r = 0` at all times and whose reactions are full-circle forces. Markers
 //! of an axisymmetric problem are located, and tracked, in the section: `(r, y)`.
 //!
+//! A specimen that no face or tool holds tangentially (frictionless plate and
+//! floor, or only frictionless plate tools that never turn) is free to slide in
+//! x (and z) and to turn about y. It is held so that its centre of mass and its
+//! mean rotation about y stay where they were: a homogeneous specimen expands
+//! about its centre, as a real one between frictionless plates does, on any
+//! mesh. Snapshots and markers report that frame. Under a curved frictionless
+//! tool (sphere, punch, surface) the node at min x (then min z) is pinned
+//! instead. (The model module's docs, "Free bodies", give the constraints and
+//! how they are imposed.)
+//!
 //! Integrators ([`Integrator`]): the quasi-static implicit scheme with the exact
 //! exponential history update (design.md 3.3, the default), a dynamic
 //! generalized-alpha scheme (lumped mass), and the seed's own scheme (eq. 8:

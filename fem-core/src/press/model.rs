@@ -7,6 +7,54 @@
 //! `axis` hold `u_r = 0` in every constraint set, and no pins against rigid
 //! motions in r are added (the axis holds them: a radial translation is not a
 //! rigid motion of a body of revolution).
+//!
+//! ## Free bodies: the centred hold
+//!
+//! A specimen that no face or tool holds tangentially (frictionless plate and
+//! floor) is free to translate in x (and z) and, in 3D, to turn about y. A real
+//! one expands about its centre, so the engine holds these rigid motions by the
+//! constraints `C u = 0` that keep the specimen's centre of mass and its mean
+//! rotation about y where they were:
+//!
+//! ```text
+//! sum_i w_i u_x,i = 0,   sum_i w_i u_z,i = 0,   sum_i w_i ((z_i - z_c) u_x,i - (x_i - x_c) u_z,i) = 0
+//! ```
+//!
+//! with `w_i = int N_i dV` the node's share of the volume (the lumped mass over the
+//! density) and `(x_c, z_c)` the volume centroid. These are the free body's own
+//! frame: with no lateral force and no moment about y on it, its momentum and
+//! its angular momentum about y stay zero, and their time integrals, linearized,
+//! are the three sums. They are exact for a homogeneous deformation on any mesh:
+//! P1 fields integrate exactly with these weights, and a symmetric strain
+//! about the centroid has zero mean displacement and zero mean rotation. (The
+//! bottom face's mean would be as exact on a block or a cylinder, but a rounded
+//! surface specimen may stand on a few nodes, where its mean rotation is
+//! ill-defined.)
+//!
+//! *How they are imposed.* By elimination on a gauge: statically determinate
+//! pins (node A, min x then min z, holds x and z; in 3D node B, max x at A's z,
+//! holds z) make the step matrix regular, and the displacement `x` solved with
+//! them maps to the constrained one by `u = x - R (C R)^{-1} C x`, `R` the three
+//! rigid motions. Since `K R = 0` and the loads are balanced (`R^T f = 0`), the
+//! reduced matrix `T^T K T` of that elimination is the pinned matrix itself, so
+//! the factorizations (and the linear path's factor-once property) are those of
+//! the pins; the pins carry no load, and strains, stresses, histories and forces
+//! do not see the gauge. The map `x -> u` is applied where displacements leave
+//! the engine ([`Model::reported`]: snapshots; [`Model::marker_positions`]:
+//! markers and their sensitivities, which the map, linear, carries over). With
+//! `(x_c, z_c)` the centroid, `C R` is diagonal: `diag(V, V, J)`, `V` the volume
+//! and `J = sum_i w_i ((x_i - x_c)^2 + (z_i - z_c)^2)`.
+//!
+//! The hold applies where the rigid motions are symmetries of the whole problem:
+//! no contact tools, or tools that are all plates that never turn (their
+//! pressing faces' normals are y; the floor, a frictionless plate, a double
+//! compression's plate that leaves and touches again). Under a curved
+//! frictionless tool (sphere, punch, surface) the contact resists the lateral
+//! motions, `K R != 0`, and the pins stay as they are. The dynamic and seed
+//! integrators keep the pins too; there they carry the inertia of the lateral
+//! expansion (negligible at a press's rates), and the reported displacements are
+//! centred the same way. Axisymmetric problems need none of it: the axis holds
+//! `u_r = 0`.
 
 use nalgebra::{SMatrix, SVector};
 use rayon::prelude::*;
@@ -40,6 +88,86 @@ pub(crate) struct Constraints {
     /// Whether the plate holds the top face (always true with contact tools: the
     /// reactions then follow from the stresses at all times).
     pub plate_attached: bool,
+    /// Whether the set holds a free body by the centred hold (module doc, "Free
+    /// bodies"): its pins are a gauge, removed from reported displacements.
+    pub centred: bool,
+}
+
+/// The centred hold's weights (module doc, "Free bodies").
+pub(crate) struct Centring {
+    /// Per node: its share of the specimen's volume, `int N_i dV` [mm^3].
+    weight: Vec<f64>,
+    /// The volume centroid's x and z [mm] (z = 0 in 2D).
+    centre: [f64; 2],
+    /// The volume `sum_i w_i` [mm^3].
+    volume: f64,
+    /// `J = sum_i w_i ((x_i - x_c)^2 + (z_i - z_c)^2)` [mm^5] (3D; 0 in 2D).
+    polar: f64,
+}
+
+impl Centring {
+    fn new<const D: usize, const N: usize>(
+        mesh: &crate::mesh::SimplexMesh<D, N>,
+        geometry: &[CellGeometry<D, N>],
+    ) -> Self
+    where
+        Simplex<D, N>: ReferenceSimplex<D, N>,
+    {
+        let mut weight = vec![0.0; mesh.num_nodes()];
+        for (e, cell) in mesh.cells.iter().enumerate() {
+            let w = geometry[e].weight / N as f64;
+            for &v in cell {
+                weight[v as usize] += w;
+            }
+        }
+        let volume: f64 = weight.iter().sum();
+        let lateral = |p: &[f64; D]| [p[0], if D == 3 { p[2] } else { 0.0 }];
+        let mut centre = [0.0; 2];
+        for (w, p) in weight.iter().zip(&mesh.nodes) {
+            let q = lateral(p);
+            centre[0] += w * q[0];
+            centre[1] += w * q[1];
+        }
+        centre = centre.map(|c| c / volume);
+        let polar = if D == 3 {
+            weight
+                .iter()
+                .zip(&mesh.nodes)
+                .map(|(w, p)| w * ((p[0] - centre[0]).powi(2) + (p[2] - centre[1]).powi(2)))
+                .sum()
+        } else {
+            0.0
+        };
+        Self { weight, centre, volume, polar }
+    }
+
+    /// The rigid motion `[a_x, a_z, omega]` that `u` holds: translations along x
+    /// and z [mm] and the rotation about y through the centroid [rad], so that
+    /// `u` minus it meets `C u = 0`.
+    fn rigid<const D: usize>(&self, nodes: &[[f64; D]], u: &[f64]) -> [f64; 3] {
+        let (mut ax, mut az, mut moment) = (0.0, 0.0, 0.0);
+        for (i, (w, p)) in self.weight.iter().zip(nodes).enumerate() {
+            let ux = u[i * D];
+            ax += w * ux;
+            if D == 3 {
+                let uz = u[i * D + 2];
+                az += w * uz;
+                moment += w * ((p[2] - self.centre[1]) * ux - (p[0] - self.centre[0]) * uz);
+            }
+        }
+        let omega = if D == 3 { moment / self.polar } else { 0.0 };
+        [ax / self.volume, az / self.volume, omega]
+    }
+
+    /// The displacement of the rigid motion `rigid` at the point `p` (x and z parts).
+    fn displacement_at(&self, rigid: &[f64; 3], p: &[f64]) -> [f64; 2] {
+        let [ax, az, omega] = *rigid;
+        if p.len() == 3 {
+            [ax + omega * (p[2] - self.centre[1]), az - omega * (p[0] - self.centre[0])]
+        } else {
+            [ax, 0.0]
+        }
+    }
 }
 
 /// A boundary cell's reaction functional: the y reaction summed over a node set is
@@ -92,6 +220,8 @@ pub(crate) struct Model<'p, const D: usize, const N: usize, const S: usize> {
     /// The `finite-strain` blend when that effect runs (the finite-strain
     /// kinematics of `super::inelastic`); `None`: small strain.
     pub finite: Option<f64>,
+    /// The centred hold's weights when a constraint set holds a free body.
+    pub centring: Option<Centring>,
 }
 
 impl<'p, const D: usize, const N: usize, const S: usize> Model<'p, D, N, S>
@@ -177,10 +307,17 @@ where
         // Tools that hold tangentially (glued, friction) hold the rigid motions too:
         // no pins then.
         let tools_hold = problem.tools.iter().any(|t| !matches!(t.contact, crate::press::ToolContact::Frictionless));
+        // The centred hold needs the rigid motions to be symmetries of the contact:
+        // plates that never turn (module doc, "Free bodies").
+        let tools_flat = problem.tools.iter().all(|t| {
+            matches!(t.shape, crate::press::ToolShape::Plate { .. })
+                && t.keyframes.iter().all(|k| k.rotation_rad == [0.0; 3])
+        });
         // With tools, no plate holds the top: both sets hold only the support (and
         // count as "attached": the reactions follow from the stresses throughout).
         let attached = if with_tools {
-            let mut c = constraints::<D, N>(mesh, &bottom, &top, axis, problem.protocol.support, None, tools_hold);
+            let mut c =
+                constraints::<D, N>(mesh, &bottom, &top, axis, problem.protocol.support, None, tools_hold, tools_flat);
             c.plate_attached = true;
             c
         } else {
@@ -192,13 +329,15 @@ where
                 problem.protocol.support,
                 Some(problem.protocol.plate),
                 false,
+                true,
             )
         };
         let released = if with_tools {
             attached.clone()
         } else {
-            constraints::<D, N>(mesh, &bottom, &top, axis, problem.protocol.support, None, false)
+            constraints::<D, N>(mesh, &bottom, &top, axis, problem.protocol.support, None, false, true)
         };
+        let centring = (attached.centred || released.centred).then(|| Centring::new(mesh, &geometry));
 
         let functionals =
             [functional(&geometry, &topology, &bottom, 1.0), functional(&geometry, &topology, &top, -1.0)];
@@ -253,6 +392,7 @@ where
             })
         });
         Ok(Self {
+            centring,
             point,
             finite,
             diagonal_positions,
@@ -356,16 +496,56 @@ where
         det * hoop_stretch
     }
 
-    /// Marker positions for the displacement `u`.
-    pub fn marker_positions(&self, u: &[f64]) -> Vec<Vec<f64>> {
+    /// The rigid motion to remove from a displacement `u` at time `t` (module doc,
+    /// "Free bodies"), when the constraint set in force there is centred.
+    fn gauge(&self, u: &[f64], t: f64) -> Option<(&Centring, [f64; 3])> {
+        let centring = self.centring.as_ref().filter(|_| self.constraints_at(t).centred)?;
+        Some((centring, centring.rigid(&self.problem.mesh.nodes, u)))
+    }
+
+    /// The displacement `u` at time `t` as reported: with the centred hold, the
+    /// gauge's rigid motion removed (module doc, "Free bodies"); otherwise `u`.
+    pub fn reported(&self, u: &[f64], t: f64) -> Vec<f64> {
+        let mut u = u.to_vec();
+        if let Some((centring, rigid)) = self.gauge(&u, t) {
+            for (i, p) in self.problem.mesh.nodes.iter().enumerate() {
+                let [rx, rz] = centring.displacement_at(&rigid, p);
+                u[i * D] -= rx;
+                if D == 3 {
+                    u[i * D + 2] -= rz;
+                }
+            }
+        }
+        u
+    }
+
+    /// Marker positions for the displacement `u` at time `t` (as reported: see
+    /// [`Model::reported`]; the map is linear in `u`, so sensitivities follow it).
+    pub fn marker_positions(&self, u: &[f64], t: f64) -> Vec<Vec<f64>> {
+        let gauge = self.gauge(u, t);
         self.markers
             .iter()
             .zip(&self.problem.markers)
             .map(|(m, req)| {
                 let cell = &self.problem.mesh.cells[m.cell];
+                // The rigid motion where the marker's cell interpolates it (a marker a
+                // little outside a faceted surface is projected in).
+                let rigid = gauge.map_or([0.0; 2], |(centring, rigid)| {
+                    let nodes = &self.problem.mesh.nodes;
+                    let p: Vec<f64> = (0..D)
+                        .map(|k| (0..N).map(|a| m.barycentric[a] * nodes[cell[a] as usize][k]).sum::<f64>())
+                        .collect();
+                    centring.displacement_at(&rigid, &p)
+                });
                 (0..D)
                     .map(|k| {
+                        let shift = match k {
+                            0 => rigid[0],
+                            2 => rigid[1],
+                            _ => 0.0,
+                        };
                         req.position[k] + (0..N).map(|a| m.barycentric[a] * u[cell[a] as usize * D + k]).sum::<f64>()
+                            - shift
                     })
                     .collect()
             })
@@ -396,8 +576,10 @@ where
 
 /// The held dofs: the floor's (bottom), the plate's (top, when `plate` is given),
 /// `u_r` on the `axis` nodes of an axisymmetric problem, and otherwise, when no
-/// face is glued and no tool holds tangentially (`tools_hold`), the pins against
-/// rigid motions in the x(-z) plane.
+/// face is glued and no tool holds tangentially (`tools_hold`), the gauge pins
+/// against rigid motions in the x(-z) plane: the centred hold's when the tools
+/// allow it (`tools_flat`, module doc, "Free bodies"), plain pins otherwise.
+#[allow(clippy::too_many_arguments)]
 fn constraints<const D: usize, const N: usize>(
     mesh: &crate::mesh::SimplexMesh<D, N>,
     bottom: &[u32],
@@ -406,6 +588,7 @@ fn constraints<const D: usize, const N: usize>(
     support: Attachment,
     plate: Option<Attachment>,
     tools_hold: bool,
+    tools_flat: bool,
 ) -> Constraints
 where
     Simplex<D, N>: ReferenceSimplex<D, N>,
@@ -441,9 +624,11 @@ where
     }
     // Statically determinate pins against the rigid motions in the x(-z) plane when
     // no face is glued: node A (min x, then min z) holds x and z; in 3D node B (max x
-    // at A's z) holds z. They carry no load, so they add no stress.
+    // at A's z) holds z. They carry no load, so they add no stress; with the centred
+    // hold they are its gauge.
     let some_face_glued = support == Attachment::Glued || plate == Some(Attachment::Glued) || tools_hold;
-    if !some_face_glued && axis.is_none() {
+    let pinned = !some_face_glued && axis.is_none();
+    if pinned {
         let key = |i: u32| {
             let p = mesh.nodes[i as usize];
             (p[0], if D == 3 { p[2] } else { 0.0 })
@@ -468,7 +653,7 @@ where
             }
         }
     }
-    Constraints { held, plate_dofs, plate_attached: plate.is_some() }
+    Constraints { held, plate_dofs, plate_attached: plate.is_some(), centred: pinned && tools_flat }
 }
 
 fn functional<const D: usize, const N: usize, const S: usize>(

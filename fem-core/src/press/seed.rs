@@ -171,7 +171,7 @@ where
         if schedule.is_snapshot(t, end) {
             snapshots.push(Snapshot {
                 t_s: t,
-                displacement: y[..ndof].to_vec(),
+                displacement: model.reported(&y[..ndof], t),
                 cell_stress: cell_stress(&model, &layout, &y),
             });
         }

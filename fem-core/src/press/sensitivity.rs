@@ -441,13 +441,13 @@ impl<const S: usize> Tracker<S> {
         let (t0, t1) = (step.t0, step.t0 + step.dt);
         let ndof = model.num_dofs();
         // marker_positions adds the initial position: subtract it (the derivative is linear in du).
-        let base = model.marker_positions(&vec![0.0; ndof]);
-        let d0: Vec<Vec<Vec<f64>>> = old_u.chunks(ndof).map(|u| model.marker_positions(u)).collect();
+        let base = model.marker_positions(&vec![0.0; ndof], t1);
+        let d0: Vec<Vec<Vec<f64>>> = old_u.chunks(ndof).map(|u| model.marker_positions(u, t0)).collect();
         let new_u = match &self.state {
             TangentStates::Cells(state) => &state.u,
             TangentStates::Nodal(batch) => &batch.du0,
         };
-        let d1: Vec<Vec<Vec<f64>>> = new_u.chunks(ndof).map(|u| model.marker_positions(u)).collect();
+        let d1: Vec<Vec<Vec<f64>>> = new_u.chunks(ndof).map(|u| model.marker_positions(u, t1)).collect();
         for (m, req) in model.problem.markers.iter().enumerate() {
             while self.marker_next[m] < req.times.len() && req.times[self.marker_next[m]] <= t1 * (1.0 + 1e-12) {
                 let t = req.times[self.marker_next[m]];

@@ -950,7 +950,7 @@ where
         if schedule.is_snapshot(t1, end) {
             snapshots.push(Snapshot {
                 t_s: t1,
-                displacement: outcome.state.u.clone(),
+                displacement: model.reported(&outcome.state.u, t1),
                 cell_stress: outcome.stress.iter().flat_map(|s| s.iter().copied()).collect(),
             });
         }
@@ -1562,8 +1562,8 @@ pub(crate) fn emit_markers<const D: usize, const N: usize, const S: usize>(
     if tracks.is_empty() {
         return;
     }
-    let p0 = model.marker_positions(u0);
-    let p1 = model.marker_positions(u1);
+    let p0 = model.marker_positions(u0, t0);
+    let p1 = model.marker_positions(u1, t1);
     for (m, req) in model.problem.markers.iter().enumerate() {
         while next[m] < req.times.len() {
             let t = req.times[next[m]];

@@ -39,6 +39,27 @@
 //! - `[[protocol.tools]]` (optional): more rigid tools, see below.
 //! - `[effects]` (optional): candidate effects of the gap diagnosis, see below.
 //!
+//! ## Markers: their frame
+//!
+//! `markers.csv` ([`MarkerSeries`]) gives each marker's position over time,
+//! `marker,t_s,x_mm,y_mm[,z_mm]`, in the specimen's frame: mm, y up, the bottom
+//! on y = 0, a block spanning `[0, W] x [0, H] x [0, T]` (2D: `[0, W] x [0, H]`),
+//! a cylinder's axis on x = z = 0. A marker is the material point at its position
+//! at `t_s = 0` (that row defines it; a fit takes no residual from it). The
+//! simulated markers ([`Bundle::simulated_markers`], `markers.csv` of `wagashi
+//! press`) are in the same frame, at the measured times.
+//!
+//! The frame is fixed to the specimen's initial position. A specimen that no
+//! face holds tangentially (frictionless plate and support, or frictionless
+//! plate tools) stays centred laterally: its centre of mass does not move in x
+//! (or z) and it does not turn about y (`fem_core::press`), so a specimen that
+//! deforms homogeneously expands about its centre, as a real one between
+//! frictionless plates does. Measured markers are compared as given: a real
+//! specimen that slid sideways as a whole should have that drift taken out
+//! first (e.g. its markers' mean lateral motion), since the simulated one does
+//! not slide. Under a curved frictionless tool (`sphere`, `punch`, `surface`)
+//! the simulated specimen is pinned at its node of least x (then z) instead.
+//!
 //! ## Effects
 //!
 //! `[effects]` switches on model extensions of `fem_core::effects` (the
