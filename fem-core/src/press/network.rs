@@ -651,7 +651,11 @@ where
             newton_iterations: converged.iterations,
         });
         if keep(t1) {
-            snapshots.push(Snapshot { t_s: t1, displacement: state.u.clone(), cell_stress: state.stress.clone() });
+            snapshots.push(Snapshot {
+                t_s: t1,
+                displacement: model.reported(&state.u, t1),
+                cell_stress: state.stress.clone(),
+            });
         }
         let landed = (t1 - next_landing).abs() <= 1e-12 * next_landing.abs().max(1.0);
         after_kink = landed;

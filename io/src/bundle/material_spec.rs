@@ -494,9 +494,14 @@ impl MaterialSpec {
         self.parameters().into_iter().find(|(k, _)| *k == key).and_then(|(_, v)| v)
     }
 
-    /// The model's keys (then `poisson`) that this material does not give.
+    /// The model's keys (then `poisson`) that this material does not give;
+    /// a network key with a default (Mullins' `beta`) is never missing.
     pub fn missing(&self) -> Vec<&'static str> {
-        let mut out: Vec<&'static str> = self.parameter_keys().into_iter().filter(|k| self.get(k).is_none()).collect();
+        let mut out: Vec<&'static str> = self
+            .parameter_keys()
+            .into_iter()
+            .filter(|k| self.get(k).is_none() && network_default(k).is_none())
+            .collect();
         if self.poisson.is_none() {
             out.push("poisson");
         }
@@ -508,6 +513,9 @@ impl MaterialSpec {
         let need = |key: &'static str| self.get(key).ok_or(MissingParameter { key });
         Ok(match self.model {
             Model::Network => {
+                if let Some(key) = self.missing().first() {
+                    return Err(MissingParameter { key });
+                }
                 let net = self.to_network().map_err(|_| MissingParameter { key: "network" })?;
                 Material::network(net).map_err(|_| MissingParameter { key: "network" })?.rheology
             }
@@ -590,7 +598,13 @@ impl MaterialSpec {
             // fills them), so the parts are read with placeholders in their place.
             let mut filled = self.clone();
             for key in self.missing() {
-                if key != "poisson" {
+                // A key given with a value of the wrong type is not absent: the
+                // read below refuses it.
+                let given = self
+                    .network_slot(key)
+                    .and_then(|(parts, leaf)| self.network_table(&parts).map(|t| t.contains_key(leaf)))
+                    .unwrap_or(false);
+                if key != "poisson" && !given {
                     filled.set_network_parameter(key, placeholder(key));
                 }
             }
@@ -650,6 +664,20 @@ impl MaterialSpec {
         }
         Ok(())
     }
+}
+
+/// The default of a network key ([`NETWORK_KEYS`]) from the law's tables, if it has one.
+fn network_default(key: &str) -> Option<f64> {
+    use fem_core::material::network::parameters::{DAMPER, EQUILIBRIUM, MULLINS, VISCOUS};
+    let (path, leaf) = key.rsplit_once('.')?;
+    let table = match path {
+        "equilibrium" => EQUILIBRIUM,
+        "equilibrium.mullins" => MULLINS,
+        "damper" => DAMPER,
+        _ if path.starts_with("viscous[") => VISCOUS,
+        _ => return None,
+    };
+    table.iter().find(|s| s.key == leaf)?.default
 }
 
 /// A value inside a network key's bounds, standing for an unknown while the
