@@ -248,6 +248,73 @@ mod surface {
         assert!(rel_close(s.signed_volume(None), 9000.0 / 6.0, 1e-5));
     }
 
+    /// The GLB of [`glb`] as a `.gltf` whose buffer has the URI `uri`, with its
+    /// data in `model/tets.bin` and a copy outside the model's folder
+    /// (`tets.bin`, `secret.bin`): the `.gltf` file's path.
+    fn gltf_with_uri(dir: &Path, uri: &str) -> PathBuf {
+        let glb = glb();
+        let json_len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+        let json = std::str::from_utf8(&glb[20..20 + json_len]).unwrap().trim_end();
+        let bin = &glb[20 + json_len + 8..];
+        let model = dir.join("model");
+        std::fs::create_dir_all(&model).unwrap();
+        for file in [model.join("tets.bin"), dir.join("tets.bin"), dir.join("secret.bin")] {
+            std::fs::write(file, bin).unwrap();
+        }
+        let json = json.replace(r#""buffers":[{"byteLength""#, &format!(r#""buffers":[{{"uri":{uri:?},"byteLength""#));
+        let path = model.join("tets.gltf");
+        std::fs::write(&path, json).unwrap();
+        path
+    }
+
+    /// Buffer URIs name files inside the glTF file's folder, or are `data:`
+    /// URIs: absolute paths, `file:` and other schemes, `..` (also
+    /// percent-encoded) and symlinks out are refused, naming the buffer, before
+    /// anything is read; escapes that do not decode to UTF-8 are refused too
+    /// (the gltf crate's own loader panics on them).
+    #[test]
+    fn gltf_buffer_uris_stay_in_the_files_folder() {
+        let dir = tempfile::tempdir().unwrap();
+        let root = dir.path();
+        // Inside: plain, percent-encoded and through a subfolder.
+        for uri in ["tets.bin", "tet%73.bin", "./sub/../tets.bin"] {
+            std::fs::create_dir_all(root.join("model/sub")).unwrap();
+            let s = read(&gltf_with_uri(root, uri));
+            assert_eq!((s.num_vertices(), s.num_triangles()), (8, 8), "{uri}");
+        }
+        let outside = root.join("secret.bin").display().to_string();
+        let mut refused = vec![
+            ("../tets.bin", "leaves the glTF file's folder"),
+            ("%2e%2e/tets.bin", "leaves the glTF file's folder"),
+            ("..%2Fsecret.bin", "leaves the glTF file's folder"),
+            ("sub/../../secret.bin", "leaves the glTF file's folder"),
+            (outside.as_str(), "leaves the glTF file's folder"),
+            ("%FF%FE.bin", "do not decode to UTF-8"),
+            ("http://example.com/tets.bin", "has the scheme \"http\""),
+        ];
+        let file_uri = format!("file://{outside}");
+        refused.push((file_uri.as_str(), "has the scheme \"file\""));
+        for (uri, why) in refused {
+            let path = gltf_with_uri(root, uri);
+            let err = read_surface(&path, &SurfaceOptions::default()).unwrap_err();
+            let msg = err.to_string();
+            assert!(matches!(err, SurfaceError::Format { .. }), "{uri}: {err:?}");
+            assert!(msg.starts_with(&format!("{}: glTF buffer 0: URI ", path.display())), "{uri}: {msg}");
+            assert!(msg.contains(why) && !msg.contains('\n'), "{uri}: {msg}");
+        }
+        #[cfg(unix)]
+        {
+            let path = gltf_with_uri(root, "link.bin");
+            std::os::unix::fs::symlink(root.join("secret.bin"), root.join("model/link.bin")).unwrap();
+            let msg = read_surface(&path, &SurfaceOptions::default()).unwrap_err().to_string();
+            assert!(msg.contains("glTF buffer 0: URI \"link.bin\" leaves the glTF file's folder"), "{msg}");
+        }
+        // A data: URI is decoded (here too short for the buffer).
+        let path = gltf_with_uri(root, "data:application/octet-stream;base64,AAAA");
+        let msg = read_surface(&path, &SurfaceOptions::default()).unwrap_err().to_string();
+        assert!(msg.contains("glTF buffer 0: 3 bytes, fewer than its byteLength 72"), "{msg}");
+    }
+
     fn refusal(name: &str, content: &[u8]) -> (SurfaceError, String) {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join(name);
