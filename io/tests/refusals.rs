@@ -48,6 +48,19 @@ fn missing_materials_file() {
     assert!(msg.starts_with(&format!("{}: cannot read: ", path.display())), "{msg}");
 }
 
+/// Devices, FIFOs and folders are refused before they are opened (`/dev/zero`
+/// would otherwise be read without end), naming the file.
+#[cfg(unix)]
+#[test]
+fn a_materials_file_or_bundle_that_is_not_a_regular_file() {
+    let msg = read_materials_file("/dev/zero").unwrap_err().to_string();
+    assert_eq!(msg, "/dev/zero: cannot read: not a regular file (a character device)");
+    let b = bundle(&[]);
+    std::fs::create_dir(b.dir.join("experiment.toml")).unwrap();
+    let msg = read_bundle(&b.dir).unwrap_err().to_string();
+    assert!(msg.ends_with("experiment.toml: cannot read: not a regular file (a folder)"), "{msg}");
+}
+
 // ---- a missing required key ----------------------------------------------
 
 #[test]
