@@ -71,8 +71,7 @@ use fem_core::press::{
 use wagashi_io::vtu::{write_pvd, write_vtu, VtuFields};
 use wagashi_io::{
     read_bundle_with, read_materials_file, write_atomic, write_bundle, AtomicDir, Bundle, BundleWrite, ForceSample,
-    ForceSeries,
-    MarkerSeries, SurfaceMeshing, WriteError,
+    ForceSeries, MarkerSeries, SurfaceMeshing, WriteError,
 };
 
 use crate::plot::force_svg;

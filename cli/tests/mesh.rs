@@ -8,7 +8,8 @@ use std::path::{Path, PathBuf};
 mod common;
 
 use common::{
-    assert_one_line_error, assert_success, fixture, shared_data_path, skip_without_shared_data, stderr, stdout, wagashi_in,
+    assert_one_line_error, assert_success, fixture, shared_data_path, skip_without_shared_data, stderr, stdout,
+    wagashi_in,
 };
 use wagashi_io::tetmesh::read_tetmesh;
 

@@ -382,7 +382,10 @@ fn end_before_the_last_push() {
 fn end_before_the_release() {
     let toml = edit(EXPERIMENT, "end_s = 400.0", "end_s = 200.0");
     let msg = refused_toml(&toml, "end_s", "protocol.end_s");
-    assert!(msg.ends_with("protocol.end_s: 200 s is before release_s (210.93 s): the run must go on until the release"), "{msg}");
+    assert!(
+        msg.ends_with("protocol.end_s: 200 s is before release_s (210.93 s): the run must go on until the release"),
+        "{msg}"
+    );
     // Ending at the release is fine.
     let toml = edit(EXPERIMENT, "end_s = 400.0", "end_s = 210.93");
     read_bundle(with_experiment(&toml).dir).unwrap();

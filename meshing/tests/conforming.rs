@@ -561,10 +561,9 @@ fn the_defect_corpus_is_refused_with_each_defect_named() {
 
 #[test]
 fn size_refinement_bounds_every_tet_and_keeps_the_boundary() {
-    for (name, s, h) in [
-        ("cube", Surface::cuboid([0.0, 0.0, 0.0], [10.0, 20.0, 5.0], "cube"), 2.0),
-        ("bunny", bunny(), 0.5),
-    ] {
+    for (name, s, h) in
+        [("cube", Surface::cuboid([0.0, 0.0, 0.0], [10.0, 20.0, 5.0], "cube"), 2.0), ("bunny", bunny(), 0.5)]
+    {
         let out = conforming_mesh(&s, &ConformingOptions::new(h)).unwrap();
         let r = check_conforming(&out.mesh, &s);
         let max_volume = h * h * h / (6.0 * 2f64.sqrt());

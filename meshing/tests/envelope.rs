@@ -5,7 +5,7 @@
 //! `tests/support/data.rs`), read with `tobj` (in f32), the corpus tests' files
 //! with `tests/common`'s reader (in f64).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::OnceLock;
 use std::time::Instant;
 

@@ -70,7 +70,8 @@ pub fn read_bundle_with(
 ) -> Result<Bundle, BundleError> {
     let dir = dir.as_ref();
     let file = dir.join(EXPERIMENT_FILE);
-    let text = crate::input::read_to_string(&file).map_err(|source| BundleError::Read { file: file.clone(), source })?;
+    let text =
+        crate::input::read_to_string(&file).map_err(|source| BundleError::Read { file: file.clone(), source })?;
     read_bundle_from_str(dir, &text, external)
 }
 

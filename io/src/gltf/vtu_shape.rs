@@ -33,7 +33,8 @@ impl VtuShape {
     /// Reads `path`; errors name the file and what is wrong.
     pub fn read(path: impl AsRef<Path>) -> Result<Self, GltfError> {
         let path = path.as_ref();
-        let text = crate::input::read_to_string(path).map_err(|source| GltfError::Read { path: path.into(), source })?;
+        let text =
+            crate::input::read_to_string(path).map_err(|source| GltfError::Read { path: path.into(), source })?;
         Self::parse(&text, path)
     }
 

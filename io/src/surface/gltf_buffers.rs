@@ -144,7 +144,10 @@ mod tests {
         assert_eq!(check(&folder, "a%20b.bin"), file("a b.bin"));
         assert_eq!(check(&folder, "bin/../a b.bin"), file("bin/../a b.bin"));
         assert_eq!(check(&folder, "missing.bin"), file("missing.bin"));
-        assert_eq!(check(&folder, "data:application/octet-stream;base64,AAECAw=="), Ok(Resolved::Data(vec![0, 1, 2, 3])));
+        assert_eq!(
+            check(&folder, "data:application/octet-stream;base64,AAECAw=="),
+            Ok(Resolved::Data(vec![0, 1, 2, 3]))
+        );
         for (uri, why) in [
             ("../x.bin", "leaves the glTF file's folder"),
             ("%2e%2e/x.bin", "leaves the glTF file's folder"),

@@ -25,6 +25,7 @@ pub fn bunny() -> Surface {
 
 /// The OBJ file `rel` of the shared data folder (the test has checked that the
 /// folder is there), read as [`read_obj_file`] does.
+#[allow(dead_code)]
 pub fn read_obj(rel: &str) -> Surface {
     read_obj_file(&data(rel))
 }
