@@ -57,10 +57,9 @@ pub fn shared_data(what: &str) -> Option<PathBuf> {
         path.display(),
         std::env::var("CI").unwrap_or_default()
     );
-    let _ = writeln!(
-        std::io::stderr().lock(),
-        "{test}: skipped: needs ../shared/data ({what}); not present beside the checkout"
-    );
+    // One write, so that the lines of tests running in parallel do not mix.
+    let line = format!("{test}: skipped: needs ../shared/data ({what}); not present beside the checkout\n");
+    let _ = std::io::stderr().lock().write_all(line.as_bytes());
     None
 }
 
