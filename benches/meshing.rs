@@ -7,7 +7,7 @@
 //!   cospherical): the fully degenerate case, decided by the perturbation.
 //! - `conforming/...`: the whole conforming mesher (`conforming_mesh`, default
 //!   quality bounds) at the sizes of the TetGen comparison
-//!   (`meshing/tests/tetgen_golden.rs`): the shared Stanford bunny at 0.3 mm,
+//!   (`meshing/tests/tetgen_golden.rs`): the Stanford bunny (`tests/fixtures`) at 0.3 mm,
 //!   and the CAD models from Debian packages, CGAL's fandisk at 0.05 mm
 //!   (`libcgal-demo`'s `data.tar.gz`, read with `tar`) and Netgen's hinge at
 //!   2 mm (`netgen-doc`), and CGAL's armadillo scan at 8 mm (`libcgal-demo`;
@@ -74,7 +74,7 @@ fn models() -> Vec<(&'static str, Surface, f64)> {
     let read = |path: &str| {
         wagashi_io::surface::read_surface(path, &wagashi_io::surface::SurfaceOptions::default()).map(|s| s.surface)
     };
-    match read("../shared/data/meshes/npm_bunny.obj") {
+    match read(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/npm_bunny.obj")) {
         Ok(s) => out.push(("bunny_0.3", s, 0.3)),
         Err(e) => eprintln!("bunny skipped: {e}"),
     }

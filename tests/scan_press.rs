@@ -11,13 +11,16 @@
 //!
 //! It reads the YCB pear from `<workspace>/../shared/data`; without that folder it
 //! is skipped with a note, except on CI (`CI` set to anything but `false` or `0`),
-//! where it fails. The Khronos glTF-Validator check follows `tests/browser`: it is
+//! where it fails (`tests/support/data.rs`). The Khronos glTF-Validator check follows `tests/browser`: it is
 //! skipped with a note when Node.js or the npm package is missing, except on CI or
 //! with `WAGASHI_BROWSER_TESTS=required`.
 
 #[path = "../examples/scan_press.rs"]
 #[allow(dead_code)]
 mod scan_press;
+
+#[path = "support/data.rs"]
+mod data;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -35,25 +38,12 @@ use wagashi_io::gltf::{ShapeCells, VtuShape};
 /// seconds (about 1,200 nodes and 5,000 tets for the pear).
 const SIZE_MM: f64 = 8.0;
 
-fn on_ci() -> bool {
-    std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "false" && v != "0")
-}
-
-/// The run, shared by the tests below; `None` when the shared data is absent (not on CI).
+/// The run, shared by the tests below; `None` (after saying so) when the shared
+/// data is absent (not on CI).
 fn outcome() -> Option<&'static Outcome> {
-    static RUN: OnceLock<Option<Outcome>> = OnceLock::new();
-    RUN.get_or_init(|| {
-        let data = scan_press::shared_data();
-        if !data.is_dir() {
-            assert!(
-                !on_ci(),
-                "this test reads the YCB pear scan in {} (the shared data folder beside the workspace), \
-                 which is missing; on CI it must be there",
-                data.display()
-            );
-            eprintln!("note: scan_press skipped: the shared data folder {} is missing", data.display());
-            return None;
-        }
+    data::shared_data("the YCB pear scan")?;
+    static RUN: OnceLock<Outcome> = OnceLock::new();
+    Some(RUN.get_or_init(|| {
         let options = Options {
             size_mm: SIZE_MM,
             output: Path::new(env!("CARGO_TARGET_TMPDIR")).join("scan_press/out"),
@@ -62,9 +52,8 @@ fn outcome() -> Option<&'static Outcome> {
         let clock = Instant::now();
         let out = scan_press::run(&options, &mut |line| eprintln!("{line}")).unwrap_or_else(|e| panic!("{e}"));
         eprintln!("scan_press pipeline: {:.1} s in all", clock.elapsed().as_secs_f64());
-        Some(out)
-    })
-    .as_ref()
+        out
+    }))
 }
 
 fn sphere(out: &Outcome) -> &ToolTrack {
@@ -316,7 +305,7 @@ fn same_json(a: &serde_json::Value, b: &serde_json::Value) -> bool {
 /// root package lies outside the workspace.
 fn khronos_validate(glb: &Path) -> Option<serde_json::Value> {
     let browser: PathBuf = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/browser");
-    let required = on_ci() || std::env::var("WAGASHI_BROWSER_TESTS").is_ok_and(|v| v == "required");
+    let required = data::on_ci() || std::env::var("WAGASHI_BROWSER_TESTS").is_ok_and(|v| v == "required");
     let node = Command::new("node").arg("--version").stdout(Stdio::null()).stderr(Stdio::null()).status();
     let missing = if !node.is_ok_and(|s| s.success()) {
         Some("`node` does not run".to_string())
@@ -354,9 +343,7 @@ fn khronos_validate(glb: &Path) -> Option<serde_json::Value> {
 /// nothing after, and the shape should recover as with the glued sphere.
 #[test]
 fn frictionless_sphere_settles_after_the_plate_starts() {
-    if !scan_press::shared_data().is_dir() {
-        assert!(!on_ci(), "the shared data folder {} is missing", scan_press::shared_data().display());
-        eprintln!("note: skipped: the shared data folder {} is missing", scan_press::shared_data().display());
+    if data::skip_without_shared_data("the YCB pear scan") {
         return;
     }
     let options = Options {

@@ -418,7 +418,7 @@ impl PressOutput {
             bail!("{}: not a wagashi press output (it has no summary.json)", dir.display());
         }
         let summary: serde_json::Value = serde_json::from_str(
-            &std::fs::read_to_string(&summary_path)
+            &wagashi_io::input::read_to_string(&summary_path)
                 .with_context(|| format!("{}: cannot read", summary_path.display()))?,
         )
         .with_context(|| format!("{}: not JSON", summary_path.display()))?;

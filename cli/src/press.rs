@@ -70,8 +70,8 @@ use fem_core::press::{
 };
 use wagashi_io::vtu::{write_pvd, write_vtu, VtuFields};
 use wagashi_io::{
-    read_bundle_with, read_materials_file, write_atomic, write_bundle, AtomicDir, Bundle, BundleWrite, ForceSeries,
-    MarkerSeries, SurfaceMeshing, WriteError,
+    read_bundle_with, read_materials_file, write_atomic, write_bundle, AtomicDir, Bundle, BundleWrite, ForceSample,
+    ForceSeries, MarkerSeries, SurfaceMeshing, WriteError,
 };
 
 use crate::plot::force_svg;
@@ -416,8 +416,13 @@ fn press_bundle_as(
     let result = result.with_context(|| format!("simulating {}", bundle.experiment_file().display()))?;
     let wall_time_s = sim_clock.elapsed().as_secs_f64();
 
-    // Force samples: at the measured times, else on the --output-dt grid.
-    let measured = bundle.force.as_ref().filter(|m| !m.samples.is_empty());
+    // Force samples: at the measured times up to end_s (nothing is simulated
+    // after it: no held value is written or compared), else on the --output-dt grid.
+    let in_run = bundle.force.as_ref().map(|m| measured_until(m, end_s));
+    if let Some((_, left_out @ 1..)) = in_run {
+        writeln!(out, "note: {left_out} measured force samples after end_s = {end_s} s are left out (not simulated)")?;
+    }
+    let measured = in_run.as_ref().map(|(m, _)| m).filter(|m| !m.samples.is_empty());
     let times = match measured {
         Some(m) => m.samples.iter().map(|s| s.t_s).collect(),
         None => uniform_times(end_s, options.output_dt_s)?,
@@ -572,6 +577,15 @@ pub(crate) fn resolve(path: &Path) -> anyhow::Result<PathBuf> {
     Ok(resolved)
 }
 
+/// The samples of `measured` up to `end_s` (within 1e-12 relative), and how
+/// many are left out after it.
+fn measured_until(measured: &ForceSeries, end_s: f64) -> (ForceSeries, usize) {
+    let until = end_s + 1e-12 * end_s.abs();
+    let kept: Vec<ForceSample> = measured.samples.iter().filter(|s| s.t_s <= until).copied().collect();
+    let left_out = measured.samples.len() - kept.len();
+    (ForceSeries { samples: kept }, left_out)
+}
+
 /// `0, dt, 2 dt, ...` up to `end_s`, and `end_s` itself when it is not on the grid.
 fn uniform_times(end_s: f64, dt_s: f64) -> anyhow::Result<Vec<f64>> {
     let n = (end_s / dt_s + 1e-9).floor();
@@ -675,7 +689,7 @@ fn copy_tool_surfaces(
         let from = bundle.dir.join(file.as_str());
         let name = Path::new(file.as_str()).file_name().map(|n| n.to_string_lossy().into_owned());
         let relative = format!("{SPECIMEN_SURFACE_DIR}/{}", name.unwrap_or_else(|| "surface.obj".into()));
-        let bytes = std::fs::read(&from).with_context(|| format!("{}: cannot read", from.display()))?;
+        let bytes = wagashi_io::input::read(&from).with_context(|| format!("{}: cannot read", from.display()))?;
         std::fs::create_dir_all(dir.join(SPECIMEN_SURFACE_DIR))
             .with_context(|| format!("{}: cannot create", dir.join(SPECIMEN_SURFACE_DIR).display()))?;
         write_atomic(dir.join(&relative), &bytes)?;
@@ -686,7 +700,7 @@ fn copy_tool_surfaces(
         let from = bundle.dir.join(file.as_str());
         let ext = Path::new(file.as_str()).extension().map(|e| format!(".{}", e.to_string_lossy())).unwrap_or_default();
         let relative = format!("{TOOL_SURFACES_DIR}/{tool}{ext}");
-        let bytes = std::fs::read(&from).with_context(|| format!("{}: cannot read", from.display()))?;
+        let bytes = wagashi_io::input::read(&from).with_context(|| format!("{}: cannot read", from.display()))?;
         let to = dir.join(&relative);
         std::fs::create_dir_all(dir.join(TOOL_SURFACES_DIR))
             .with_context(|| format!("{}: cannot create", dir.join(TOOL_SURFACES_DIR).display()))?;

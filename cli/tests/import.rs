@@ -1,5 +1,6 @@
 //! `wagashi import`: the real binary on the shared measured data
-//! (`<workspace>/../shared/data`, never copied into the repository).
+//! (`<workspace>/../shared/data`, never copied into the repository; a test that
+//! reads it skips without it, see `tests/support/data.rs`).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -10,13 +11,14 @@ use wagashi_io::{read_bundle_with, Bundle};
 
 mod common;
 
-use common::{assert_one_line_error, assert_success, stderr, wagashi_in};
+use common::{assert_one_line_error, assert_success, shared_data_path, skip_without_shared_data, stderr, wagashi_in};
 
 // ---- the shared data
 
-/// `<workspace>/../shared/data/real/SUB`, or a failure that says what is missing.
+/// `<workspace>/../shared/data/real/SUB` (the test has checked that the folder
+/// is there), or a failure that says what is missing.
 fn data(sub: &str) -> PathBuf {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data");
+    let root = shared_data_path();
     let path = root.join("real").join(sub);
     assert!(
         path.is_file(),
@@ -77,6 +79,9 @@ fn import(cwd: &Path, kind: &str, files: &[&Path], out: &Path, extra: &[&str]) -
 
 #[test]
 fn fungi_steak_specimen_1() {
+    if skip_without_shared_data("the fungi-steak records") {
+        return;
+    }
     let dir = tempfile::tempdir().unwrap();
     let input = fungi(1);
     let before = std::fs::read(&input).unwrap();
@@ -142,6 +147,9 @@ fn fungi_steak_specimen_1() {
 
 #[test]
 fn three_fungi_specimens_in_one_run_and_their_second_strokes() {
+    if skip_without_shared_data("the fungi-steak records") {
+        return;
+    }
     let dir = tempfile::tempdir().unwrap();
     let files = [fungi(1), fungi(2), fungi(3)];
     let refs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
@@ -168,6 +176,9 @@ fn three_fungi_specimens_in_one_run_and_their_second_strokes() {
 
 #[test]
 fn cmc_gel_on_the_exponent() {
+    if skip_without_shared_data("the CMC gel record") {
+        return;
+    }
     let dir = tempfile::tempdir().unwrap();
     let args = ["--cylinder-radius-mm", "2.5", "--start-height-mm", "2.5"];
     let o = import(dir.path(), "exponent", &[&gel()], Path::new("out"), &args);
@@ -191,6 +202,9 @@ fn cmc_gel_on_the_exponent() {
 
 #[test]
 fn an_existing_output_is_replaced_only_with_force() {
+    if skip_without_shared_data("the fungi-steak records") {
+        return;
+    }
     let dir = tempfile::tempdir().unwrap();
     let args = ["--cylinder-radius-mm", "4"];
     assert_success(&import(dir.path(), "rheometer", &[&fungi(2)], Path::new("out"), &args));
@@ -211,6 +225,9 @@ fn an_existing_output_is_replaced_only_with_force() {
 
 #[test]
 fn a_bad_file_writes_nothing_and_names_its_line() {
+    if skip_without_shared_data("the fungi-steak and CMC gel records") {
+        return;
+    }
     let dir = tempfile::tempdir().unwrap();
     // The gel file read as a rheometer file: wrong header.
     let o = import(dir.path(), "rheometer", &[&fungi(1), &gel()], Path::new("out"), &["--cylinder-radius-mm", "4"]);

@@ -1,23 +1,27 @@
-//! `wagashi mesh`: the real binary on the shared mesh fixtures
-//! (`<workspace>/../shared/data/meshes`, never copied into the repository).
+//! `wagashi mesh`: the real binary on the bunny (`tests/fixtures`) and the
+//! shared mesh fixtures (`<workspace>/../shared/data/meshes`, never copied into
+//! the repository; a test that reads them skips without them, see
+//! `tests/support/data.rs`).
 
 use std::path::{Path, PathBuf};
 
 mod common;
 
-use common::{assert_one_line_error, assert_success, stderr, stdout, wagashi_in};
+use common::{
+    assert_one_line_error, assert_success, fixture, shared_data_path, skip_without_shared_data, stderr, stdout,
+    wagashi_in,
+};
 use wagashi_io::tetmesh::read_tetmesh;
 
+/// The mesh fixture `name`: the repository's (`tests/fixtures`) when it has it,
+/// else the shared data folder's (the test has checked that the folder is there).
 fn mesh_data(name: &str) -> PathBuf {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/meshes");
-    let path = root.join(name);
-    assert!(
-        path.is_file(),
-        "this test reads the mesh fixtures in {} (the shared data folder beside the workspace, \
-         <workspace>/../shared/data; see its README.md), and {} is missing",
-        root.display(),
-        path.display()
-    );
+    let fixture = fixture(name);
+    if fixture.is_file() {
+        return fixture.canonicalize().unwrap();
+    }
+    let path = shared_data_path().join("meshes").join(name);
+    assert!(path.is_file(), "{} is missing from the shared data folder", path.display());
     path.canonicalize().unwrap()
 }
 
@@ -95,6 +99,9 @@ fn the_bunny_to_vtu_with_a_json_report() {
 /// and the cap farther from the input than that.
 #[test]
 fn a_holed_bunny_reports_its_caps_on_the_level_set() {
+    if skip_without_shared_data("the mesh fixture bad_syn_hole.obj") {
+        return;
+    }
     let dir = tempfile::tempdir().unwrap();
     let (out, json) = mesh_with_report(dir.path(), "bad_syn_hole.obj", "h.vtu", "0.8", &[]);
     let row = out.lines().find(|l| l.trim_start().starts_with("hole caps")).unwrap_or_else(|| panic!("{out}"));
@@ -111,6 +118,9 @@ fn a_holed_bunny_reports_its_caps_on_the_level_set() {
 
 #[test]
 fn the_layered_bunny_to_gmsh_and_tetgen_keeps_its_three_regions() {
+    if skip_without_shared_data("the mesh fixture layered_bunny.obj") {
+        return;
+    }
     let dir = tempfile::tempdir().unwrap();
     let layered = mesh_data("layered_bunny.obj");
     for out in ["l.msh", "l.node"] {
@@ -128,6 +138,9 @@ fn the_layered_bunny_to_gmsh_and_tetgen_keeps_its_three_regions() {
 
 #[test]
 fn layers_along_y_and_a_defective_input() {
+    if skip_without_shared_data("the mesh fixture npm_teapot.obj") {
+        return;
+    }
     let dir = tempfile::tempdir().unwrap();
     let teapot = mesh_data("npm_teapot.obj");
     // The teapot is 15.75 mm tall along y.
@@ -142,6 +155,9 @@ fn layers_along_y_and_a_defective_input() {
 /// An unwelded soup (1e-9 jitter) and 10 % flipped faces: both give the bunny.
 #[test]
 fn defective_bunnies_give_the_bunny() {
+    if skip_without_shared_data("the mesh fixtures bad_syn_soup_jitter.obj, bad_syn_flipped10pct.obj") {
+        return;
+    }
     let dir = tempfile::tempdir().unwrap();
     for name in ["bad_syn_soup_jitter.obj", "bad_syn_flipped10pct.obj"] {
         let (_, json) = mesh_with_report(dir.path(), name, "b.msh", "0.4", &[]);
@@ -163,6 +179,9 @@ fn conforming_mode_keeps_the_input_boundary_and_refuses_defects() {
     let m = read_tetmesh(dir.path().join("b.node")).unwrap();
     assert!(m.cells.len() > 1000);
     // A bunny with a hole: refused in strict mode, the defect named, nothing written.
+    if skip_without_shared_data("the mesh fixture bad_syn_hole.obj") {
+        return;
+    }
     let hole = mesh_data("bad_syn_hole.obj");
     let o = mesh(dir.path(), &[hole.to_str().unwrap(), "-o", "h.vtu", "--size-mm", "0.8", "--mode", "conforming"]);
     let line = assert_one_line_error(&o);

@@ -191,3 +191,30 @@ fn a_fixed_step_is_used() {
     assert!(dts.iter().all(|&dt| dt <= 5.0 * (1.0 + 1e-12)), "{dts:?}");
     assert!(dts.iter().filter(|&&dt| (dt - 5.0).abs() < 1e-9).count() > dts.len() / 2, "{dts:?}");
 }
+
+/// Measured force past `end_s`: nothing is simulated there, so `force.csv`
+/// stops at `end_s` (no held value written after it) and the comparison uses
+/// the samples up to it; the run says how many it left out.
+#[test]
+fn measured_force_after_the_end_is_left_out() {
+    let tmp = tempfile::tempdir().unwrap();
+    let toml = mat1_experiment!(
+        "past-end",
+        3,
+        "shape = \"block\"\nsize_mm = [10.0, 10.0, 10.0]\n",
+        "tool_contact = \"glued\"\nsupport = \"glued\"\nwaypoints = [[0.0, 0.0], [2.0, 0.2]]\nrelease_s = 2.0\nend_s = 4.0\n\n[data]\nforce = \"force.csv\"\n"
+    );
+    let force = "t_s,force_N\n0.0,0.0\n1.0,0.01\n2.0,0.02\n3.0,0.0\n4.0,0.0\n5.0,0.0\n6.0,0.0\n";
+    let bundle = write_files(&tmp.path().join("trial"), &[("experiment.toml", toml), ("force.csv", force)]);
+    let out = tmp.path().join("out");
+    let o = press_in(tmp.path(), &bundle, &out, &["--size-mm", "5"]);
+    assert_success(&o);
+    let times: Vec<f64> = read_force_csv(&out.join("force.csv")).into_iter().map(|s| s.0).collect();
+    assert_eq!(times, vec![0.0, 1.0, 2.0, 3.0, 4.0]);
+    assert_eq!(read_summary(&out)["measured_force_samples"].as_u64(), Some(5));
+    assert!(
+        stdout(&o).contains("note: 2 measured force samples after end_s = 4 s are left out (not simulated)"),
+        "{}",
+        stdout(&o)
+    );
+}

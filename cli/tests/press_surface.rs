@@ -1,9 +1,8 @@
 //! `wagashi press` on a `shape = "surface"` specimen, end to end: the real
 //! binary meshes the closed surface on the fly (conforming mode by default) and
 //! presses it with a plate; a defective surface is refused naming the defect and
-//! suggesting envelope mode, which then meshes it. The shared Stanford bunny
-//! (`<workspace>/../shared/data/meshes`, never copied into the repository) is
-//! pressed at a coarse size.
+//! suggesting envelope mode, which then meshes it. The Stanford bunny (the
+//! repository's copy in `tests/fixtures`) becomes a press problem at a coarse size.
 
 mod common;
 
@@ -168,17 +167,15 @@ fn a_defective_surface_is_refused_and_envelope_mode_meshes_it() {
     assert_eq!(std::fs::read(dir.join("open.obj")).unwrap(), before, "the input was modified");
 }
 
-/// The shared Stanford bunny at 1.5 mm becomes a press problem (meshed in
+/// The Stanford bunny (`tests/fixtures`) at 1.5 mm becomes a press problem (meshed in
 /// conforming mode) whose mesh volume is the surface's within 1e-9, standing on
 /// the floor by nodes at its lowest y, with the plate as a contact tool. (Not
 /// simulated here: the plate first touches an ear tip, and the contact steps
 /// take a minute; the cube above runs the binary end to end.)
 #[test]
 fn the_bunny_becomes_a_press_problem_at_a_coarse_size() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/meshes/npm_bunny.obj");
-    let bytes = std::fs::read(&path).unwrap_or_else(|e| {
-        panic!("{}: {e} (the tests read the shared models from <workspace>/../shared/data)", path.display())
-    });
+    let path = fixture("npm_bunny.obj");
+    let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let tmp = tempfile::tempdir().unwrap();
     let toml = experiment("bunny.obj", 0.3).replace("[specimen.regions]\ngel = \"gel\"", "material = \"gel\"");
     assert!(toml.contains("material = \"gel\"\n"));

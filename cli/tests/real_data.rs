@@ -10,6 +10,8 @@
 //! tool that leaves the specimen and touches it again, run with the parameters
 //! fitted to specimen 1's first stroke. Its errors are measured per stroke, split
 //! at the measured second touch.
+//!
+//! Without the shared data folder the tests skip (`tests/support/data.rs`).
 
 mod common;
 
@@ -17,13 +19,10 @@ use std::path::PathBuf;
 
 use common::*;
 
+/// The fungi-steak records (the test has checked that the shared data folder is there).
 fn fungi() -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/real/fungi-steak");
-    assert!(
-        dir.is_dir(),
-        "{} is missing: this test reads the shared measured data beside the checkout (../shared/data)",
-        dir.display()
-    );
+    let dir = shared_data_path().join("real/fungi-steak");
+    assert!(dir.is_dir(), "{} is missing from the shared data folder", dir.display());
     dir
 }
 
@@ -37,6 +36,9 @@ fn summary_rms(dir: &std::path::Path) -> (f64, f64) {
 
 #[test]
 fn fungi_steak_first_stroke_fits_and_predicts_the_other_specimens() {
+    if skip_without_shared_data("the fungi-steak records") {
+        return;
+    }
     let tmp = tempfile::tempdir().unwrap();
     let cwd = tmp.path();
     let files: Vec<String> = (1..=3)
@@ -198,6 +200,9 @@ fn second_touch_of(force: &[(f64, f64)], threshold: f64) -> Option<f64> {
 /// LR under the critical value and the fitted `lambda_g` below 0.05.
 #[test]
 fn fungi_steak_diagnosis_validates_on_a_double_compression() {
+    if skip_without_shared_data("the fungi-steak records") {
+        return;
+    }
     let tmp = tempfile::tempdir().unwrap();
     let cwd = tmp.path();
     let files: Vec<String> = (1..=2)

@@ -86,6 +86,7 @@ pub mod atomic;
 pub mod bundle;
 mod error;
 pub mod gltf;
+pub mod input;
 mod number;
 mod source_map;
 pub mod surface;

@@ -48,6 +48,19 @@ fn missing_materials_file() {
     assert!(msg.starts_with(&format!("{}: cannot read: ", path.display())), "{msg}");
 }
 
+/// Devices, FIFOs and folders are refused before they are opened (`/dev/zero`
+/// would otherwise be read without end), naming the file.
+#[cfg(unix)]
+#[test]
+fn a_materials_file_or_bundle_that_is_not_a_regular_file() {
+    let msg = read_materials_file("/dev/zero").unwrap_err().to_string();
+    assert_eq!(msg, "/dev/zero: cannot read: not a regular file (a character device)");
+    let b = bundle(&[]);
+    std::fs::create_dir(b.dir.join("experiment.toml")).unwrap();
+    let msg = read_bundle(&b.dir).unwrap_err().to_string();
+    assert!(msg.ends_with("experiment.toml: cannot read: not a regular file (a folder)"), "{msg}");
+}
+
 // ---- a missing required key ----------------------------------------------
 
 #[test]
@@ -363,6 +376,21 @@ fn end_before_the_last_push() {
     refused_toml(&toml, "end_s", "protocol.end_s");
 }
 
+/// The run ends before the release: refused (the release, and the recovery
+/// after it, would never be simulated).
+#[test]
+fn end_before_the_release() {
+    let toml = edit(EXPERIMENT, "end_s = 400.0", "end_s = 200.0");
+    let msg = refused_toml(&toml, "end_s", "protocol.end_s");
+    assert!(
+        msg.ends_with("protocol.end_s: 200 s is before release_s (210.93 s): the run must go on until the release"),
+        "{msg}"
+    );
+    // Ending at the release is fine.
+    let toml = edit(EXPERIMENT, "end_s = 400.0", "end_s = 210.93");
+    read_bundle(with_experiment(&toml).dir).unwrap();
+}
+
 #[test]
 fn release_during_a_hold_after_the_last_push_is_accepted() {
     let toml = edit(EXPERIMENT, "release_s = 210.93", "release_s = 28.87");
@@ -645,4 +673,75 @@ fn reading_never_modifies_the_bundle() {
     read_bundle(&b.dir).unwrap();
     let _ = read_bundle(&b.dir).unwrap().to_press(20.0);
     assert_eq!(before, snapshot(&b.dir));
+}
+
+// ---- files outside the bundle folder ----------------------------------------------------
+
+/// `experiment.toml` with `key = "from"` replaced by `key = "to"` is refused
+/// on that line as `KEY: path leaves the bundle folder`; `setup` prepares the
+/// test bundle (files outside it, symlinks).
+fn refused_outside(toml: &str, from: &str, to: &str, field: &str, setup: impl Fn(&TestBundle)) {
+    let toml = edit(toml, from, to);
+    let b = with_experiment(&toml);
+    setup(&b);
+    let line = line_of(&toml, to);
+    let msg = assert_invalid(read_bundle(&b.dir), &b.file("experiment.toml"), line, field);
+    assert!(msg.ends_with(": path leaves the bundle folder"), "{to}: {msg}");
+}
+
+/// A copy of the bundle's own CSV files beside the bundle folder (in its parent).
+fn csv_outside(b: &TestBundle) {
+    std::fs::write(b.root.path().join("force.csv"), FORCE).unwrap();
+    std::fs::write(b.root.path().join("markers.csv"), MARKERS).unwrap();
+}
+
+#[test]
+fn data_files_outside_the_bundle_folder_are_refused() {
+    let force = "force = \"force.csv\"";
+    let markers = "markers = \"markers.csv\"";
+    refused_outside(EXPERIMENT, force, "force = \"../force.csv\"", "data.force", csv_outside);
+    refused_outside(EXPERIMENT, markers, "markers = \"sub/../../markers.csv\"", "data.markers", csv_outside);
+    // Absolute, even when it names the bundle's own file: the bundle is read
+    // relative to its folder, wherever that is.
+    refused_outside(EXPERIMENT, force, "force = \"/etc/hostname\"", "data.force", csv_outside);
+    // Refused by name, whether the file exists or not.
+    refused_outside(EXPERIMENT, force, "force = \"../../no/such.csv\"", "data.force", |_| {});
+}
+
+#[cfg(unix)]
+#[test]
+fn a_symlink_out_of_the_bundle_folder_is_refused() {
+    let force = "force = \"force.csv\"";
+    refused_outside(EXPERIMENT, force, "force = \"link.csv\"", "data.force", |b| {
+        csv_outside(b);
+        std::os::unix::fs::symlink(b.root.path().join("force.csv"), b.dir.join("link.csv")).unwrap();
+    });
+    // A folder inside that is a symlink to the outside.
+    refused_outside(EXPERIMENT, force, "force = \"up/force.csv\"", "data.force", |b| {
+        csv_outside(b);
+        std::os::unix::fs::symlink(b.root.path(), b.dir.join("up")).unwrap();
+    });
+    // Symlinks that stay inside the folder are read, and the folder itself may be
+    // reached by a symlink.
+    let b = with_experiment(&edit(EXPERIMENT, force, "force = \"data/f.csv\""));
+    std::fs::create_dir(b.dir.join("data")).unwrap();
+    std::os::unix::fs::symlink("../force.csv", b.dir.join("data/f.csv")).unwrap();
+    let link = b.root.path().join("trial-link");
+    std::os::unix::fs::symlink(&b.dir, &link).unwrap();
+    assert_eq!(read_bundle(&link).unwrap().force.unwrap().samples.len(), 4);
+}
+
+#[test]
+fn a_specimen_surface_outside_the_bundle_folder_is_refused() {
+    let surface = edit(
+        GEL_CYLINDER,
+        "shape = \"cylinder\"\nradius_mm = 4.0\nheight_mm = 9.0\n",
+        "shape = \"surface\"\nsurface = \"gel.obj\"\n",
+    );
+    let outside = |b: &TestBundle| std::fs::write(b.root.path().join("gel.obj"), "v 0 0 0\n").unwrap();
+    let inside = with_experiment(&surface);
+    assert!(read_bundle(&inside.dir).is_ok(), "the surface is read when it is meshed");
+    for to in ["surface = \"../gel.obj\"", "surface = \"/etc/passwd\"", "surface = \"./a/../../gel.obj\""] {
+        refused_outside(&surface, "surface = \"gel.obj\"", to, "specimen.surface", outside);
+    }
 }

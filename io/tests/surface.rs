@@ -1,12 +1,18 @@
-//! Surface import (`wagashi_io::surface`): the shared meshes and scans read in
-//! place (`../shared/data`, never copied), STL round trips, a hand-made GLB and
-//! glTF with node transforms, and every refusal naming its file and line.
+//! Surface import (`wagashi_io::surface`): the bunny (`tests/fixtures`), the
+//! shared meshes and scans read in place (`../shared/data`, never copied; a test
+//! that reads them skips without them, see `tests/support/data.rs`), STL round
+//! trips, a hand-made GLB and glTF with node transforms, and every refusal
+//! naming its file and line.
 //!
 //! Everything is inside `mod surface` so that `cargo test -p wagashi-io surface`
 //! selects it.
 
+mod common;
+
 mod surface {
     use std::path::{Path, PathBuf};
+
+    use crate::common::{fixture, shared_data, skip_without_shared_data};
 
     use meshing::validate::{validate, ValidateOptions};
     use meshing::Surface;
@@ -14,8 +20,21 @@ mod surface {
         read_surface, write_stl, LengthUnit, Location, StlEncoding, SurfaceError, SurfaceFormat, SurfaceOptions,
     };
 
+    /// A file of the shared data folder (the test has checked that it is there).
     fn data(rel: &str) -> PathBuf {
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data").join(rel)
+        crate::common::shared_data_path().join(rel)
+    }
+
+    /// Two unit cubes touching along an edge (24 triangles, two regions).
+    fn cubes_sharing_an_edge() -> Surface {
+        let mut s = Surface::cuboid([0.0; 3], [1.0; 3], "a");
+        let b = Surface::cuboid([1.0, 1.0, 0.0], [2.0, 2.0, 1.0], "b");
+        let base = s.vertices.len() as u32;
+        s.vertices.extend(&b.vertices);
+        s.triangles.extend(b.triangles.iter().map(|t| t.map(|v| v + base)));
+        s.triangle_regions.extend(b.triangle_regions.iter().map(|_| 1));
+        s.region_names.push("b".into());
+        s
     }
 
     fn read(path: &Path) -> Surface {
@@ -32,13 +51,16 @@ mod surface {
 
     #[test]
     fn obj_fixtures_read_with_their_regions() {
-        let bunny = read_surface(data("meshes/npm_bunny.obj"), &SurfaceOptions::default()).unwrap();
+        let bunny = read_surface(fixture("npm_bunny.obj"), &SurfaceOptions::default()).unwrap();
         assert_eq!(bunny.format, SurfaceFormat::Obj);
         assert_eq!((bunny.unit, bunny.to_mm), (LengthUnit::Mm, 1.0));
         assert_eq!((bunny.surface.num_vertices(), bunny.surface.num_triangles()), (1839, 3674));
         assert_eq!(bunny.surface.region_names, vec!["npm_bunny"], "no o/g: named after the file");
         assert!(bunny.surface.require_closed_manifold().is_ok());
 
+        if skip_without_shared_data("the layered bunny and the YCB pear") {
+            return;
+        }
         let layered = read(&data("meshes/layered_bunny.obj"));
         assert_eq!(layered.region_names, vec!["layer0_bunny", "layer1_sphereA", "layer2_sphereB"]);
         let per_region: Vec<usize> =
@@ -53,6 +75,9 @@ mod surface {
 
     #[test]
     fn the_scans_in_metres() {
+        if skip_without_shared_data("the YCB pear and banana scans") {
+            return;
+        }
         // YCB pear (V-HACD collision mesh) and banana (textured scan): OBJ in
         // metres. Each is one closed, outward, intersection-free surface.
         for (file, volume_cm3, size_mm) in [
@@ -84,8 +109,9 @@ mod surface {
 
     #[test]
     fn stl_round_trips_binary_and_ascii() {
+        let Some(shared) = shared_data("the layered bunny") else { return };
         let dir = tempfile::tempdir().unwrap();
-        let layered = read(&data("meshes/layered_bunny.obj"));
+        let layered = read(&shared.join("meshes/layered_bunny.obj"));
 
         // ASCII: f64 written exactly, one solid per region.
         let ascii = dir.path().join("layered.stl");
@@ -113,7 +139,7 @@ mod surface {
     #[test]
     fn stl_flavour_is_told_by_content() {
         let dir = tempfile::tempdir().unwrap();
-        let tet = read(&data("meshes/npm_bunny.obj"));
+        let tet = read(&fixture("npm_bunny.obj"));
         // A binary STL whose header begins with "solid", as some exporters write.
         let path = dir.path().join("b.stl");
         write_stl(&path, &tet, StlEncoding::Binary).unwrap();
@@ -222,6 +248,73 @@ mod surface {
         assert!(rel_close(s.signed_volume(None), 9000.0 / 6.0, 1e-5));
     }
 
+    /// The GLB of [`glb`] as a `.gltf` whose buffer has the URI `uri`, with its
+    /// data in `model/tets.bin` and a copy outside the model's folder
+    /// (`tets.bin`, `secret.bin`): the `.gltf` file's path.
+    fn gltf_with_uri(dir: &Path, uri: &str) -> PathBuf {
+        let glb = glb();
+        let json_len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+        let json = std::str::from_utf8(&glb[20..20 + json_len]).unwrap().trim_end();
+        let bin = &glb[20 + json_len + 8..];
+        let model = dir.join("model");
+        std::fs::create_dir_all(&model).unwrap();
+        for file in [model.join("tets.bin"), dir.join("tets.bin"), dir.join("secret.bin")] {
+            std::fs::write(file, bin).unwrap();
+        }
+        let json = json.replace(r#""buffers":[{"byteLength""#, &format!(r#""buffers":[{{"uri":{uri:?},"byteLength""#));
+        let path = model.join("tets.gltf");
+        std::fs::write(&path, json).unwrap();
+        path
+    }
+
+    /// Buffer URIs name files inside the glTF file's folder, or are `data:`
+    /// URIs: absolute paths, `file:` and other schemes, `..` (also
+    /// percent-encoded) and symlinks out are refused, naming the buffer, before
+    /// anything is read; escapes that do not decode to UTF-8 are refused too
+    /// (the gltf crate's own loader panics on them).
+    #[test]
+    fn gltf_buffer_uris_stay_in_the_files_folder() {
+        let dir = tempfile::tempdir().unwrap();
+        let root = dir.path();
+        // Inside: plain, percent-encoded and through a subfolder.
+        for uri in ["tets.bin", "tet%73.bin", "./sub/../tets.bin"] {
+            std::fs::create_dir_all(root.join("model/sub")).unwrap();
+            let s = read(&gltf_with_uri(root, uri));
+            assert_eq!((s.num_vertices(), s.num_triangles()), (8, 8), "{uri}");
+        }
+        let outside = root.join("secret.bin").display().to_string();
+        let mut refused = vec![
+            ("../tets.bin", "leaves the glTF file's folder"),
+            ("%2e%2e/tets.bin", "leaves the glTF file's folder"),
+            ("..%2Fsecret.bin", "leaves the glTF file's folder"),
+            ("sub/../../secret.bin", "leaves the glTF file's folder"),
+            (outside.as_str(), "leaves the glTF file's folder"),
+            ("%FF%FE.bin", "do not decode to UTF-8"),
+            ("http://example.com/tets.bin", "has the scheme \"http\""),
+        ];
+        let file_uri = format!("file://{outside}");
+        refused.push((file_uri.as_str(), "has the scheme \"file\""));
+        for (uri, why) in refused {
+            let path = gltf_with_uri(root, uri);
+            let err = read_surface(&path, &SurfaceOptions::default()).unwrap_err();
+            let msg = err.to_string();
+            assert!(matches!(err, SurfaceError::Format { .. }), "{uri}: {err:?}");
+            assert!(msg.starts_with(&format!("{}: glTF buffer 0: URI ", path.display())), "{uri}: {msg}");
+            assert!(msg.contains(why) && !msg.contains('\n'), "{uri}: {msg}");
+        }
+        #[cfg(unix)]
+        {
+            let path = gltf_with_uri(root, "link.bin");
+            std::os::unix::fs::symlink(root.join("secret.bin"), root.join("model/link.bin")).unwrap();
+            let msg = read_surface(&path, &SurfaceOptions::default()).unwrap_err().to_string();
+            assert!(msg.contains("glTF buffer 0: URI \"link.bin\" leaves the glTF file's folder"), "{msg}");
+        }
+        // A data: URI is decoded (here too short for the buffer).
+        let path = gltf_with_uri(root, "data:application/octet-stream;base64,AAAA");
+        let msg = read_surface(&path, &SurfaceOptions::default()).unwrap_err().to_string();
+        assert!(msg.contains("glTF buffer 0: 3 bytes, fewer than its byteLength 72"), "{msg}");
+    }
+
     fn refusal(name: &str, content: &[u8]) -> (SurfaceError, String) {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join(name);
@@ -273,7 +366,7 @@ mod surface {
     #[test]
     fn binary_refusals_name_the_record() {
         let dir = tempfile::tempdir().unwrap();
-        let s = read(&data("meshes/bad_syn_nonmanifold_edge.obj"));
+        let s = cubes_sharing_an_edge();
         let path = dir.path().join("cubes.stl");
         write_stl(&path, &s, StlEncoding::Binary).unwrap();
         let good = std::fs::read(&path).unwrap();
@@ -304,18 +397,21 @@ mod surface {
     fn a_bad_scale_is_refused_before_reading() {
         for scale in [0.0, -1.0, f64::NAN, f64::INFINITY] {
             let opts = SurfaceOptions { scale, ..Default::default() };
-            let err = read_surface(data("meshes/npm_bunny.obj"), &opts).unwrap_err();
+            let err = read_surface(fixture("npm_bunny.obj"), &opts).unwrap_err();
             assert!(matches!(err, SurfaceError::Option { name: "scale", .. }), "{err}");
         }
         assert_eq!("cm".parse::<LengthUnit>(), Ok(LengthUnit::Cm));
         assert!("furlong".parse::<LengthUnit>().unwrap_err().to_string().contains("expected mm, cm, m or in"));
-        let missing = read_surface(data("meshes/no-such-file.obj"), &SurfaceOptions::default()).unwrap_err();
+        let missing = read_surface(fixture("no-such-file.obj"), &SurfaceOptions::default()).unwrap_err();
         assert!(missing.to_string().contains("no-such-file.obj: cannot read"), "{missing}");
     }
 
     #[test]
     fn imported_defects_are_left_for_validation() {
         // Import does not repair: the teapot's unwelded seams come through as given.
+        if skip_without_shared_data("the teapot") {
+            return;
+        }
         let teapot = read(&data("meshes/npm_teapot.obj"));
         let r = validate(&teapot, &ValidateOptions::default()).unwrap();
         assert_eq!(r.defects.len(), 3, "{r}");

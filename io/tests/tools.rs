@@ -206,6 +206,37 @@ fn a_surface_tool_stands_where_its_file_places_it() {
     assert_eq!(vertices[3], [0.0, 100.0, 0.0]);
 }
 
+/// A surface tool outside the bundle folder (`..`, absolute, a symlink out) is
+/// refused when the bundle is read, naming its key, and never read.
+#[test]
+fn a_surface_tool_outside_the_bundle_folder_is_refused() {
+    let v1 = edit(BLOCK, "tool = \"plate\"", "tool = \"surface\"\ntool_surface = \"tip.obj\"");
+    let extra = BLOCK.to_string()
+        + &edit(TWO_TOOLS, "shape = \"sphere\"\nradius_mm = 2.0", "shape = \"surface\"\nsurface = \"tip.obj\"");
+    for (toml, from, field) in [
+        (v1.as_str(), "tool_surface = \"tip.obj\"", "protocol.tool_surface"),
+        (extra.as_str(), "surface = \"tip.obj\"", "protocol.tools[0].surface"),
+    ] {
+        let key = from.split(" = ").next().unwrap();
+        let mut names = vec!["../tip.obj".to_string(), "sub/../../tip.obj".to_string()];
+        let b = bundle(&[("experiment.toml", toml)]);
+        names.push(b.root.path().join("tip.obj").display().to_string());
+        if cfg!(unix) {
+            names.push("link.obj".to_string());
+        }
+        for name in names {
+            let toml = edit(toml, from, &format!("{key} = \"{name}\""));
+            let b = bundle(&[("experiment.toml", toml.as_str())]);
+            std::fs::write(b.root.path().join("tip.obj"), TETRAHEDRON_OBJ).unwrap();
+            #[cfg(unix)]
+            std::os::unix::fs::symlink(b.root.path().join("tip.obj"), b.dir.join("link.obj")).unwrap();
+            let line = line_of(&toml, &format!("{key} = "));
+            let msg = assert_invalid(read_bundle(&b.dir), &b.file("experiment.toml"), line, field);
+            assert!(msg.ends_with(": path leaves the bundle folder"), "{name}: {msg}");
+        }
+    }
+}
+
 /// A surface tool whose file is missing, or open, is refused on `tool_surface`'s line.
 #[test]
 fn a_surface_tool_must_be_a_readable_closed_surface() {

@@ -900,9 +900,9 @@ mod tests {
         }
     }
 
-    /// A shared OBJ fixture (`<workspace>/../shared/data/meshes`) as one region.
-    fn shared_obj(name: &str) -> Surface {
-        let path = format!("{}/../../shared/data/meshes/{name}", env!("CARGO_MANIFEST_DIR"));
+    /// An OBJ fixture of the repository (`<workspace>/tests/fixtures`) as one region.
+    fn fixture_obj(name: &str) -> Surface {
+        let path = format!("{}/../tests/fixtures/{name}", env!("CARGO_MANIFEST_DIR"));
         let (models, _) = tobj::load_obj(&path, &tobj::LoadOptions { triangulate: true, ..Default::default() })
             .unwrap_or_else(|e| panic!("{path}: {e}"));
         let mut s = Surface { region_names: vec!["all".into()], ..Surface::default() };
@@ -939,7 +939,7 @@ mod tests {
     /// [`boundary_distance`] takes the fast path on each.
     #[test]
     fn a_single_closed_shell_gives_the_general_paths_figures_bit_for_bit() {
-        let bunny = shared_obj("npm_bunny.obj");
+        let bunny = fixture_obj("npm_bunny.obj");
         let cube = Surface::cuboid([0.0; 3], [1.0; 3], "cube");
         let inner = Surface::cuboid([0.1; 3], [0.9; 3], "inner");
         let inner: Vec<[P; 3]> = inner.triangles.iter().map(|t| t.map(|v| inner.vertices[v as usize])).collect();

@@ -1,6 +1,8 @@
 //! The conforming mesher: its Delaunay core on random and degenerate point sets,
-//! and boundary recovery on a cube, the shared bunny and two boxes sharing a face
-//! (`../shared/data/meshes`, read in place).
+//! and boundary recovery on a cube, the bunny (`tests/fixtures`) and, from the
+//! shared data folder (`../shared/data/meshes`, read in place; a test that reads
+//! it skips without it, see `tests/support/data.rs`), the layered bunny, two
+//! boxes sharing a face and the defect corpus.
 
 use fem_core::mesh::TetMesh;
 use meshing::conforming::{conforming_mesh, insphere, ConformingError, ConformingOptions, Delaunay, FACE, GHOST};
@@ -10,7 +12,7 @@ use meshing::repair::{repair, RepairOptions};
 use meshing::Surface;
 
 mod common;
-use common::read_obj;
+use common::{bunny, read_obj, skip_without_shared_data};
 
 type P = [f64; 3];
 
@@ -377,7 +379,7 @@ fn nearly_coplanar_triangles_stay_apart() {
 
 #[test]
 fn the_bunny_is_meshed_with_its_exact_boundary() {
-    let s = read_obj("meshes/npm_bunny.obj");
+    let s = bunny();
     let out = conforming_mesh(&s, &RECOVERY_ONLY).unwrap();
     let r = check_conforming(&out.mesh, &s);
     eprintln!(
@@ -394,7 +396,7 @@ fn the_bunny_is_meshed_with_its_exact_boundary() {
 /// edge removal leaves sliver smoothing nothing to do there).
 #[test]
 fn conforming_output_does_not_depend_on_the_thread_count() {
-    let s = read_obj("meshes/npm_bunny.obj");
+    let s = bunny();
     let options = ConformingOptions { size_mm: Some(0.5), ..ConformingOptions::default() };
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
@@ -411,6 +413,9 @@ fn conforming_output_does_not_depend_on_the_thread_count() {
 
 #[test]
 fn two_boxes_sharing_a_face_become_two_regions() {
+    if skip_without_shared_data("the mesh fixture layered_two_boxes.obj") {
+        return;
+    }
     let raw = read_obj("meshes/layered_two_boxes.obj");
     // The file's x = 0 face faces into box 1 (a fixture defect): strict mode
     // refuses it, naming the defect; once repaired it meshes.
@@ -434,6 +439,9 @@ fn two_boxes_sharing_a_face_become_two_regions() {
 /// exactly (the gates against TetGen are in `tests/tetgen_golden.rs`).
 #[test]
 fn smoothing_moves_boundary_points_within_their_faces_exactly() {
+    if skip_without_shared_data("the mesh fixture layered_two_boxes.obj") {
+        return;
+    }
     let s = repair(&read_obj("meshes/layered_two_boxes.obj"), &RepairOptions::default()).unwrap().surface;
     let out = conforming_mesh(&s, &ConformingOptions::new(0.1)).unwrap();
     check_conforming(&out.mesh, &s);
@@ -463,6 +471,9 @@ fn smoothing_moves_boundary_points_within_their_faces_exactly() {
 
 #[test]
 fn the_layered_bunny_keeps_its_three_nested_regions_exactly() {
+    if skip_without_shared_data("the mesh fixture layered_bunny.obj") {
+        return;
+    }
     let s = read_obj("meshes/layered_bunny.obj");
     let out = conforming_mesh(&s, &RECOVERY_ONLY).unwrap();
     assert_eq!(out.mesh.region_names.len(), 3);
@@ -491,6 +502,9 @@ fn defective_input_is_refused_with_the_defect_named() {
 /// accepted (tests above).
 #[test]
 fn the_defect_corpus_is_refused_with_each_defect_named() {
+    if skip_without_shared_data("the defect corpus bad_syn_*.obj") {
+        return;
+    }
     use meshing::{Defect, InvalidSurface};
     // (file, the defect's kind, its count, the number of kinds found, the message's start)
     let corpus: [(&str, &str, usize, usize, &str); 8] = [
@@ -547,10 +561,9 @@ fn the_defect_corpus_is_refused_with_each_defect_named() {
 
 #[test]
 fn size_refinement_bounds_every_tet_and_keeps_the_boundary() {
-    for (name, s, h) in [
-        ("cube", Surface::cuboid([0.0, 0.0, 0.0], [10.0, 20.0, 5.0], "cube"), 2.0),
-        ("bunny", read_obj("meshes/npm_bunny.obj"), 0.5),
-    ] {
+    for (name, s, h) in
+        [("cube", Surface::cuboid([0.0, 0.0, 0.0], [10.0, 20.0, 5.0], "cube"), 2.0), ("bunny", bunny(), 0.5)]
+    {
         let out = conforming_mesh(&s, &ConformingOptions::new(h)).unwrap();
         let r = check_conforming(&out.mesh, &s);
         let max_volume = h * h * h / (6.0 * 2f64.sqrt());

@@ -1,9 +1,11 @@
 //! Envelope mode (isosurface stuffing on the generalized winding number): analytic
-//! shapes built here, and the shared fixtures in `<workspace>/../shared/data/meshes`
-//! (the clean bunny, the defective corpus, the layered bunny), read with `tobj`
-//! (in f32), the corpus tests' files with `tests/common`'s reader (in f64).
+//! shapes built here, the clean bunny (`tests/fixtures`) and the shared fixtures
+//! in `<workspace>/../shared/data/meshes` (the defective corpus, the layered
+//! bunny, the teapot; a test that reads them skips without them, see
+//! `tests/support/data.rs`), read with `tobj` (in f32), the corpus tests' files
+//! with `tests/common`'s reader (in f64).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::OnceLock;
 use std::time::Instant;
 
@@ -12,6 +14,7 @@ use meshing::quality::{cell_statistics, report, CellStatistics, QualityReport};
 use meshing::{Surface, WindingNumber};
 
 mod common;
+use common::skip_without_shared_data;
 
 // ---- shapes built here
 
@@ -238,19 +241,17 @@ fn a_blades_ridge_is_resolved_below_the_smallest_cells() {
     assert!(ridge < tol / 2.5, "{ridge} vs {tol}");
 }
 
-// ---- the shared fixtures
+// ---- the fixtures
 
+/// The fixture `name`: the repository's (`tests/fixtures`) when it has it, else
+/// the shared data folder's (`../shared/data/meshes`; the test has checked that
+/// the folder is there).
 fn data(name: &str) -> PathBuf {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/meshes");
-    let path = root.join(name);
-    assert!(
-        path.is_file(),
-        "this test reads the mesh fixtures in {} (the shared data folder beside the workspace, \
-         <workspace>/../shared/data; see its README.md), and {} is missing",
-        root.display(),
-        path.display()
-    );
-    path
+    let fixture = common::fixture(name);
+    if fixture.is_file() {
+        return fixture;
+    }
+    common::data(&format!("meshes/{name}"))
 }
 
 /// An OBJ as a surface, one region per object or group (a minimal reader for tests).
@@ -611,6 +612,9 @@ fn bunny_meets_the_angle_and_volume_targets() {
 /// test replaces), and no cell across sphere A (conforming interfaces).
 #[test]
 fn the_graded_layered_bunny_meets_every_envelope_gate() {
+    if skip_without_shared_data("the mesh fixture layered_bunny.obj") {
+        return;
+    }
     let s = obj("layered_bunny.obj");
     let (json, exact) = layered_bunny_exact_volumes();
     assert_eq!(exact.len(), 3);
@@ -985,6 +989,9 @@ fn an_open_scans_rim_is_refined_on_the_graded_lattice() {
 /// between them, and every envelope gate of issue 3.
 #[test]
 fn boxes_sharing_a_face_become_two_regions() {
+    if skip_without_shared_data("the mesh fixture layered_two_boxes.obj") {
+        return;
+    }
     let s = obj("layered_two_boxes.obj");
     let (out, q) = mesh_and_report(&s, 0.1);
     assert_proven_bounds(&out, &q);
@@ -1093,6 +1100,9 @@ fn solid_volume_by_sampling(s: &Surface, h: f64) -> f64 {
 /// (2.1e-3).
 #[test]
 fn the_teapot_meshes_with_the_proven_bounds() {
+    if skip_without_shared_data("the mesh fixture npm_teapot.obj") {
+        return;
+    }
     let s = obj("npm_teapot.obj");
     let (out, q) = mesh_and_report(&s, 0.5);
     assert_proven_bounds(&out, &q);
@@ -1176,6 +1186,9 @@ fn the_teapot_meshes_with_the_proven_bounds() {
 /// the sampled solid (asserted within 1e-2 less the sampler's bound, 2.1e-3).
 #[test]
 fn the_graded_teapot_resolves_the_voids_at_the_handles_mouth_and_the_spouts_lip() {
+    if skip_without_shared_data("the mesh fixture npm_teapot.obj") {
+        return;
+    }
     let s = obj("npm_teapot.obj");
     let (out, q) = mesh_and_report_with(&s, &EnvelopeOptions { grade_levels: 3, ..EnvelopeOptions::new(0.5) });
     eprintln!(
@@ -1237,7 +1250,7 @@ fn the_bunny_cut_into_layers() {
 /// tobj's default f32, rounds the coordinates to 6e-8 relative: the thin fin's
 /// 9.9e-5 mm would be off by 3e-8 mm).
 fn corpus_obj(name: &str) -> Surface {
-    common::read_obj(&format!("meshes/{name}"))
+    common::read_obj_file(&data(name))
 }
 
 /// The graded lattice the bunny family needs for the Hausdorff gate: base 0.2
@@ -1425,6 +1438,9 @@ fn corpus_clean_bunny_meets_every_envelope_gate() {
 /// extent, the rim's bounding-box diagonal, 1.866 mm (asserted to 1e-9 mm).
 #[test]
 fn corpus_holed_bunny_meets_every_gate_its_cap_within_its_bound() {
+    if skip_without_shared_data("the mesh fixture bad_syn_hole.obj") {
+        return;
+    }
     let name = "bad_syn_hole.obj";
     let (_, q) = defective_bunny(name);
     let rim = border_vertices(&corpus_obj(name));
@@ -1458,6 +1474,9 @@ fn corpus_holed_bunny_meets_every_gate_its_cap_within_its_bound() {
 /// angles, boundary figure 9.98e-4 and volume (-4.4e-4 from the clean one's).
 #[test]
 fn corpus_flipped_bunny_meets_every_envelope_gate() {
+    if skip_without_shared_data("the mesh fixture bad_syn_flipped10pct.obj") {
+        return;
+    }
     let (out, _) = defective_bunny("bad_syn_flipped10pct.obj");
     let turned: usize = out
         .warnings
@@ -1475,6 +1494,9 @@ fn corpus_flipped_bunny_meets_every_envelope_gate() {
 /// an `InsideOut` warning.
 #[test]
 fn corpus_inverted_bunny_meets_every_envelope_gate() {
+    if skip_without_shared_data("the mesh fixture bad_syn_inverted.obj") {
+        return;
+    }
     let (out, _) = defective_bunny("bad_syn_inverted.obj");
     assert!(out.warnings.iter().any(|w| matches!(w, EnvelopeWarning::InsideOut { .. })), "{:?}", out.warnings);
 }
@@ -1484,6 +1506,9 @@ fn corpus_inverted_bunny_meets_every_envelope_gate() {
 /// tets, boundary figure 9.98e-4, volume -4.4e-4 from the clean one's).
 #[test]
 fn corpus_soup_bunny_meets_every_envelope_gate() {
+    if skip_without_shared_data("the mesh fixture bad_syn_soup_jitter.obj") {
+        return;
+    }
     let (_, q) = defective_bunny("bad_syn_soup_jitter.obj");
     assert_eq!((q.num_border_edges, q.hole_cap_mm), (0, 0.0), "{q:?}");
 }
@@ -1500,6 +1525,9 @@ fn corpus_soup_bunny_meets_every_envelope_gate() {
 /// clean bunny's.
 #[test]
 fn corpus_degenerate_bunny_meets_every_envelope_gate() {
+    if skip_without_shared_data("the mesh fixture bad_syn_degenerate_dup.obj") {
+        return;
+    }
     let (_, q) = defective_bunny("bad_syn_degenerate_dup.obj");
     eprintln!(
         "degenerate: caps {:.3e} mm, fraction {:.3e}, from the level set {:.3e} mm, widest chain {:.3} mm",
@@ -1524,6 +1552,9 @@ fn corpus_degenerate_bunny_meets_every_envelope_gate() {
 /// union (the chords across the facets' convex edges cut inward).
 #[test]
 fn corpus_overlapping_spheres_mesh_their_exact_union() {
+    if skip_without_shared_data("the mesh fixture bad_syn_overlapping_spheres.obj") {
+        return;
+    }
     let name = "bad_syn_overlapping_spheres.obj";
     let s = corpus_obj(name);
     assert_eq!((s.vertices.len(), s.triangles.len()), (1284, 2560));
@@ -1567,6 +1598,9 @@ fn corpus_overlapping_spheres_mesh_their_exact_union() {
 /// proud of the face, is within that of the box's face), volume error -6.35e-6.
 #[test]
 fn corpus_thin_fin_meets_every_gate_and_is_reported() {
+    if skip_without_shared_data("the mesh fixture bad_syn_thin_fin.obj") {
+        return;
+    }
     let name = "bad_syn_thin_fin.obj";
     let s = corpus_obj(name);
     let [cube, fin] = two_boxes(&s, 12);
@@ -1597,6 +1631,9 @@ fn corpus_thin_fin_meets_every_gate_and_is_reported() {
 /// (closed form); angles [45, 90] deg, boundary figure ~1e-16.
 #[test]
 fn corpus_boxes_sharing_an_edge_mesh_both_exactly() {
+    if skip_without_shared_data("the mesh fixture bad_syn_nonmanifold_edge.obj") {
+        return;
+    }
     let name = "bad_syn_nonmanifold_edge.obj";
     let s = corpus_obj(name);
     let boxes = two_boxes(&s, 12);
@@ -1627,6 +1664,9 @@ fn corpus_boxes_sharing_an_edge_mesh_both_exactly() {
 /// distances cost more than the meshes).
 #[test]
 fn the_uniform_lattice_keeps_the_proven_bounds_on_the_corpus() {
+    if skip_without_shared_data("the defect corpus bad_syn_*.obj") {
+        return;
+    }
     for (name, h) in [
         ("npm_bunny.obj", 0.4),
         ("bad_syn_hole.obj", 0.4),
@@ -1650,6 +1690,9 @@ fn the_uniform_lattice_keeps_the_proven_bounds_on_the_corpus() {
 /// The same input gives bit-identical output with 1 and 2 threads.
 #[test]
 fn output_does_not_depend_on_the_thread_count() {
+    if skip_without_shared_data("the mesh fixture layered_bunny.obj") {
+        return;
+    }
     let s = obj("layered_bunny.obj");
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();

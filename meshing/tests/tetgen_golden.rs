@@ -5,7 +5,9 @@
 //! CGAL's armadillo scan from `libcgal-demo`),
 //! read where Debian installs them. `.ci/run` installs those packages; under
 //! `CI` a missing one fails the tests, elsewhere its model is skipped with a
-//! message.
+//! message. The bunny is the repository's copy (`tests/fixtures`); the other
+//! shared models are read from `../shared/data/meshes` and skipped the same way
+//! when that folder is missing (`tests/support/data.rs`).
 //!
 //! TetGen's figures are golden files (`tests/golden/tetgen_MODEL.json`): the
 //! quality report (`meshing::quality::report`, against the same surface) of
@@ -28,7 +30,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use common::{parse_ascii_stl, parse_off, read_obj};
+use common::{fixture, parse_ascii_stl, parse_off, read_obj, read_obj_file, skip_without_shared_data};
 use fem_core::mesh::TetMesh;
 use meshing::conforming::{conforming_mesh, ConformingOptions};
 use meshing::predicates::orient3d;
@@ -49,7 +51,8 @@ enum Gate {
 
 /// Where a model's surface comes from.
 enum Source {
-    /// A file of the shared data folder; `repair`: the fixture needs repair first.
+    /// A file of the shared data folder (or its copy in `tests/fixtures`, where
+    /// the repository has one); `repair`: the fixture needs repair first.
     Shared { file: &'static str, repair: bool },
     /// A file a Debian package installs (`.ci/run` installs the package): an OFF
     /// or ASCII STL file at `path`, or, with `member`, the OFF file `member` of
@@ -183,13 +186,22 @@ fn golden_path(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden").join(format!("tetgen_{name}.json"))
 }
 
-/// The model's surface; `None` (after saying so) when its Debian package is
-/// not installed outside CI. Under `CI` a missing package fails the test.
+/// The model's surface; `None` (after saying so) when its Debian package or
+/// the shared data folder is missing outside CI. Under `CI` a missing one
+/// fails the test.
 fn surface(m: &Model) -> Option<Surface> {
     match m.source {
-        Source::Shared { file, repair: false } => Some(read_obj(file)),
-        Source::Shared { file, repair: true } => {
-            Some(meshing::repair::repair(&read_obj(file), &RepairOptions::default()).unwrap().surface)
+        Source::Shared { file, repair } => {
+            // The repository's copy where it has one, else the shared data folder's.
+            let name = file.rsplit('/').next().unwrap_or(file);
+            let s = if fixture(name).is_file() {
+                read_obj_file(&fixture(name))
+            } else if skip_without_shared_data(&format!("the model {name}; only this model is skipped")) {
+                return None;
+            } else {
+                read_obj(file)
+            };
+            Some(if repair { meshing::repair::repair(&s, &RepairOptions::default()).unwrap().surface } else { s })
         }
         Source::Debian { package, path, member } => {
             if !Path::new(path).exists() {

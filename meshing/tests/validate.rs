@@ -1,5 +1,6 @@
-//! Validation and repair on the shared defect corpus (`../shared/data/meshes`)
-//! and the scans (`../shared/data/real/scans`), read in place, never copied.
+//! Validation and repair on the Stanford bunny (`tests/fixtures`) and the shared
+//! defect corpus (`../shared/data/meshes`, read in place, never copied; a test
+//! that reads it skips without it, see `tests/support/data.rs`).
 
 use std::time::Instant;
 
@@ -9,7 +10,7 @@ use meshing::InvalidSurface;
 use meshing::{Surface, SurfaceReport};
 
 mod common;
-use common::read_obj;
+use common::{bunny, read_obj, skip_without_shared_data};
 
 fn check(s: &Surface) -> SurfaceReport {
     validate(s, &ValidateOptions::default()).expect("well-formed")
@@ -45,7 +46,7 @@ fn rel_close(a: f64, b: f64, tol: f64) -> bool {
 
 #[test]
 fn the_bunny_is_closed_outward_and_valid() {
-    let s = read_obj("meshes/npm_bunny.obj");
+    let s = bunny();
     let r = s.require_closed_manifold().expect("valid");
     assert_eq!((r.num_vertices, r.num_triangles, r.num_edges), (1839, 3674, 5511));
     assert_eq!(r.components.len(), 1);
@@ -62,7 +63,7 @@ fn the_bunny_is_closed_outward_and_valid() {
 
 #[test]
 fn validation_is_fast_on_the_bunny_and_on_a_235k_subdivision() {
-    let s = read_obj("meshes/npm_bunny.obj");
+    let s = bunny();
     let t = Instant::now();
     let r = check(&s);
     let bunny = t.elapsed().as_secs_f64();
@@ -109,6 +110,9 @@ fn subdivide(s: &Surface) -> Surface {
 
 #[test]
 fn the_teapot_is_open_in_several_pieces_and_self_intersecting() {
+    if skip_without_shared_data("the mesh fixture npm_teapot.obj") {
+        return;
+    }
     let s = read_obj("meshes/npm_teapot.obj");
     let r = check(&s);
     assert_eq!(kinds(&r), vec!["unwelded vertices", "open boundary", "self-intersections"]);
@@ -132,6 +136,9 @@ fn the_teapot_is_open_in_several_pieces_and_self_intersecting() {
 
 #[test]
 fn the_layered_bunny_is_three_nested_shells_with_the_exact_region_volumes() {
+    if skip_without_shared_data("the mesh fixture layered_bunny.obj") {
+        return;
+    }
     let s = read_obj("meshes/layered_bunny.obj");
     assert_eq!(s.region_names, vec!["layer0_bunny", "layer1_sphereA", "layer2_sphereB"]);
     let r = s.require_closed_manifold().expect("valid");
@@ -150,6 +157,9 @@ fn the_layered_bunny_is_three_nested_shells_with_the_exact_region_volumes() {
 
 #[test]
 fn two_boxes_sharing_a_face_are_a_valid_two_region_input_once_oriented() {
+    if skip_without_shared_data("the mesh fixture layered_two_boxes.obj") {
+        return;
+    }
     let s = read_obj("meshes/layered_two_boxes.obj");
     let r = check(&s);
     // The four edges around the shared face carry three triangles each: junctions
@@ -179,6 +189,9 @@ fn two_boxes_sharing_a_face_are_a_valid_two_region_input_once_oriented() {
 
 #[test]
 fn a_hole_is_an_open_boundary_with_its_border_edges() {
+    if skip_without_shared_data("the mesh fixture bad_syn_hole.obj") {
+        return;
+    }
     let s = read_obj("meshes/bad_syn_hole.obj");
     let r = check(&s);
     assert_eq!(kinds(&r), vec!["open boundary"]);
@@ -199,7 +212,10 @@ fn a_hole_is_an_open_boundary_with_its_border_edges() {
 
 #[test]
 fn ten_percent_flipped_is_inconsistent_and_repairs_to_the_bunny() {
-    let bunny = read_obj("meshes/npm_bunny.obj");
+    if skip_without_shared_data("the mesh fixture bad_syn_flipped10pct.obj") {
+        return;
+    }
+    let bunny = bunny();
     let s = read_obj("meshes/bad_syn_flipped10pct.obj");
     let r = check(&s);
     assert_eq!(kinds(&r), vec!["inconsistent orientation"]);
@@ -212,6 +228,9 @@ fn ten_percent_flipped_is_inconsistent_and_repairs_to_the_bunny() {
 
 #[test]
 fn an_inverted_bunny_has_negative_volume_and_repairs_outward() {
+    if skip_without_shared_data("the mesh fixture bad_syn_inverted.obj") {
+        return;
+    }
     let s = read_obj("meshes/bad_syn_inverted.obj");
     let r = check(&s);
     assert_eq!(kinds(&r), vec!["inverted"]);
@@ -221,11 +240,14 @@ fn an_inverted_bunny_has_negative_volume_and_repairs_outward() {
     let fixed = repair(&s, &RepairOptions::default()).unwrap();
     assert_eq!(fixed.report.flipped.len(), 3674);
     assert!(rel_close(fixed.surface.signed_volume(None), 194.288, 1e-5));
-    assert_eq!(oriented_set(&fixed.surface), oriented_set(&read_obj("meshes/npm_bunny.obj")));
+    assert_eq!(oriented_set(&fixed.surface), oriented_set(&bunny()));
 }
 
 #[test]
 fn overlapping_spheres_self_intersect() {
+    if skip_without_shared_data("the mesh fixture bad_syn_overlapping_spheres.obj") {
+        return;
+    }
     let s = read_obj("meshes/bad_syn_overlapping_spheres.obj");
     let r = check(&s);
     assert_eq!(kinds(&r), vec!["self-intersections"]);
@@ -241,6 +263,9 @@ fn overlapping_spheres_self_intersect() {
 
 #[test]
 fn a_jittered_soup_is_unwelded_and_welds_into_a_closed_surface() {
+    if skip_without_shared_data("the mesh fixture bad_syn_soup_jitter.obj") {
+        return;
+    }
     let s = read_obj("meshes/bad_syn_soup_jitter.obj");
     let r = check(&s);
     assert_eq!(kinds(&r), vec!["unwelded vertices", "open boundary", "self-intersections"]);
@@ -261,6 +286,9 @@ fn a_jittered_soup_is_unwelded_and_welds_into_a_closed_surface() {
 
 #[test]
 fn degenerate_and_duplicate_triangles_are_found_and_dropped() {
+    if skip_without_shared_data("the mesh fixture bad_syn_degenerate_dup.obj") {
+        return;
+    }
     let s = read_obj("meshes/bad_syn_degenerate_dup.obj");
     let r = check(&s);
     assert_eq!(kinds(&r), vec!["degenerate triangles", "duplicate triangles"]);
@@ -277,11 +305,14 @@ fn degenerate_and_duplicate_triangles_are_found_and_dropped() {
     assert_eq!(fixed.report.dropped_duplicates.len(), 20);
     assert_eq!(fixed.report.removed_vertices.len(), 20, "the needles' apexes");
     assert!(fixed.surface.require_closed_manifold().is_ok());
-    assert_eq!(oriented_set(&fixed.surface), oriented_set(&read_obj("meshes/npm_bunny.obj")));
+    assert_eq!(oriented_set(&fixed.surface), oriented_set(&bunny()));
 }
 
 #[test]
 fn cubes_touching_along_an_edge_are_non_manifold() {
+    if skip_without_shared_data("the mesh fixture bad_syn_nonmanifold_edge.obj") {
+        return;
+    }
     let s = read_obj("meshes/bad_syn_nonmanifold_edge.obj");
     let r = check(&s);
     assert_eq!(kinds(&r), vec!["non-manifold edges"]);
@@ -296,6 +327,9 @@ fn cubes_touching_along_an_edge_are_non_manifold() {
 
 #[test]
 fn the_thin_fin_pierces_the_cube() {
+    if skip_without_shared_data("the mesh fixture bad_syn_thin_fin.obj") {
+        return;
+    }
     // A 0.8 x 0.8 x 1e-4 mm plate whose face lies 1e-6 mm inside the cube's
     // x = 0.5 face: two closed boxes that intersect, one thinner than 1e-4 of the
     // diagonal.

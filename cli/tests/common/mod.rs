@@ -7,6 +7,11 @@ use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
+#[path = "../../../tests/support/data.rs"]
+mod data;
+#[allow(unused_imports)]
+pub use data::{fixture, shared_data, shared_data_path, skip_without_shared_data};
+
 /// The `experiment.toml` text (a `&'static str`) of a specimen of the seed's
 /// material 1 (five-element) pressed by a plate: `name`, `dimension`, the
 /// `[specimen]` lines before `material` (shape, sizes, mass) and the `[protocol]`

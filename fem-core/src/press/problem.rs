@@ -89,8 +89,8 @@ impl Protocol {
         k
     }
 
-    /// Refuses waypoints out of time order, negative times, and a release or end
-    /// before the last waypoint that pushes.
+    /// Refuses waypoints out of time order, negative times, a release or end
+    /// before the last waypoint that pushes, and an end before the release.
     pub fn validate(&self) -> Result<(), PressError> {
         let bad = |m: String| Err(PressError::BadProtocol(m));
         if self.waypoints.is_empty() {
@@ -110,6 +110,9 @@ impl Protocol {
         }
         if !(self.end_s.is_finite() && self.end_s >= last_push && self.end_s > 0.0) {
             return bad(format!("end_s = {} is before the last pushing waypoint ({last_push} s)", self.end_s));
+        }
+        if self.end_s < self.release_s {
+            return bad(format!("end_s = {} is before release_s = {}", self.end_s, self.release_s));
         }
         Ok(())
     }
@@ -649,5 +652,17 @@ impl SolidPress {
     /// A 3D problem, density 1 g/cm^3, no markers.
     pub fn new_3d(mesh: TetMesh, materials: Vec<Material>, protocol: Protocol) -> Result<Self, PressError> {
         Self::checked(mesh, Formulation::Solid, materials, protocol)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_end_before_the_release_is_refused() {
+        let err = Protocol::ramp_hold_release(0.2, 10.0, 40.0, 30.0).validate().unwrap_err();
+        assert_eq!(err.to_string(), "protocol: end_s = 30 is before release_s = 40");
+        assert!(Protocol::ramp_hold_release(0.2, 10.0, 40.0, 40.0).validate().is_ok());
     }
 }

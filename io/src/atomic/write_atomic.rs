@@ -4,7 +4,9 @@ use std::path::Path;
 use crate::error::WriteError;
 
 /// Writes `bytes` to `path` atomically: into a temporary file in the same folder,
-/// synced, then renamed over `path`. The folder must exist.
+/// synced, then renamed over `path`. The folder must exist. The file gets the
+/// mode any new file gets (`0666` less the umask: normally `0644`), not the
+/// owner-only mode of a temporary file.
 pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<(), WriteError> {
     let path = path.as_ref();
     let parent = match path.parent() {
@@ -13,7 +15,15 @@ pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<(), WriteErr
     };
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let io = |e: std::io::Error| WriteError::io(path, e);
-    let mut tmp = tempfile::Builder::new().prefix(&format!(".{name}.tmp-")).tempfile_in(parent).map_err(io)?;
+    let prefix = format!(".{name}.tmp-");
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(&prefix);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let mut tmp = builder.tempfile_in(parent).map_err(io)?;
     tmp.write_all(bytes).map_err(io)?;
     tmp.as_file().sync_all().map_err(io)?;
     tmp.persist(path).map_err(|e| io(e.error))?;
@@ -33,6 +43,19 @@ mod tests {
         assert_eq!(std::fs::read(&path).unwrap(), b"two");
         let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
         assert_eq!(names, vec![std::ffi::OsString::from("a.txt")]);
+    }
+
+    /// Outputs are for colleagues too: the mode of any new file (0666 less the
+    /// umask), as `std::fs::write` gives it, not a temporary file's 0600.
+    #[cfg(unix)]
+    #[test]
+    fn files_get_the_umasks_mode() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+        std::fs::write(dir.path().join("plain.txt"), b"x").unwrap();
+        write_atomic(dir.path().join("a.txt"), b"x").unwrap();
+        assert_eq!(mode(&dir.path().join("a.txt")), mode(&dir.path().join("plain.txt")));
     }
 
     #[test]

@@ -742,7 +742,7 @@ struct MaterialsFile {
 pub fn read_materials_file(path: impl AsRef<Path>) -> Result<BTreeMap<String, MaterialSpec>, BundleError> {
     let path = path.as_ref();
     let text =
-        std::fs::read_to_string(path).map_err(|source| BundleError::Read { file: path.to_path_buf(), source })?;
+        crate::input::read_to_string(path).map_err(|source| BundleError::Read { file: path.to_path_buf(), source })?;
     let map = Arc::new(SourceMap::parse(path, &text)?);
     let parsed: MaterialsFile = toml::from_str(&text).map_err(|e| map.toml_error(&e))?;
     let mut out = parsed.materials;

@@ -27,7 +27,7 @@
 //!   `friction` when a contact is `"friction"`. A key that belongs to another
 //!   shape, tool or contact is refused.
 //! - Times (waypoints, `release_s`, `end_s`, CSV `t_s`) must not be negative;
-//!   `release_s` and `end_s` must be > 0.
+//!   `release_s` and `end_s` must be > 0, and `end_s` not before `release_s`.
 //! - "The specimen's smallest size" of the marker check is min(W, H, T) for a
 //!   block (in 2D too) and min(2R, H) for a cylinder; in 3D the distance is to the
 //!   surface of the box or cylinder, in 2D to the rectangle `[0, W] x [0, H]`.
@@ -35,6 +35,11 @@
 //!   bundle is read (the surface is read when it is meshed, by `to_press`; a
 //!   marker off the mesh is then refused by the engine, naming `data.markers`).
 //! - A material in a `--materials` file replaces the bundle's table of the same name.
+//! - Every file the bundle names (`data.force`, `data.markers`,
+//!   `specimen.surface`, `protocol.tool_surface`, `protocol.tools[i].surface`)
+//!   lies inside the bundle folder, symlinks followed: an absolute path, a `..`
+//!   that climbs out of the folder or a symlink that points out of it is refused,
+//!   `FILE:LINE: KEY: path leaves the bundle folder`.
 //! - `[protocol] tool_surface_units` (optional, `tool = "surface"` only): see below.
 //! - `[[protocol.tools]]` (optional): more rigid tools, see below.
 //! - `[effects]` (optional): candidate effects of the gap diagnosis, see below.
@@ -236,6 +241,7 @@
 //! (x or z not 0) or turning about x or z; a surface file that cannot be read or
 //! is not closed.
 
+mod confine;
 mod experiment;
 mod material_spec;
 mod read;

@@ -4,6 +4,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use super::confine::confine_paths;
 use super::experiment::Experiment;
 use super::material_spec::{attach_origins, MaterialSpec};
 use super::series::{read_force, read_markers, ForceSeries, MarkerSeries};
@@ -69,14 +70,16 @@ pub fn read_bundle_with(
 ) -> Result<Bundle, BundleError> {
     let dir = dir.as_ref();
     let file = dir.join(EXPERIMENT_FILE);
-    let text = std::fs::read_to_string(&file).map_err(|source| BundleError::Read { file: file.clone(), source })?;
+    let text =
+        crate::input::read_to_string(&file).map_err(|source| BundleError::Read { file: file.clone(), source })?;
     read_bundle_from_str(dir, &text, external)
 }
 
 /// Reads a bundle whose `experiment.toml` is the text `experiment_toml` (e.g.
 /// embedded in a binary with `include_str!`), as if it stood in `dir`: messages
 /// name `dir/experiment.toml`, and the data files it names are read from `dir`
-/// (a bundle without `[data]` reads nothing from disk). `external` as in
+/// (a bundle without `[data]` reads nothing from disk; every file it names must
+/// lie inside `dir`, see the [`super`] module docs). `external` as in
 /// [`read_bundle_with`].
 pub fn read_bundle_from_str(
     dir: impl AsRef<Path>,
@@ -90,6 +93,7 @@ pub fn read_bundle_from_str(
     attach_origins(&mut experiment.materials, &map);
     merge_materials(&mut experiment, external);
     validate_experiment(&experiment, &map)?;
+    confine_paths(&experiment, dir, &map)?;
 
     let data = experiment.data.clone().unwrap_or_default();
     let force = match &data.force {

@@ -97,7 +97,7 @@ pub fn markers_header(dimension: usize) -> &'static [&'static str] {
 
 /// The rows of a CSV file whose header must be `header`: `(line, cells)`.
 fn read_rows(file: &Path, header: &[&str]) -> Result<Vec<(usize, Vec<String>)>, BundleError> {
-    let bytes = std::fs::read(file).map_err(|source| BundleError::Read { file: file.to_path_buf(), source })?;
+    let bytes = crate::input::read(file).map_err(|source| BundleError::Read { file: file.to_path_buf(), source })?;
     let invalid = |line: usize, field: &str, cause: String| BundleError::Invalid {
         file: file.to_path_buf(),
         line,

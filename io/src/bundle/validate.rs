@@ -246,6 +246,12 @@ fn validate_protocol(e: &Experiment, map: &SourceMap) -> Result<(), BundleError>
             return Err(map.invalid(key, format!("{value} s is before the last waypoint that pushes ({last_push} s)")));
         }
     }
+    if p.end_s < p.release_s {
+        return Err(map.invalid(
+            "protocol.end_s",
+            format!("{} s is before release_s ({} s): the run must go on until the release", p.end_s, p.release_s),
+        ));
+    }
     validate_tools(e, map)
 }
 

@@ -133,7 +133,7 @@ impl FrameSeries {
     /// Reads a series written by [`write`](Self::write); errors name the file.
     pub fn read(path: impl AsRef<Path>) -> Result<Self, GltfError> {
         let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|source| GltfError::Read { path: path.to_path_buf(), source })?;
+        let bytes = crate::input::read(path).map_err(|source| GltfError::Read { path: path.to_path_buf(), source })?;
         Self::from_bytes(&bytes, path)
     }
 

@@ -33,7 +33,8 @@ impl VtuShape {
     /// Reads `path`; errors name the file and what is wrong.
     pub fn read(path: impl AsRef<Path>) -> Result<Self, GltfError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|source| GltfError::Read { path: path.into(), source })?;
+        let text =
+            crate::input::read_to_string(path).map_err(|source| GltfError::Read { path: path.into(), source })?;
         Self::parse(&text, path)
     }
 
@@ -161,7 +162,7 @@ fn mesh<const D: usize, const N: usize>(nodes: Vec<[f64; D]>, cells: &[[u32; N]]
 /// the `.pvd`'s folder, in the order written.
 pub fn read_pvd(path: impl AsRef<Path>) -> Result<Vec<(f64, PathBuf)>, GltfError> {
     let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|source| GltfError::Read { path: path.into(), source })?;
+    let text = crate::input::read_to_string(path).map_err(|source| GltfError::Read { path: path.into(), source })?;
     let bad = |cause: String| GltfError::bad_file(path, cause);
     let doc = roxmltree::Document::parse(&text).map_err(|e| bad(format!("not well-formed XML: {e}")))?;
     if doc.root_element().attribute("type") != Some("Collection") {

@@ -13,6 +13,9 @@
 //! belong to its region. Vertices at bit-identical positions after the transform
 //! are merged: glTF repeats a vertex in every primitive that uses it and along
 //! texture seams. Positions are metres by the specification (the default unit).
+//!
+//! Buffers are loaded by [`super::gltf_buffers`]: `data:` URIs and files inside
+//! the glTF file's folder only.
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -32,8 +35,7 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Raw, SurfaceError> {
     let format_err = |message: String| SurfaceError::Format { path: owned(path), message };
     let gltf = ::gltf::Gltf::from_slice(bytes).map_err(|e| format_err(format!("glTF: {e}")))?;
     let base = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let buffers = ::gltf::import_buffers(&gltf.document, Some(base), gltf.blob.clone())
-        .map_err(|e| format_err(format!("glTF buffers: {e}")))?;
+    let buffers = super::gltf_buffers::load_buffers(base, &gltf.document, gltf.blob.clone()).map_err(format_err)?;
     let document = &gltf.document;
     let scene = document
         .default_scene()

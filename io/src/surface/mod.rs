@@ -64,6 +64,7 @@
 
 mod error;
 pub mod gltf;
+mod gltf_buffers;
 pub mod obj;
 pub mod off;
 mod options;

@@ -38,7 +38,7 @@ pub fn read_surface(path: impl AsRef<Path>, options: &SurfaceOptions) -> Result<
     if !(options.scale.is_finite() && options.scale > 0.0) {
         return Err(SurfaceError::Option { name: "scale", value: options.scale });
     }
-    let bytes = std::fs::read(path).map_err(|source| SurfaceError::Read { path: path.to_path_buf(), source })?;
+    let bytes = crate::input::read(path).map_err(|source| SurfaceError::Read { path: path.to_path_buf(), source })?;
     let format = match options.format {
         Some(f) => f,
         None => detect(path, &bytes)?,

@@ -86,7 +86,7 @@ impl<'a> Reader<'a> {
 /// Reads a Gmsh MSH 4.1 ASCII file (see the module docs).
 pub fn read_gmsh(path: impl AsRef<Path>) -> Result<TetMesh, TetMeshError> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|source| TetMeshError::Read { file: path.to_path_buf(), source })?;
+    let bytes = crate::input::read(path).map_err(|source| TetMeshError::Read { file: path.to_path_buf(), source })?;
     let text = String::from_utf8(bytes).map_err(|_| {
         TetMeshError::invalid(
             path,

@@ -92,7 +92,7 @@ impl<'a> Lines<'a> {
 }
 
 fn read_text(path: &Path) -> Result<String, TetMeshError> {
-    std::fs::read_to_string(path).map_err(|source| TetMeshError::Read { file: path.to_path_buf(), source })
+    crate::input::read_to_string(path).map_err(|source| TetMeshError::Read { file: path.to_path_buf(), source })
 }
 
 /// `STEM.ext`: the extension appended to the stem, which may hold dots of its own

@@ -128,7 +128,7 @@ pub(crate) fn check_time_order(
 /// Reads `file` as text: UTF-8, a leading byte-order mark dropped. Invalid UTF-8
 /// is refused with its line.
 pub(crate) fn read_text(file: &Path) -> Result<String, ImportError> {
-    let bytes = std::fs::read(file).map_err(|reason| ImportError::Read { file: file.to_path_buf(), reason })?;
+    let bytes = crate::input::read(file).map_err(|reason| ImportError::Read { file: file.to_path_buf(), reason })?;
     decode(file, bytes)
 }
 

@@ -6,6 +6,11 @@ use std::path::{Path, PathBuf};
 
 use wagashi_io::BundleError;
 
+#[path = "../../../tests/support/data.rs"]
+mod data;
+#[allow(unused_imports)]
+pub use data::{fixture, shared_data, shared_data_path, skip_without_shared_data};
+
 /// The `experiment.toml` text (a `&'static str`) of an elastic gel (E = 0.05
 /// MPa, nu = 0.45) pressed by a plate: `name`, `dimension`, the `[specimen]`
 /// lines before `material` (shape and sizes) and the `[protocol]` lines after

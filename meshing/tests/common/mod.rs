@@ -1,23 +1,40 @@
-//! Test support shared by the meshing tests: the shared data folder and a reader
-//! for the fixtures' OBJ subset.
+//! Test support shared by the meshing tests: the test data (the repository's
+//! fixtures and the shared data folder beside the checkout, which a test that
+//! reads it checks for first: see `tests/support/data.rs`) and a reader for the
+//! fixtures' OBJ subset.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use meshing::Surface;
 
+#[path = "../../../tests/support/data.rs"]
+mod support;
+#[allow(unused_imports)]
+pub use support::{fixture, shared_data, skip_without_shared_data};
+
 /// A file of the shared data folder beside the workspace (`<workspace>/../shared/data`).
 pub fn data(rel: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data").join(rel)
+    support::shared_data_path().join(rel)
+}
+
+/// The Stanford bunny of the repository's fixtures (`tests/fixtures/npm_bunny.obj`).
+#[allow(dead_code)]
+pub fn bunny() -> Surface {
+    read_obj_file(&fixture("npm_bunny.obj"))
+}
+
+/// The OBJ file `rel` of the shared data folder (the test has checked that the
+/// folder is there), read as [`read_obj_file`] does.
+#[allow(dead_code)]
+pub fn read_obj(rel: &str) -> Surface {
+    read_obj_file(&data(rel))
 }
 
 /// The fixtures' OBJ subset: `v`, `f` (first index of each corner, polygons as
 /// fans), `o`/`g` regions. The full reader is `wagashi_io::surface` (which
 /// depends on this crate); these files need nothing more.
-pub fn read_obj(rel: &str) -> Surface {
-    let path = data(rel);
-    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| {
-        panic!("{}: {e} (the shared data folder beside the workspace, <workspace>/../shared/data)", path.display())
-    });
+pub fn read_obj_file(path: &Path) -> Surface {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let mut s = Surface::default();
     let mut region: Option<u32> = None;
     for line in text.lines() {
