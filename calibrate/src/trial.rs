@@ -121,7 +121,8 @@ impl Unknown {
     /// [1e-5, 1e2] MPa, relaxation times in [1e-3, 1e5] s, the damper in
     /// [1e-6, 1e4] MPa s and the exponential's stiffening in [1e-3, 50], all on a
     /// log scale; Mullins's `r` in [1.01, 50] (log), `m` in [1e-6, 1] MPa (log),
-    /// `beta` in [0, 5] (linear).
+    /// `beta` in [0, 5] (linear); the plastic network's yield stress and
+    /// hardening modulus in [1e-6, 1e2] MPa (log).
     pub fn spec(&self) -> ParameterSpec {
         let label = self.label();
         match self.key {
@@ -131,6 +132,7 @@ impl Unknown {
             k if k.ends_with("mullins.r") => ParameterSpec::log(label, 1.01, 50.0),
             k if k.ends_with("mullins.m_MPa") => ParameterSpec::log(label, 1e-6, 1.0),
             k if k.ends_with("mullins.beta") => ParameterSpec::linear(label, 0.0, 5.0),
+            "plastic.yield_MPa" | "plastic.hardening_MPa" => ParameterSpec::log(label, 1e-6, 1e2),
             "poisson" => ParameterSpec::linear(self.label(), 0.0, 0.499),
             k if k.ends_with("_MPa_s") => ParameterSpec::log(self.label(), 1e-5, 1e5),
             _ => ParameterSpec::log(self.label(), 1e-5, 1e2),
@@ -532,6 +534,11 @@ fn default_starts(materials: &mut BTreeMap<String, MaterialSpec>, unknowns: &[Un
                 10f64.powi(k.as_bytes()["viscous[".len()] as i32 - b'0' as i32)
             }
             "damper.c_MPa_s" => 0.1 * e,
+            // A plastic network of a quarter of the modulus that yields at a
+            // tenth of the apparent stress at 20 % strain, hardening gently.
+            "plastic.E_MPa" => 0.25 * e,
+            "plastic.yield_MPa" => 0.02 * e,
+            "plastic.hardening_MPa" => 0.1 * e,
             "E_MPa" => e,
             "E1_MPa" | "E2_MPa" => 2.0 * e,
             "c1_MPa_s" => 2.0 * e * 0.1,

@@ -1,6 +1,6 @@
 //! The network model on the Newton path against closed forms and the chain.
 
-use fem_core::material::network::{Energy, Equilibrium, Network, ViscousNetwork};
+use fem_core::material::network::{Energy, Equilibrium, Network, PlasticNetwork, ViscousNetwork};
 use fem_core::material::Material;
 use fem_core::mesh;
 use fem_core::press::{self, Attachment, PressResult, Protocol, Settings, SolidPress};
@@ -56,6 +56,7 @@ fn a_neo_hookean_block_in_uniaxial_compression_follows_the_closed_form_to_50_per
         poisson: nu,
         equilibrium: Some(Equilibrium { energy: Energy::NeoHookean, e_mpa: e, mullins: None }),
         viscous: vec![],
+        plastic: None,
         damper_mpa_s: None,
     };
     let h = 10.0;
@@ -134,6 +135,7 @@ fn a_viscous_network_in_uniaxial_compression_converges_to_an_independent_integra
         poisson: nu,
         equilibrium: None,
         viscous: vec![ViscousNetwork { e_mpa: e, tau_s: tau }],
+        plastic: None,
         damper_mpa_s: None,
     };
     let h = 10.0;
@@ -200,6 +202,66 @@ fn a_viscous_network_in_uniaxial_compression_converges_to_an_independent_integra
     assert!(errors[2] < 1e-3, "{errors:?}");
 }
 
+/// A plastic network pushed to 50 % strain between frictionless plates, pulled
+/// back to its starting height (through reverse yielding in tension) and held:
+/// the engine against the 1D elastoplastic element written here. Under uniaxial
+/// stress a Hencky spring is Hooke's law in the axial log strain `eps`, and the
+/// isochoric J2 flow with isotropic hardening is the scalar law
+/// `tau = E (eps - p)`, `|tau| <= sigma_y + H alpha`, `d alpha = |dp|`: its
+/// piecewise-linear return is exact for any step, so the engine must match it
+/// to the solver's tolerance at every step end, at the peak and after the set.
+#[test]
+fn a_plastic_network_in_uniaxial_compression_and_reverse_yield_follows_the_1d_element() {
+    let (e, nu, sigma_y, hardening) = (0.04, 0.3, 2e-3, 0.01);
+    let net = Network {
+        poisson: nu,
+        equilibrium: None,
+        viscous: vec![],
+        plastic: Some(PlasticNetwork { e_mpa: e, yield_mpa: sigma_y, hardening_mpa: hardening }),
+        damper_mpa_s: None,
+    };
+    let h = 10.0;
+    let mut protocol = frictionless(5.0, 10.0, 25.0);
+    protocol.waypoints = vec![[0.0, 0.0], [10.0, 5.0], [20.0, 0.0]];
+    let problem = SolidPress::new_3d(
+        mesh::block([6.0, h, 6.0], 3.0, "m").unwrap(),
+        vec![Material::network(net).unwrap()],
+        protocol.clone(),
+    )
+    .unwrap();
+    let settings = Settings { fixed_dt_s: Some(0.25), ..Settings::default() };
+    let result = run(&problem, &settings);
+    let area = 36.0;
+    // The 1D element along the engine's step ends.
+    let (mut p, mut alpha) = (0.0f64, 0.0f64);
+    let mut want = Vec::new();
+    for s in &result.steps {
+        let stretch = 1.0 - protocol.displacement(s.t_s) / h;
+        let eps = stretch.ln();
+        let trial = e * (eps - p);
+        let excess = trial.abs() - (sigma_y + hardening * alpha);
+        if excess > 0.0 {
+            let dp = excess / (e + hardening) * trial.signum();
+            p += dp;
+            alpha += dp.abs();
+        }
+        want.push(-e * (eps - p) / stretch * area);
+    }
+    let peak = want.iter().fold(0.0f64, |m, w| m.max(w.abs()));
+    let worst = result.steps.iter().zip(&want).map(|(s, w)| (s.bottom_force_n - w).abs() / peak).fold(0.0, f64::max);
+    let last = result.steps.last().unwrap();
+    eprintln!(
+        "plastic network: {} steps, worst force error {worst:.3e} of the peak {peak:.5} N; after the pull back \
+         the force is {:.5} N (1D: {:.5} N), the plastic strain {p:.4}",
+        result.steps.len(),
+        last.bottom_force_n,
+        want.last().unwrap()
+    );
+    assert!(worst < 1e-8, "worst {worst:.3e}");
+    // The set: back at its height the block pulls on the plates (it would rest shorter).
+    assert!(last.bottom_force_n.abs() > 0.1 * peak && p < -0.1);
+}
+
 /// A double compression with a plate tool that leaves the specimen and touches
 /// it again, on a neo-Hookean cylinder's axisymmetric section: while the plate
 /// pushes, the unilateral contact gives the constrained frictionless plate's
@@ -213,6 +275,7 @@ fn a_plate_tool_leaves_an_elastic_network_cylinder_and_touches_it_again() {
         poisson: 0.3,
         equilibrium: Some(Equilibrium { energy: Energy::Exponential { stiffening: 1.0 }, e_mpa: 0.03, mullins: None }),
         viscous: vec![],
+        plastic: None,
         damper_mpa_s: None,
     };
     let (r, h) = (4.0, 8.0);

@@ -27,6 +27,10 @@ tau_s = 2.0
 E_MPa = 0.01
 tau_s = 40.0
 
+[materials.mat1.plastic]
+E_MPa = 0.01
+yield_MPa = 0.002
+
 [materials.mat1.damper]
 c_MPa_s = 0.005
 "#;
@@ -48,6 +52,9 @@ fn a_network_material_is_read_with_its_parts_and_defaults() {
     assert_eq!(net.viscous.len(), 2);
     assert_eq!(net.viscous[1].tau_s, 40.0);
     assert_eq!(net.damper_mpa_s, Some(0.005));
+    let plastic = net.plastic.unwrap();
+    // The hardening's default.
+    assert_eq!((plastic.e_mpa, plastic.yield_mpa, plastic.hardening_mpa), (0.01, 0.002, 0.0));
     let eq = net.equilibrium.unwrap();
     assert_eq!(eq.e_mpa, 0.03);
     // beta's default.
@@ -59,7 +66,7 @@ fn a_network_material_is_read_with_its_parts_and_defaults() {
 
 #[test]
 fn bad_network_keys_are_refused_naming_file_line_and_key() {
-    let cases: [(&str, &str, &str, &str, &str); 6] = [
+    let cases: [(&str, &str, &str, &str, &str); 7] = [
         ("tau_s = 40.0", "tau_s = -4.0", "tau_s = -4.0", "materials.mat1.viscous[1].tau_s", "outside (0, 1000000000]"),
         (
             "stiffening = 0.5",
@@ -78,6 +85,7 @@ fn bad_network_keys_are_refused_naming_file_line_and_key() {
         ("poisson = 0.45", "poisson = 0.5", "poisson", "materials.mat1.poisson", "outside"),
         ("r = 2.0", "r = 0.5", "r = 0.5", "materials.mat1.equilibrium.mullins.r", "outside (1, 1000]"),
         ("c_MPa_s = 0.005", "c_MPa_s = \"fast\"", "c_MPa_s", "materials.mat1.damper.c_MPa_s", "is not a number"),
+        ("yield_MPa = 0.002", "yield_MPa = 0.0", "yield_MPa", "materials.mat1.plastic.yield_MPa", "outside (0, 10000]"),
     ];
     for (from, to, line, field, cause) in cases {
         let toml = with_network(&edit(NETWORK, from, to));

@@ -10,7 +10,7 @@
 //! | `four-element`  | `E1_MPa, c1_MPa_s, E2_MPa, c3_MPa_s` (E2 the series spring) |
 //! | `five-element`  | `E1_MPa, E2_MPa, c1_MPa_s, c2_MPa_s, c3_MPa_s`     |
 //!
-//! | `network`       | `[equilibrium]`, `[[viscous]]`, `[damper]` (below)  |
+//! | `network`       | `[equilibrium]`, `[[viscous]]`, `[plastic]`, `[damper]` (below) |
 //!
 //! Every parameter is optional when reading, so that identification can take a
 //! material that gives only its model and the parameters to hold fixed; a key
@@ -53,6 +53,10 @@
 //! [[materials.gel.viscous]]
 //! E_MPa = 0.01
 //! tau_s = 60.0
+//! [materials.gel.plastic]        # a plastic network: the permanent set
+//! E_MPa = 0.01                   # its Hencky spring
+//! yield_MPa = 0.002              # uniaxial yield stress (von Mises)
+//! hardening_MPa = 0.005          # linear isotropic hardening (default 0)
 //! [materials.gel.damper]         # a parallel Newtonian damper
 //! c_MPa_s = 0.005
 //! ```
@@ -67,7 +71,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use fem_core::material::law::ParameterSpec;
-use fem_core::material::network::{Energy, Equilibrium, Mullins, Network, ViscousNetwork};
+use fem_core::material::network::{Energy, Equilibrium, Mullins, Network, PlasticNetwork, ViscousNetwork};
 use fem_core::material::{Material, MaterialError, MullinsDamage, Rheology};
 use serde::{Deserialize, Serialize};
 
@@ -87,7 +91,7 @@ pub enum Model {
     /// Two Voigt elements `(E1, c1)`, `(E2, c2)` and a dashpot `c3` in series.
     FiveElement,
     /// The finite-strain network ([`fem_core::material::network`]): its parts in
-    /// the sub-tables `[equilibrium]`, `[[viscous]]` and `[damper]` (module docs).
+    /// the sub-tables `[equilibrium]`, `[[viscous]]`, `[plastic]` and `[damper]` (module docs).
     Network,
 }
 
@@ -138,6 +142,9 @@ pub const NETWORK_KEYS: &[&str] = &[
     "viscous[2].tau_s",
     "viscous[3].E_MPa",
     "viscous[3].tau_s",
+    "plastic.E_MPa",
+    "plastic.yield_MPa",
+    "plastic.hardening_MPa",
     "damper.c_MPa_s",
 ];
 
@@ -185,6 +192,9 @@ pub struct MaterialSpec {
     /// `network`: the viscous networks, one `[[viscous]]` table each (`E_MPa`, `tau_s`).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub viscous: Vec<toml::Table>,
+    /// `network`: the plastic network (`E_MPa`, `yield_MPa`, `hardening_MPa`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plastic: Option<toml::Table>,
     /// `network`: the parallel damper (`c_MPa_s`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub damper: Option<toml::Table>,
@@ -212,7 +222,8 @@ impl PartialEq for MaterialSpec {
             && self.poisson == other.poisson
             && self.parameters() == other.parameters()
             && (self.mullins_d_inf, self.mullins_strain_c) == (other.mullins_d_inf, other.mullins_strain_c)
-            && (&self.equilibrium, &self.viscous, &self.damper) == (&other.equilibrium, &other.viscous, &other.damper)
+            && (&self.equilibrium, &self.viscous, &self.plastic, &self.damper)
+                == (&other.equilibrium, &other.viscous, &other.plastic, &other.damper)
     }
 }
 
@@ -239,6 +250,7 @@ impl MaterialSpec {
             mullins_strain_c: None,
             equilibrium: None,
             viscous: Vec::new(),
+            plastic: None,
             damper: None,
             origin: None,
         }
@@ -333,6 +345,9 @@ impl MaterialSpec {
             poisson: Some(net.poisson),
             equilibrium,
             viscous: net.viscous.iter().map(|v| table(&[("E_MPa", v.e_mpa), ("tau_s", v.tau_s)])).collect(),
+            plastic: net
+                .plastic
+                .map(|p| table(&[("E_MPa", p.e_mpa), ("yield_MPa", p.yield_mpa), ("hardening_MPa", p.hardening_mpa)])),
             damper: net.damper_mpa_s.map(|c| table(&[("c_MPa_s", c)])),
             ..Self::new(Model::Network)
         }
@@ -342,7 +357,7 @@ impl MaterialSpec {
     /// tables: `Err((key path inside the material, cause))` for an unknown,
     /// missing, mistyped or out-of-bounds key. Needs `poisson`.
     pub fn to_network(&self) -> Result<Network, (String, String)> {
-        use fem_core::material::network::parameters::{DAMPER, EQUILIBRIUM, MATERIAL, MULLINS, VISCOUS};
+        use fem_core::material::network::parameters::{DAMPER, EQUILIBRIUM, MATERIAL, MULLINS, PLASTIC, VISCOUS};
         let poisson = self.poisson.ok_or_else(|| ("poisson".to_string(), "missing".to_string()))?;
         let mspec = MATERIAL[0];
         if !mspec.accepts(poisson) {
@@ -401,7 +416,15 @@ impl MaterialSpec {
             None => None,
             Some(t) => Some(read_table(t, DAMPER, &["c_MPa_s"], "damper")?["c_MPa_s"]),
         };
-        let net = Network { poisson, equilibrium, viscous, damper_mpa_s };
+        let plastic = match &self.plastic {
+            None => None,
+            Some(t) => {
+                let keys: Vec<&str> = PLASTIC.iter().map(|s| s.key).collect();
+                let v = read_table(t, PLASTIC, &keys, "plastic")?;
+                Some(PlasticNetwork { e_mpa: v["E_MPa"], yield_mpa: v["yield_MPa"], hardening_mpa: v["hardening_MPa"] })
+            }
+        };
+        let net = Network { poisson, equilibrium, viscous, plastic, damper_mpa_s };
         net.validate().map_err(|e| ("".to_string(), e.to_string()))?;
         Ok(net)
     }
@@ -450,6 +473,8 @@ impl MaterialSpec {
             self.equilibrium.as_ref()?
         } else if first == "damper" {
             self.damper.as_ref()?
+        } else if first == "plastic" {
+            self.plastic.as_ref()?
         } else {
             return None;
         };
@@ -468,6 +493,8 @@ impl MaterialSpec {
             &mut self.viscous[i]
         } else if first == "equilibrium" {
             self.equilibrium.as_mut().expect("the slot exists")
+        } else if first == "plastic" {
+            self.plastic.as_mut().expect("the slot exists")
         } else {
             self.damper.as_mut().expect("the slot exists")
         };
@@ -583,12 +610,14 @@ impl MaterialSpec {
                 cause,
             },
         };
-        let network_tables = self.equilibrium.is_some() || !self.viscous.is_empty() || self.damper.is_some();
+        let network_tables =
+            self.equilibrium.is_some() || !self.viscous.is_empty() || self.plastic.is_some() || self.damper.is_some();
         if self.model == Model::Network {
             if let Some((key, _)) = self.parameters().into_iter().find(|(_, v)| v.is_some()) {
                 return Err(err(
                     key,
-                    "not a key of the network model (its parts: [equilibrium], [[viscous]], [damper])".into(),
+                    "not a key of the network model (its parts: [equilibrium], [[viscous]], [plastic], [damper])"
+                        .into(),
                 ));
             }
             if self.mullins_d_inf.is_some() || self.mullins_strain_c.is_some() {
@@ -620,6 +649,8 @@ impl MaterialSpec {
                 "equilibrium"
             } else if self.damper.is_some() {
                 "damper"
+            } else if self.plastic.is_some() {
+                "plastic"
             } else {
                 "viscous"
             };
@@ -668,12 +699,13 @@ impl MaterialSpec {
 
 /// The default of a network key ([`NETWORK_KEYS`]) from the law's tables, if it has one.
 fn network_default(key: &str) -> Option<f64> {
-    use fem_core::material::network::parameters::{DAMPER, EQUILIBRIUM, MULLINS, VISCOUS};
+    use fem_core::material::network::parameters::{DAMPER, EQUILIBRIUM, MULLINS, PLASTIC, VISCOUS};
     let (path, leaf) = key.rsplit_once('.')?;
     let table = match path {
         "equilibrium" => EQUILIBRIUM,
         "equilibrium.mullins" => MULLINS,
         "damper" => DAMPER,
+        "plastic" => PLASTIC,
         _ if path.starts_with("viscous[") => VISCOUS,
         _ => return None,
     };

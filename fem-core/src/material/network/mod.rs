@@ -12,6 +12,10 @@
 //!   `tau_i` (Reese-Govindjee with the viscosity proportional to the spring's
 //!   moduli: the flow relaxes the spring's whole log strain, volume included, as
 //!   the seed's Lamé split does);
+//! - an optional **plastic** network ([`PlasticNetwork`]): a Hencky spring on
+//!   `F = Fe Fp` with von Mises yield and linear isotropic hardening, by the
+//!   exponential map's closed-form radial return ([`plastic`]); it holds the
+//!   permanent set against the other networks;
 //! - an optional parallel Newtonian **damper** of Young-type viscosity `c`
 //!   [MPa s], acting on the rate of the logarithmic strain.
 //!
@@ -60,15 +64,18 @@
 //!
 //! ## History layout (per point)
 //!
-//! `[C_n^-1 - I (6), W_max (1), per viscous network: A - I (6), S_n (6)]`,
+//! `[C_n^-1 - I (6), W_max (1), per viscous network: A - I (6), S_n (6),
+//! then, with a plastic network, Cp^-1 - I (6), alpha (1)]`,
 //! symmetric tensors as `[xx, yy, zz, xy, xz, yz]`. The configurations are kept
 //! as deviations from the identity, so that small strains keep their precision
 //! ([`hencky`]).
 
 mod equilibrium;
 mod hencky;
+pub mod plastic;
 
 pub use equilibrium::{Energy, Equilibrium, Mullins};
+pub use plastic::PlasticNetwork;
 
 use nalgebra::Matrix3;
 
@@ -93,6 +100,8 @@ pub struct Network {
     pub equilibrium: Option<Equilibrium>,
     /// The viscous networks.
     pub viscous: Vec<ViscousNetwork>,
+    /// The plastic network; `None`: no permanent set.
+    pub plastic: Option<PlasticNetwork>,
     /// The damper's Young-type viscosity [MPa s]; `None`: no damper.
     pub damper_mpa_s: Option<f64>,
 }
@@ -134,7 +143,7 @@ pub mod parameters {
     ];
     /// `[equilibrium.mullins]`: Ogden-Roxburgh softening.
     pub const MULLINS: &[ParameterSpec] = &[
-        spec("r", "1 - 1/r is the most softening", "1", 1.0, true, 1e3, None),
+        spec("r", "the softened stress is at least 1 - 1/r of the virgin", "1", 1.0, true, 1e3, None),
         spec("m_MPa", "energy scale of the softening", "MPa", 0.0, true, 1e3, None),
         spec("beta", "growth of the scale with W_max", "1", 0.0, false, 1e3, Some(0.0)),
     ];
@@ -142,6 +151,12 @@ pub mod parameters {
     pub const VISCOUS: &[ParameterSpec] = &[
         spec("E_MPa", "the spring's Young's modulus", "MPa", 0.0, true, 1e4, None),
         spec("tau_s", "relaxation time", "s", 0.0, true, 1e9, None),
+    ];
+    /// `[plastic]`: the plastic network.
+    pub const PLASTIC: &[ParameterSpec] = &[
+        spec("E_MPa", "the spring's Young's modulus", "MPa", 0.0, true, 1e4, None),
+        spec("yield_MPa", "uniaxial yield stress", "MPa", 0.0, true, 1e4, None),
+        spec("hardening_MPa", "linear isotropic hardening modulus", "MPa", 0.0, false, 1e4, Some(0.0)),
     ];
     /// `[damper]`.
     pub const DAMPER: &[ParameterSpec] =
@@ -156,11 +171,11 @@ pub mod parameters {
 const HISTORY_BASE: usize = 7;
 const HISTORY_PER_NETWORK: usize = 12;
 
-fn sym_to(m: &Matrix3<f64>, out: &mut [f64]) {
+pub(crate) fn sym_to(m: &Matrix3<f64>, out: &mut [f64]) {
     out[..6].copy_from_slice(&[m[(0, 0)], m[(1, 1)], m[(2, 2)], m[(0, 1)], m[(0, 2)], m[(1, 2)]]);
 }
 
-fn sym_from(v: &[f64]) -> Matrix3<f64> {
+pub(crate) fn sym_from(v: &[f64]) -> Matrix3<f64> {
     Matrix3::new(v[0], v[3], v[4], v[3], v[1], v[5], v[4], v[5], v[2])
 }
 
@@ -177,7 +192,7 @@ impl Network {
             mullins: None,
         });
         let damper_mpa_s = (k.viscous > 0.0).then_some(k.viscous);
-        Self { poisson, equilibrium, viscous, damper_mpa_s }
+        Self { poisson, equilibrium, viscous, plastic: None, damper_mpa_s }
     }
 
     /// Checks every parameter against its table.
@@ -208,13 +223,29 @@ impl Network {
             check(VISCOUS, "E_MPa", v.e_mpa, &prefix)?;
             check(VISCOUS, "tau_s", v.tau_s, &prefix)?;
         }
+        if let Some(pl) = &self.plastic {
+            check(PLASTIC, "E_MPa", pl.e_mpa, "plastic.")?;
+            check(PLASTIC, "yield_MPa", pl.yield_mpa, "plastic.")?;
+            check(PLASTIC, "hardening_MPa", pl.hardening_mpa, "plastic.")?;
+        }
         if let Some(c) = self.damper_mpa_s {
             check(DAMPER, "c_MPa_s", c, "damper.")?;
         }
-        if self.equilibrium.is_none() && self.viscous.is_empty() && self.damper_mpa_s.is_none() {
+        if self.equilibrium.is_none()
+            && self.viscous.is_empty()
+            && self.plastic.is_none()
+            && self.damper_mpa_s.is_none()
+        {
             return Err(NetworkError::Empty);
         }
         Ok(())
+    }
+}
+
+impl Network {
+    /// Where the plastic network's history starts.
+    fn plastic_offset(&self) -> usize {
+        HISTORY_BASE + HISTORY_PER_NETWORK * self.viscous.len()
     }
 }
 
@@ -224,7 +255,7 @@ impl PointLaw for Network {
     }
 
     fn history_len(&self) -> usize {
-        HISTORY_BASE + HISTORY_PER_NETWORK * self.viscous.len()
+        self.plastic_offset() + if self.plastic.is_some() { plastic::HISTORY } else { 0 }
     }
 
     fn initial_history(&self, h: &mut [f64]) {
@@ -234,7 +265,9 @@ impl PointLaw for Network {
     }
 
     fn small_strain_modulus(&self) -> f64 {
-        self.equilibrium.map_or(0.0, |e| e.e_mpa) + self.viscous.iter().map(|v| v.e_mpa).sum::<f64>()
+        self.equilibrium.map_or(0.0, |e| e.e_mpa)
+            + self.viscous.iter().map(|v| v.e_mpa).sum::<f64>()
+            + self.plastic.map_or(0.0, |p| p.e_mpa)
     }
 
     fn update(&self, h: &Matrix3<f64>, dt_s: f64, old: &[f64], new: &mut [f64]) -> Result<PointResponse, LawFailure> {
@@ -296,6 +329,12 @@ impl PointLaw for Network {
             sym_to(&hencky::symmetrize(&a_new), &mut new[o..o + 6]);
             sym_to(&hencky::symmetrize(&(f_inv * tau * f_inv_t)), &mut new[o + 6..o + 12]);
         }
+        if let Some(pl) = &self.plastic {
+            let o = self.plastic_offset();
+            let (pp, tp) = plastic::respond(pl, h, &f_inv, self.poisson, &old[o..o + plastic::HISTORY], &mut new[o..]);
+            p += pp;
+            tangent += tp;
+        }
         if let Some(c) = self.damper_mpa_s {
             let c_n_inv_dev = sym_from(&old[0..6]);
             let (pd, td, _) = hencky::spring(h, &f_inv_t, &c_n_inv_dev, c / dt_s, lame);
@@ -324,6 +363,7 @@ mod tests {
                 mullins: Some(Mullins { r: 2.5, m_mpa: 2e-3, beta: 0.1 }),
             }),
             viscous: vec![ViscousNetwork { e_mpa: 0.015, tau_s: 2.0 }, ViscousNetwork { e_mpa: 0.01, tau_s: 40.0 }],
+            plastic: Some(PlasticNetwork { e_mpa: 0.04, yield_mpa: 1e-3, hardening_mpa: 5e-3 }),
             damper_mpa_s: Some(5e-3),
         }
     }
@@ -397,6 +437,7 @@ mod tests {
             poisson: 0.3,
             equilibrium: None,
             viscous: vec![ViscousNetwork { e_mpa: 0.02, tau_s: 3.0 }],
+            plastic: None,
             damper_mpa_s: None,
         };
         let f = Matrix3::new(1.1, 0.05, 0.0, 0.0, 0.6, 0.0, 0.0, 0.0, 1.2);
@@ -415,7 +456,7 @@ mod tests {
         let mut net = full();
         net.viscous[1].tau_s = -1.0;
         assert_eq!(net.validate().unwrap_err().to_string(), "viscous[1].tau_s = -1: must lie in (0, 1000000000]");
-        let empty = Network { poisson: 0.3, equilibrium: None, viscous: vec![], damper_mpa_s: None };
+        let empty = Network { poisson: 0.3, equilibrium: None, viscous: vec![], plastic: None, damper_mpa_s: None };
         assert_eq!(empty.validate(), Err(NetworkError::Empty));
     }
 }
