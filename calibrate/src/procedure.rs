@@ -325,7 +325,12 @@ fn fit_weighted(
     objective.channels = channels.iter().copied().filter(|c| has_data.contains(&c.0)).collect();
     let specs = objective.specs();
     let starts = if free.len() > 1 { options.starts.max(1) } else { 1 };
-    let ms_options = MultiStartOptions { num_starts: starts - 1, seed: options.seed, fit: options.lsq.clone() };
+    // A finite-difference Jacobian costs a run per column: only at accepted points.
+    let lsq = Options {
+        jacobian_with_trial: options.lsq.jacobian_with_trial && !campaign.differenced(),
+        ..options.lsq.clone()
+    };
+    let ms_options = MultiStartOptions { num_starts: starts - 1, seed: options.seed, fit: lsq.clone() };
     let step_progress = |done: usize, total: usize| progress(name, done, total);
     let result = multistart(&objective, &specs, &x0, &ms_options, Some(&step_progress))?;
     let best = result.best();
@@ -348,7 +353,7 @@ fn fit_weighted(
         free.len() == 1 || (name == "joint" && matches!(campaign.unknowns[free[k]].key, "poisson" | "c3_MPa_s"))
     });
     for k in wanted.collect::<Vec<_>>() {
-        match profile(&objective, &specs, best, k, 4, &options.lsq) {
+        match profile(&objective, &specs, best, k, 4, &lsq) {
             Ok(p) => {
                 warnings.extend(p.warnings().iter().map(|w| w.to_string()));
                 let (lo, hi) = p.interval();

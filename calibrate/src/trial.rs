@@ -480,6 +480,13 @@ impl Campaign {
         t
     }
 
+    /// Whether any trial's Jacobian comes from finite differences (a run per
+    /// column), so that a least-squares fit should ask for it only at accepted
+    /// points ([`crate::lsq::Options::jacobian_with_trial`]).
+    pub fn differenced(&self) -> bool {
+        self.trials.iter().any(|t| t.materials(&self.materials).is_ok_and(|m| differenced(&t.with_materials(m))))
+    }
+
     /// Simulations run so far.
     pub fn simulations(&self) -> usize {
         self.simulations.load(Ordering::Relaxed)
@@ -620,6 +627,16 @@ fn trial_of(b: &Bundle, problem: AnyPress) -> Result<Trial, CampaignError> {
     })
 }
 
+/// Whether a problem's Jacobian comes from finite differences rather than
+/// forward sensitivities: effects without sensitivities, contact tools, damage
+/// and the network model (module docs).
+fn differenced(problem: &AnyPress) -> bool {
+    problem.effects().check_sensitivities().is_err()
+        || problem.has_tools()
+        || problem.has_damage()
+        || problem.has_network()
+}
+
 /// The difference-method noise estimate, floored at 1e-4 of the peak (module docs).
 pub fn force_noise(force: &[(f64, f64)]) -> f64 {
     let peak = force.iter().map(|f| f.1.abs()).fold(0.0, f64::max);
@@ -683,12 +700,7 @@ impl<'c> Objective<'c> {
     ) -> Result<(Vec<f64>, Vec<Vec<f64>>), EvalError> {
         let materials = trial.materials(table)?;
         let problem = trial.with_materials(materials.clone());
-        // Effects without forward sensitivities, and contact tools: forward
-        // differences (module docs).
-        let differenced = problem.effects().check_sensitivities().is_err()
-            || problem.has_tools()
-            || problem.has_damage()
-            || problem.has_network();
+        let differenced = differenced(&problem);
         // The free unknowns that act on this trial: with forward sensitivities,
         // as engine parameters; differenced, every unknown of a material the
         // trial holds (a network's parameters have no engine parameter).
@@ -727,21 +739,33 @@ impl<'c> Objective<'c> {
                 Ok(self.trial_residuals_of(trial, &r))
             };
             // The columns from runs on `settings`, differenced against `base`.
+            // The columns are independent runs: in parallel, each written to its
+            // own column, so the Jacobian does not depend on the thread count.
             let columns = |settings: &Settings, base: &[f64], step: f64| -> Result<Vec<Vec<f64>>, EvalError> {
+                let differences: Vec<(usize, f64, Vec<f64>)> = acting
+                    .par_iter()
+                    .map(|&(col, _)| {
+                        let u = &self.campaign.unknowns[self.free[col]];
+                        let spec = u.spec();
+                        let value = table[&u.material].get(u.key).expect("a free unknown has a value");
+                        let h = match spec.scale {
+                            crate::lsq::Scale::Log => step * value,
+                            crate::lsq::Scale::Linear => step * (spec.upper - spec.lower),
+                        };
+                        let h = if value + h > spec.upper { -h } else { h };
+                        let mut perturbed = table.clone();
+                        set_parameter(
+                            perturbed.get_mut(&u.material).expect("the unknown's material"),
+                            u.key,
+                            value + h,
+                        );
+                        Ok((col, h, run(&perturbed, settings)?))
+                    })
+                    .collect::<Result<_, EvalError>>()?;
                 let mut jac = vec![vec![0.0; n]; base.len()];
-                for &(col, _) in &acting {
-                    let u = &self.campaign.unknowns[self.free[col]];
-                    let spec = u.spec();
-                    let value = table[&u.material].get(u.key).expect("a free unknown has a value");
-                    let h = match spec.scale {
-                        crate::lsq::Scale::Log => step * value,
-                        crate::lsq::Scale::Linear => step * (spec.upper - spec.lower),
-                    };
-                    let h = if value + h > spec.upper { -h } else { h };
-                    let mut perturbed = table.clone();
-                    set_parameter(perturbed.get_mut(&u.material).expect("the unknown's material"), u.key, value + h);
-                    for (row, (plus, at)) in jac.iter_mut().zip(run(&perturbed, settings)?.iter().zip(base)) {
-                        row[col] = (plus - at) / h;
+                for (col, h, plus) in differences {
+                    for (row, (p, at)) in jac.iter_mut().zip(plus.iter().zip(base)) {
+                        row[col] = (p - at) / h;
                     }
                 }
                 Ok(jac)

@@ -76,7 +76,10 @@ pub struct FitArgs {
     #[arg(long, value_name = "N", default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=256))]
     pub starts: u32,
 
-    /// Target element size [mm]; default: a quarter of each specimen's smallest dimension.
+    /// Target element size [mm]. Default: one cell through each specimen when every trial's solution is
+    /// homogeneous (a block, or a cylinder with --axisymmetric, of one material between a frictionless plate and
+    /// support, with no other tool, gravity or effect), which any mesh solves exactly; otherwise a quarter of
+    /// each specimen's smallest dimension.
     #[arg(long = "size-mm", value_name = "H", value_parser = positive_number, allow_negative_numbers = true)]
     pub size_mm: Option<f64>,
 
@@ -120,7 +123,11 @@ pub fn run(args: &FitArgs) -> anyhow::Result<()> {
         }
     }
     let output = crate::press::prepare_output(&bundles.iter().collect::<Vec<_>>(), &args.output, args.force)?;
-    let mut campaign = Campaign::new(&bundles, &start, args.size_mm, args.axisymmetric)?;
+    // A campaign whose every trial is homogeneous is solved exactly on one cell
+    // through each specimen (`Bundle::homogeneous_size_mm`).
+    let homogeneous: Option<Vec<f64>> = bundles.iter().map(|b| b.homogeneous_size_mm(args.axisymmetric)).collect();
+    let size_mm = args.size_mm.or_else(|| homogeneous.map(|sizes| sizes.into_iter().fold(0.0, f64::max)));
+    let mut campaign = Campaign::new(&bundles, &start, size_mm, args.axisymmetric)?;
     campaign.marker_sigma_mm = args.marker_sigma_mm;
     if campaign.unknowns.is_empty() {
         bail!("every material parameter is given: nothing to fit (give a material only its model, or free parameters with --materials)");
@@ -133,6 +140,12 @@ pub fn run(args: &FitArgs) -> anyhow::Result<()> {
         campaign.unknowns.iter().map(|u| u.label()).collect::<Vec<_>>().join(", "),
         campaign.trials.len()
     )?;
+    if args.size_mm.is_none() && size_mm.is_some() {
+        writeln!(
+            err,
+            "every trial is homogeneous (frictionless plate and support, one material): one cell per specimen"
+        )?;
+    }
     drop(err);
 
     let procedure = match args.procedure {

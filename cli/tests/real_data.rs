@@ -135,6 +135,83 @@ fn fungi_steak_first_stroke_fits_and_predicts_the_other_specimens() {
     }
 }
 
+/// The network model on the whole double compressions (issue: network model,
+/// verification 7): imported with `--model network --stroke all` (the default
+/// structure, frictionless contact plates), fitted jointly to the three records on
+/// the axisymmetric section, and each record run with the fitted material.
+///
+/// Asserted per record, the issue's targets: after one stiffness scale per
+/// record the force RMS is at most 5 % of the measured peak, and the
+/// second-stroke retention (stroke 2 peak over stroke 1 peak, split at the
+/// measured second touch) is within 0.05 of the measured one. Measured: 2.0,
+/// 4.6 and 2.8 % (scales 1.256, 0.761, 0.702); retention 0.925, 0.912, 0.922
+/// against 0.918, 0.922, 0.926 (VALIDATION.md).
+#[test]
+fn fungi_steak_network_fit_of_the_whole_double_compressions_meets_the_targets() {
+    if skip_without_shared_data("the fungi-steak records") {
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let cwd = tmp.path();
+    let files: Vec<String> = (1..=3)
+        .map(|i| fungi().join(format!("double-compression-slowest-inplane-{i}.txt")).display().to_string())
+        .collect();
+    let mut args = vec!["import", "rheometer"];
+    args.extend(files.iter().map(String::as_str));
+    args.extend(["--cylinder-radius-mm", "4", "--model", "network", "--stroke", "all", "-o", "net"]);
+    assert_success(&wagashi_in(cwd, &args));
+    let bundles: Vec<String> = (1..=3).map(|i| format!("net/double-compression-slowest-inplane-{i}")).collect();
+    let mut args = vec!["fit"];
+    args.extend(bundles.iter().map(String::as_str));
+    args.extend(["--procedure", "joint", "--axisymmetric", "-o", "fit"]);
+    let fit = wagashi_in(cwd, &args);
+    assert_success(&fit);
+    println!("{}", stdout(&fit));
+    for (i, bundle) in bundles.iter().enumerate() {
+        let out = format!("run{}", i + 1);
+        assert_success(&wagashi_in(
+            cwd,
+            ["press", bundle, "--materials", "fit/materials.toml", "--axisymmetric", "-o", &out],
+        ));
+        let facts = read_json(&cwd.join(bundle).join("summary.json"));
+        let second_touch = facts["import"]["second_touch_s"].as_f64().expect("two strokes found");
+        let measured = read_force_csv(&cwd.join(bundle).join("force.csv"));
+        let simulated = read_force_csv(&cwd.join(&out).join("force.csv"));
+        assert_eq!(measured.len(), simulated.len());
+        let peak = measured.iter().fold(0.0f64, |p, m| p.max(m.1.abs()));
+        let scale = measured.iter().zip(&simulated).map(|(m, s)| m.1 * s.1).sum::<f64>()
+            / simulated.iter().map(|s| s.1 * s.1).sum::<f64>();
+        let rms = (measured.iter().zip(&simulated).map(|(m, s)| (m.1 - scale * s.1).powi(2)).sum::<f64>()
+            / measured.len() as f64)
+            .sqrt()
+            / peak;
+        let strokes = [
+            stroke_errors(&measured, &simulated, |t| t < second_touch),
+            stroke_errors(&measured, &simulated, |t| t >= second_touch),
+        ];
+        let retention = |e: &[StrokeErrors; 2], simulated: bool| {
+            if simulated {
+                e[1].simulated_peak / e[0].simulated_peak
+            } else {
+                e[1].measured_peak / e[0].measured_peak
+            }
+        };
+        let (measured_f2f1, simulated_f2f1) = (retention(&strokes, false), retention(&strokes, true));
+        println!(
+            "specimen {}: force rms {:.1} % of the peak after the scale {scale:.3}; F2/F1 measured {measured_f2f1:.3}, \
+             simulated {simulated_f2f1:.3}",
+            i + 1,
+            100.0 * rms
+        );
+        assert!(rms <= 0.05, "specimen {}: rms {:.1} % of the peak after one scale", i + 1, 100.0 * rms);
+        assert!(
+            (simulated_f2f1 - measured_f2f1).abs() <= 0.05,
+            "specimen {}: retention {simulated_f2f1:.3} against {measured_f2f1:.3}",
+            i + 1
+        );
+    }
+}
+
 fn read_json(path: &std::path::Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
 }

@@ -133,3 +133,69 @@ fn a_chain_with_network_tables_and_a_network_with_chain_keys_are_refused() {
     let msg = read_bundle(&b.dir).unwrap_err().to_string();
     assert!(msg.contains("the network has no part"), "{msg}");
 }
+
+/// A frictionless double compression of one network material: the plate
+/// pushes 40 %, leaves the specimen and touches it again.
+fn homogeneous_trial(specimen: &str, dimension: u32) -> String {
+    format!(
+        r#"format = "wagashi-experiment/1"
+name = "homogeneous"
+dimension = {dimension}
+
+[specimen]
+{specimen}
+material = "mat1"
+
+{NETWORK}
+[protocol]
+tool = "plate"
+tool_contact = "frictionless"
+support = "frictionless"
+waypoints = [[0.0, 0.0], [8.0, 1.6], [12.0, 0.0], [14.0, 0.0], [22.0, 1.6], [26.0, 0.0]]
+release_s = 26.0
+end_s = 26.0
+"#
+    )
+}
+
+/// The force of a run at element size `size_mm`, sampled every second.
+fn forces(bundle: &wagashi_io::Bundle, axisymmetric: bool, size_mm: f64) -> Vec<f64> {
+    use fem_core::press::{simulate_any, Settings};
+    let problem = if axisymmetric { bundle.to_press_axisymmetric(size_mm) } else { bundle.to_press(size_mm) }.unwrap();
+    let r = simulate_any(&problem, &Settings::default(), &mut |_| {}).unwrap();
+    (0..=26).map(|t| r.bottom_force_at(t as f64)).collect()
+}
+
+#[test]
+fn a_homogeneous_trial_is_solved_on_one_cell_as_on_a_fine_mesh() {
+    // One cell through the specimen gives the fine mesh's force to the Newton
+    // tolerance (1e-8 of the peak): linear cells reproduce the uniform stretch
+    // exactly, so the fit may take the one-cell mesh.
+    let cases = [
+        ("shape = \"cylinder\"\nradius_mm = 2.0\nheight_mm = 4.0", 3, true, 0.5, 4.0),
+        ("shape = \"block\"\nsize_mm = [3.0, 4.0, 2.0]", 3, false, 1.0, 4.0),
+        ("shape = \"block\"\nsize_mm = [6.0, 4.0, 1.0]\nplane = \"strain\"", 2, false, 0.5, 6.0),
+    ];
+    for (specimen, dimension, axisymmetric, fine_mm, largest) in cases {
+        let b = bundle(&[("experiment.toml", &homogeneous_trial(specimen, dimension))]);
+        let bundle = read_bundle(&b.dir).unwrap();
+        let one = bundle.homogeneous_size_mm(axisymmetric).expect("a homogeneous trial");
+        assert_eq!(one, largest);
+        let (coarse, fine) = (forces(&bundle, axisymmetric, one), forces(&bundle, axisymmetric, fine_mm));
+        let peak = fine.iter().fold(0.0f64, |m, f| m.max(f.abs()));
+        assert!(peak > 0.0);
+        let worst = coarse.iter().zip(&fine).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) / peak;
+        assert!(worst < 1e-8, "{specimen}: one cell against {fine_mm} mm: {worst:.2e} of the peak");
+    }
+    // Glued plates, a 3D cylinder (a faceted circle) or gravity: not homogeneous.
+    let glued = homogeneous_trial("shape = \"block\"\nsize_mm = [3.0, 4.0, 2.0]", 3)
+        .replace("tool_contact = \"frictionless\"", "tool_contact = \"glued\"");
+    let b = bundle(&[("experiment.toml", &glued)]);
+    assert_eq!(read_bundle(&b.dir).unwrap().homogeneous_size_mm(false), None);
+    let cylinder = homogeneous_trial("shape = \"cylinder\"\nradius_mm = 2.0\nheight_mm = 4.0", 3);
+    let b = bundle(&[("experiment.toml", &cylinder)]);
+    assert_eq!(read_bundle(&b.dir).unwrap().homogeneous_size_mm(false), None);
+    let heavy = cylinder.replace("end_s = 26.0", "end_s = 26.0\ngravity = true");
+    let b = bundle(&[("experiment.toml", &heavy)]);
+    assert_eq!(read_bundle(&b.dir).unwrap().homogeneous_size_mm(true), None);
+}

@@ -40,7 +40,7 @@ use fem_core::press::{
     AnyPress, Attachment, AxisymmetricPress, MarkerRequest, MarkerTrack, PlanePress, PressError, Protocol, SolidPress,
 };
 
-use super::experiment::{Contact, Shape};
+use super::experiment::{Contact, Shape, Tool};
 use super::read::Bundle;
 use super::series::{MarkerSample, MarkerSeries};
 use super::surface_specimen::SurfaceMeshing;
@@ -223,6 +223,41 @@ impl Bundle {
             }
         };
         smallest.filter(|d| *d > 0.0).map(|d| d / 4.0)
+    }
+
+    /// The element size [mm] of one cell through the specimen, when the trial's
+    /// solution is homogeneous and such a mesh solves it exactly; `None`
+    /// otherwise.
+    ///
+    /// Homogeneous: a block (any dimension), or a cylinder modelled by its
+    /// axisymmetric section, of one material, between a plate and the support
+    /// that are both frictionless, with no other tool, no gravity and no
+    /// effect. The exact solution is then a uniform stretch about the
+    /// specimen's centre, which linear cells reproduce exactly on any mesh, so
+    /// every mesh gives the same force and markers to the solver's tolerance
+    /// (a 3D cylinder is excluded: its faceted circle's area depends on the
+    /// mesh). `wagashi fit` takes it as its default element size: one fit
+    /// evaluation then costs a few cells instead of hundreds.
+    pub fn homogeneous_size_mm(&self, axisymmetric: bool) -> Option<f64> {
+        let e = &self.experiment;
+        let (s, p) = (&e.specimen, &e.protocol);
+        let homogeneous = s.layers.is_empty()
+            && s.regions.is_empty()
+            && p.tool == Tool::Plate
+            && p.tool_contact == Contact::Frictionless
+            && p.support == Contact::Frictionless
+            && p.tools.is_empty()
+            && !p.gravity
+            && e.effects.is_empty();
+        if !homogeneous {
+            return None;
+        }
+        let largest = match s.shape {
+            Shape::Block => s.block_size().map(|[w, h, t]| w.max(h).max(t)),
+            Shape::Cylinder if axisymmetric => Some(s.radius_mm?.max(s.height_mm?)),
+            _ => None,
+        };
+        largest.filter(|d| d.is_finite() && *d > 0.0)
     }
 
     /// The engine materials of `regions` (material names), in that order.
