@@ -91,7 +91,8 @@ pub struct StepReport {
     pub correlation: Vec<Vec<f64>>,
     /// Objective at the best point (`1/2 sum r^2`).
     pub objective: f64,
-    /// Residual RMS in noise units.
+    /// Residual RMS in the campaign's noise units (each channel's own sigma,
+    /// whatever scales the step fitted with).
     pub rms: f64,
     /// Trial steps of the best start.
     pub iterations: usize,
@@ -368,6 +369,17 @@ fn fit_weighted(
         }
     }
     let evaluations = result.fits().map(|f| f.evaluations).sum::<usize>();
+    // The RMS in the campaign's own noise units: a step whose channels are
+    // rescaled (the joint fit's second pass) would otherwise report about 1 by
+    // construction. One more evaluation at the best point.
+    let rms = if objective.channels.iter().all(|c| c.1 == 1.0) {
+        (2.0 * best.objective / m).sqrt()
+    } else {
+        use crate::lsq::LeastSquares;
+        let unscaled = Objective::new(campaign, free.to_vec(), x_full.to_vec(), &has_data);
+        let e = unscaled.evaluate(&best.x, false).map_err(FitError::StartEvaluation)?;
+        (e.residuals.iter().map(|r| r * r).sum::<f64>() / e.residuals.len().max(1) as f64).sqrt()
+    };
     let report = StepReport {
         name: name.to_string(),
         parameters: labels,
@@ -376,7 +388,7 @@ fn fit_weighted(
         ci95,
         correlation,
         objective: best.objective,
-        rms: (2.0 * best.objective / m).sqrt(),
+        rms,
         iterations: best.iterations,
         evaluations,
         starts,

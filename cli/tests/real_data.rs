@@ -167,6 +167,13 @@ fn fungi_steak_network_fit_of_the_whole_double_compressions_meets_the_targets() 
     let fit = wagashi_in(cwd, &args);
     assert_success(&fit);
     println!("{}", stdout(&fit));
+    // Both passes report the misfit in the records' own noise units: the
+    // second pass's rescaled channels do not make it 1 by construction.
+    let json = read_json(&cwd.join("fit/fit.json"));
+    let rms: Vec<f64> =
+        json["steps"].as_array().unwrap().iter().map(|s| s["rms_noise_units"].as_f64().unwrap()).collect();
+    assert_eq!(rms.len(), 2, "{json}");
+    assert!(rms[0] > 5.0 && (rms[1] / rms[0] - 1.0).abs() < 0.5, "rms of the two passes: {rms:?}");
     for (i, bundle) in bundles.iter().enumerate() {
         let out = format!("run{}", i + 1);
         assert_success(&wagashi_in(
