@@ -95,6 +95,25 @@ pub(crate) fn spring(
     let eps = spectral(&q, x, |v| 0.5 * v.ln_1p());
     let tau = hooke(e_mpa, lame, &eps);
     let p = tau * f_inv_t;
+    let tangent = log_strain_tangent(&f, a_dev, &q, x, &tau, f_inv_t, |d_eps| hooke(e_mpa, lame, d_eps));
+    (p, tangent, tau)
+}
+
+/// `dP/dF` of `P = tau F^-T` for a Kirchhoff stress `tau` that depends on the
+/// logarithmic strain `eps = 1/2 ln(b)`, `b = F A F^T = Q diag(1 + x) Q^T` on a
+/// fixed intermediate configuration `A = I + a_dev`: the derivative of the log
+/// by the Daleckii-Krein formula (divided differences in the principal frame),
+/// then `d_tau`, the derivative of `tau` by `eps` as a map (the spring's
+/// modulus, or a return mapping's consistent one), and the push by `F^-T`.
+pub(crate) fn log_strain_tangent(
+    f: &Matrix3<f64>,
+    a_dev: &Matrix3<f64>,
+    q: &Matrix3<f64>,
+    x: [f64; 3],
+    tau: &Matrix3<f64>,
+    f_inv_t: &Matrix3<f64>,
+    d_tau: impl Fn(&Matrix3<f64>) -> Matrix3<f64>,
+) -> Tangent {
     let mut g = Matrix3::zeros();
     for i in 0..3 {
         for j in 0..3 {
@@ -111,8 +130,7 @@ pub(crate) fn spring(
             df[(k, m)] = 1.0;
             let db = df * fa.transpose() + fa * df.transpose();
             let d_eps = q * (qt * db * q).component_mul(&g) * qt * 0.5;
-            let d_tau = hooke(e_mpa, lame, &d_eps);
-            let dp = d_tau * f_inv_t - tau * f_inv_t * df.transpose() * f_inv_t;
+            let dp = d_tau(&d_eps) * f_inv_t - tau * f_inv_t * df.transpose() * f_inv_t;
             for i in 0..3 {
                 for j in 0..3 {
                     tangent[(ij(i, j), ij(k, m))] = dp[(i, j)];
@@ -120,7 +138,7 @@ pub(crate) fn spring(
             }
         }
     }
-    (p, tangent, tau)
+    tangent
 }
 
 /// `C^-1 - I` for `F = I + h`, without cancellation: `-C^-1 (C - I)` with

@@ -31,8 +31,8 @@
 
 use nalgebra::Matrix3;
 
-use super::hencky::{self, eigen, log_divided_difference, symmetrize};
-use crate::material::law::{ij, Tangent};
+use super::hencky::{self, eigen, symmetrize};
+use crate::material::law::Tangent;
 
 /// The history length of a plastic network.
 pub(crate) const HISTORY: usize = 7;
@@ -103,28 +103,8 @@ pub(crate) fn respond(
         Matrix3::identity() * (bulk * t) + d_dev * (2.0 * mu * theta)
             - n_tensor * (2.0 * mu * theta_bar * n_tensor.dot(d_eps))
     };
-    let mut g = Matrix3::zeros();
-    for i in 0..3 {
-        for j in 0..3 {
-            g[(i, j)] = log_divided_difference(x[i], x[j]);
-        }
-    }
-    let fa = f * (Matrix3::identity() + cp_inv_dev);
-    let mut tangent = Tangent::zeros();
-    for k in 0..3 {
-        for m in 0..3 {
-            let mut df = Matrix3::zeros();
-            df[(k, m)] = 1.0;
-            let db = df * fa.transpose() + fa * df.transpose();
-            let d_eps = q * (qt * db * q).component_mul(&g) * qt * 0.5;
-            let dp = modulus(&symmetrize(&d_eps)) * f_inv_t - tau * f_inv_t * df.transpose() * f_inv_t;
-            for i in 0..3 {
-                for j in 0..3 {
-                    tangent[(ij(i, j), ij(k, m))] = dp[(i, j)];
-                }
-            }
-        }
-    }
+    let tangent =
+        hencky::log_strain_tangent(&f, &cp_inv_dev, &q, x, &tau, &f_inv_t, |d_eps| modulus(&symmetrize(d_eps)));
 
     // The new state: Cp^-1 - I = F^-1 (b_e - I) F^-T + (C^-1 - I).
     let b_e_dev = q * Matrix3::from_diagonal(&eps_e.map(|e| (2.0 * e).exp_m1()).into()) * qt;
