@@ -64,6 +64,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         pvd: None,
         output: args.output.clone(),
         replace: true,
+        volumetric: fem_core::press::Volumetric::Standard,
     };
     let mut out = std::io::stdout().lock();
     writeln!(out, "The seed paper's material 1 trial (embedded {DEMO_BUNDLE_DIR}), 3D, x_force parameters")?;

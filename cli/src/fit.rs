@@ -95,6 +95,11 @@ pub struct FitArgs {
     /// Replace OUT when it holds a previous wagashi output.
     #[arg(long)]
     pub force: bool,
+
+    /// F-bar patches for network materials near incompressibility (as
+    /// `press --fbar`); refused without a network material.
+    #[arg(long)]
+    pub fbar: bool,
 }
 
 /// `--procedure`.
@@ -129,6 +134,12 @@ pub fn run(args: &FitArgs) -> anyhow::Result<()> {
     let size_mm = args.size_mm.or_else(|| homogeneous.map(|sizes| sizes.into_iter().fold(0.0, f64::max)));
     let mut campaign = Campaign::new(&bundles, &start, size_mm, args.axisymmetric)?;
     campaign.marker_sigma_mm = args.marker_sigma_mm;
+    if args.fbar {
+        if !campaign.materials.values().any(|m| m.model == wagashi_io::Model::Network) {
+            bail!("--fbar: F-bar patches run with network materials only, and no material is a network");
+        }
+        campaign.settings.volumetric = fem_core::press::Volumetric::FBar;
+    }
     if campaign.unknowns.is_empty() {
         bail!("every material parameter is given: nothing to fit (give a material only its model, or free parameters with --materials)");
     }

@@ -66,7 +66,7 @@ use anyhow::{bail, Context};
 use clap::{Args, ValueEnum};
 use fem_core::element::Formulation;
 use fem_core::press::{
-    simulate_any, AnyPress, Integrator, PressResult, Settings, Snapshot, Tool, ToolSample, ToolTrack,
+    simulate_any, AnyPress, Integrator, PressResult, Settings, Snapshot, Tool, ToolSample, ToolTrack, Volumetric,
 };
 use wagashi_io::vtu::{write_pvd, write_vtu, VtuFields};
 use wagashi_io::{
@@ -190,6 +190,13 @@ pub struct PressArgs {
     /// full-circle force at a small fraction of the cost. Refused for other shapes.
     #[arg(long)]
     pub axisymmetric: bool,
+
+    /// F-bar patches for network materials near incompressibility (poisson
+    /// from about 0.45): the cells of each patch of 4 tetrahedra (3
+    /// triangles) share its volume change, so the mesh does not lock. Costs
+    /// about 3x per step. Refused without a network material.
+    #[arg(long)]
+    pub fbar: bool,
 }
 
 /// `--mesh-mode`.
@@ -240,6 +247,13 @@ impl IntegratorArg {
     }
 }
 
+/// The Poisson ratio at which a network material locks on linear cells
+/// without F-bar (0.45 or more), to say so before the run.
+pub(crate) fn locking_poisson(problem: &AnyPress, volumetric: Volumetric) -> Option<f64> {
+    const LOCKS_FROM: f64 = 0.45;
+    problem.largest_network_poisson().filter(|&nu| nu >= LOCKS_FROM && volumetric == Volumetric::Standard)
+}
+
 /// A clap value parser for a finite number > 0 (every `*-mm` and `*-s` flag).
 pub(crate) fn positive_number(s: &str) -> Result<f64, String> {
     let x: f64 = s.trim().parse().map_err(|_| format!("`{s}` is not a number"))?;
@@ -272,6 +286,8 @@ pub struct PressOptions {
     pub output: PathBuf,
     /// Replace a previous wagashi output in `output`.
     pub replace: bool,
+    /// The Newton path's volumetric treatment (`--fbar`).
+    pub volumetric: Volumetric,
 }
 
 /// `wagashi press`.
@@ -292,6 +308,7 @@ pub fn run(args: &PressArgs) -> anyhow::Result<()> {
         pvd: args.pvd,
         output: args.output.clone(),
         replace: args.force,
+        volumetric: if args.fbar { Volumetric::FBar } else { Volumetric::Standard },
     };
     let mut out = std::io::stdout().lock();
     let how = How { axisymmetric: args.axisymmetric, surface_mesh: args.mesh_mode.mode() };
@@ -407,8 +424,15 @@ fn press_bundle_as(
         integrator: options.integrator.integrator(),
         rtol: options.rtol,
         fixed_dt_s: options.dt_s,
+        volumetric: options.volumetric,
         ..Settings::default()
     };
+    if let Some(nu) = locking_poisson(&problem, options.volumetric) {
+        writeln!(
+            out,
+            "note: a network material with poisson = {nu} on linear cells locks (too stiff); --fbar removes that"
+        )?;
+    }
     let bar = SimulationBar::new(end_s);
     let sim_clock = Instant::now();
     let result = simulate_any(&problem, &settings, &mut |p| bar.update(p));

@@ -29,11 +29,12 @@ pub struct Topology {
 }
 
 impl Topology {
-    /// Builds the adjacency of `num_nodes` nodes and the given cells.
-    pub fn new<const N: usize>(num_nodes: usize, cells: &[[u32; N]]) -> Self {
+    /// Builds the adjacency of `num_nodes` nodes and the given cells (of any
+    /// number of nodes each, e.g. the F-bar path's patches of cells).
+    pub fn new<C: AsRef<[u32]> + Sync>(num_nodes: usize, cells: &[C]) -> Self {
         let mut counts = vec![0usize; num_nodes + 1];
         for c in cells {
-            for &v in c {
+            for &v in c.as_ref() {
                 counts[v as usize + 1] += 1;
             }
         }
@@ -44,7 +45,7 @@ impl Topology {
         let mut fill = cell_ptr.clone();
         let mut node_cells = vec![(0u32, 0u8); cell_ptr[num_nodes]];
         for (e, c) in cells.iter().enumerate() {
-            for (a, &v) in c.iter().enumerate() {
+            for (a, &v) in c.as_ref().iter().enumerate() {
                 node_cells[fill[v as usize]] = (e as u32, a as u8);
                 fill[v as usize] += 1;
             }
@@ -53,8 +54,10 @@ impl Topology {
         let lists: Vec<Vec<u32>> = (0..num_nodes)
             .into_par_iter()
             .map(|i| {
-                let mut nb: Vec<u32> =
-                    node_cells[cell_ptr[i]..cell_ptr[i + 1]].iter().flat_map(|&(e, _)| cells[e as usize]).collect();
+                let mut nb: Vec<u32> = node_cells[cell_ptr[i]..cell_ptr[i + 1]]
+                    .iter()
+                    .flat_map(|&(e, _)| cells[e as usize].as_ref().iter().copied())
+                    .collect();
                 nb.push(i as u32);
                 nb.sort_unstable();
                 nb.dedup();
@@ -180,10 +183,10 @@ pub fn assemble_stiffness<const D: usize, const N: usize, const S: usize>(
 /// general form of [`assemble_stiffness`] for tangents that are not `B^T C B`
 /// (the finite-strain tangent with its geometric part). Rows by node, in
 /// parallel, in a fixed order.
-pub fn assemble_blocks<const D: usize, const N: usize>(
+pub fn assemble_blocks<const D: usize, C: AsRef<[u32]> + Sync>(
     topology: &Topology,
     pattern: &CsrPattern,
-    cells: &[[u32; N]],
+    cells: &[C],
     cell_block: &(dyn Fn(usize, usize, usize) -> SMatrix<f64, D, D> + Sync),
 ) -> Vec<f64> {
     assert_eq!(pattern.dim, D);
@@ -193,7 +196,7 @@ pub fn assemble_blocks<const D: usize, const N: usize>(
         let nb = &topology.neighbours[topology.adj_ptr[i]..topology.adj_ptr[i + 1]];
         let row_len = D * nb.len();
         for &(e, a) in &topology.node_cells[topology.cell_ptr[i]..topology.cell_ptr[i + 1]] {
-            for (b, &j) in cells[e as usize].iter().enumerate() {
+            for (b, &j) in cells[e as usize].as_ref().iter().enumerate() {
                 let kab = cell_block(e as usize, a as usize, b);
                 let pos = nb.binary_search(&j).expect("pattern holds every cell neighbour");
                 for r in 0..D {
@@ -218,6 +221,22 @@ pub fn assemble_vector<const D: usize, const N: usize>(
         let mut s = SVector::<f64, D>::zeros();
         for &(e, a) in &topology.node_cells[topology.cell_ptr[i]..topology.cell_ptr[i + 1]] {
             s += cell_forces[e as usize][a as usize];
+        }
+        o.copy_from_slice(s.as_slice());
+    });
+}
+
+/// Sums per-cell nodal vectors of cells with any number of nodes
+/// (`cell_forces[e][D a + k]`, node `a` of cell `e` in the topology's lists)
+/// into a global vector, node by node in increasing cell order.
+pub fn assemble_list_vector<const D: usize>(topology: &Topology, cell_forces: &[Vec<f64>], out: &mut [f64]) {
+    crate::parallel::for_each_chunk_mut(out, D, |i, o| {
+        let mut s = SVector::<f64, D>::zeros();
+        for &(e, a) in &topology.node_cells[topology.cell_ptr[i]..topology.cell_ptr[i + 1]] {
+            let f = &cell_forces[e as usize][a as usize * D..(a as usize + 1) * D];
+            for k in 0..D {
+                s[k] += f[k];
+            }
         }
         o.copy_from_slice(s.as_slice());
     });

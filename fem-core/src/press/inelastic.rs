@@ -952,7 +952,7 @@ where
                 let material = ba.transpose() * (model.region_c1[r] * input.g[r]) * bb;
                 (material + geometric_block::<D, N, S>(&g.gradients, s, blend, a, b)) * g.weight
             };
-            let values = assemble_blocks::<D, N>(&model.topology, &model.pattern, &mesh.cells, &block);
+            let values = assemble_blocks::<D, _>(&model.topology, &model.pattern, &mesh.cells, &block);
             tangent = system.factor(&[(1.0, values.as_slice())], None).ok();
             factorizations += usize::from(tangent.is_some());
             if tangent.is_none() {

@@ -29,6 +29,7 @@
 //! as a reference.
 
 mod contact;
+mod fbar;
 mod inelastic;
 mod model;
 mod network;
@@ -42,7 +43,7 @@ mod tools;
 pub use contact::{ToolSample, ToolTrack};
 pub use problem::{
     AnyPress, Attachment, AxisymmetricPress, Integrator, MarkerRequest, PlanePress, PressError, PressProblem, Protocol,
-    Settings, SolidPress,
+    Settings, SolidPress, Volumetric,
 };
 pub use result::{MarkerTrack, PressResult, Progress, Snapshot, StepRecord};
 pub use sensitivity::{ParameterKind, Sensitivities, SensitivityParameter};
@@ -69,6 +70,11 @@ where
     problem.validate_effects()?;
     if network::applies(problem) {
         return network::run(problem, settings, progress);
+    }
+    if settings.volumetric == Volumetric::FBar {
+        return Err(PressError::BadSettings(
+            "F-bar patches run with network materials only (the chain's linear path keeps its own cells)".into(),
+        ));
     }
     let effective = effects_applied(problem)?;
     let problem = effective.as_ref();

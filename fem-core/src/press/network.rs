@@ -47,13 +47,14 @@ use std::time::Instant;
 use nalgebra::{DMatrix, DVector, Matrix3, SVector};
 use rayon::prelude::*;
 
+use super::fbar::{self, PatchCell, Patches};
 use super::model::Model;
 use super::stepper::emit_markers;
 use super::{
     Integrator, MarkerTrack, PressError, PressProblem, PressResult, Progress, Settings, Snapshot, StepRecord, Tool,
-    ToolContact, ToolSample, ToolShape, ToolTrack,
+    ToolContact, ToolSample, ToolShape, ToolTrack, Volumetric,
 };
-use crate::assembly::{assemble_blocks, assemble_vector};
+use crate::assembly::{assemble_blocks, assemble_vector, CsrPattern};
 use crate::element::{CellGeometry, Formulation, ReferenceSimplex, Simplex};
 use crate::material::law::{LawFailure, PointLaw};
 use crate::material::network::Network;
@@ -154,7 +155,8 @@ fn deformation_operator<const D: usize, const N: usize>(g: &CellGeometry<D, N>) 
     op
 }
 
-/// One cell's response at `u`.
+/// One cell's response at `u` (with F-bar patches: its stress and `Fbar` only,
+/// the forces and tangent being the patch's).
 struct CellResponse {
     force: DVector<f64>,
     stiffness: DMatrix<f64>,
@@ -165,6 +167,8 @@ struct CellResponse {
 /// The whole body's response at a displacement.
 struct Evaluation {
     cells: Vec<CellResponse>,
+    /// With F-bar patches: each patch's tangent.
+    patch_stiffness: Vec<DMatrix<f64>>,
     history: Vec<f64>,
     internal: Vec<f64>,
 }
@@ -180,6 +184,8 @@ struct Newton<'m, 'p, const D: usize, const N: usize, const S: usize> {
     laws: Vec<Network>,
     operators: Vec<DMatrix<f64>>,
     offsets: Vec<usize>,
+    /// F-bar patches ([`Volumetric::FBar`]), or `None`: each cell its own `J`.
+    patches: Option<Patches>,
 }
 
 impl<const D: usize, const N: usize, const S: usize> Newton<'_, '_, D, N, S>
@@ -190,8 +196,24 @@ where
         &self.laws[self.model.problem.mesh.cell_regions[e] as usize]
     }
 
+    /// The tangent's pattern: the cells' or the patches'.
+    fn pattern(&self) -> &CsrPattern {
+        self.patches.as_ref().map_or(&self.model.pattern, |p| &p.pattern)
+    }
+
+    fn diagonal_positions(&self) -> &[usize] {
+        self.patches.as_ref().map_or(&self.model.diagonal_positions, |p| &p.diagonal_positions)
+    }
+
+    fn node_order(&self) -> &[u32] {
+        self.patches.as_ref().map_or(&self.model.node_order, |p| &p.node_order)
+    }
+
     /// Every cell's stress and tangent at `u` after a step of `dt` from `history`.
     fn evaluate(&self, u: &[f64], dt: f64, history: &[f64], with_tangent: bool) -> Result<Evaluation, CellFailure> {
+        if let Some(patches) = &self.patches {
+            return self.evaluate_patches(patches, u, dt, history, with_tangent);
+        }
         let mesh = &self.model.problem.mesh;
         let mut new_history = history.to_vec();
         let chunks = split_by_offsets(&mut new_history, &self.offsets);
@@ -228,15 +250,80 @@ where
             .collect();
         let mut internal = vec![0.0; u.len()];
         assemble_vector::<D, N>(&self.model.topology, &per_cell, &mut internal);
-        Ok(Evaluation { cells, history: new_history, internal })
+        Ok(Evaluation { cells, patch_stiffness: Vec::new(), history: new_history, internal })
+    }
+
+    /// [`Self::evaluate`] on F-bar patches ([`fbar`]).
+    fn evaluate_patches(
+        &self,
+        patches: &Patches,
+        u: &[f64],
+        dt: f64,
+        history: &[f64],
+        with_tangent: bool,
+    ) -> Result<Evaluation, CellFailure> {
+        let mesh = &self.model.problem.mesh;
+        let responses = patches
+            .cells
+            .par_iter()
+            .enumerate()
+            .map(|(p, group)| {
+                let cells: Vec<PatchCell<'_>> = group
+                    .iter()
+                    .map(|&e| {
+                        let e = e as usize;
+                        PatchCell {
+                            op: &self.operators[e],
+                            weight: self.model.geometry[e].weight,
+                            local: &patches.local[e],
+                            u: DVector::from_iterator(
+                                N * D,
+                                mesh.cells[e].iter().flat_map(|&v| (0..D).map(move |k| u[v as usize * D + k])),
+                            ),
+                        }
+                    })
+                    .collect();
+                let mut new: Vec<Vec<f64>> =
+                    group.iter().map(|&e| vec![0.0; self.offsets[e as usize + 1] - self.offsets[e as usize]]).collect();
+                let mut update = |i: usize, h: &Matrix3<f64>| {
+                    let e = group[i] as usize;
+                    let old = &history[self.offsets[e]..self.offsets[e + 1]];
+                    self.law_of(e).update(h, dt, old, &mut new[i])
+                };
+                let response = fbar::respond::<D>(patches.nodes[p].len(), &cells, &mut update, with_tangent)
+                    .map_err(|(i, failure)| CellFailure { element: group[i] as usize, failure })?;
+                Ok((response, new))
+            })
+            .collect::<Result<Vec<_>, CellFailure>>()?;
+        let mut new_history = history.to_vec();
+        let mut cells: Vec<Option<CellResponse>> = (0..mesh.num_cells()).map(|_| None).collect();
+        let mut forces = Vec::with_capacity(responses.len());
+        let mut patch_stiffness = Vec::with_capacity(responses.len());
+        for ((response, new), group) in responses.into_iter().zip(&patches.cells) {
+            for (i, &e) in group.iter().enumerate() {
+                let e = e as usize;
+                new_history[self.offsets[e]..self.offsets[e + 1]].copy_from_slice(&new[i]);
+                let (stress, f) = response.cells[i];
+                cells[e] = Some(CellResponse { force: DVector::zeros(0), stiffness: DMatrix::zeros(0, 0), stress, f });
+            }
+            forces.push(response.force);
+            patch_stiffness.push(response.stiffness);
+        }
+        let mut internal = vec![0.0; u.len()];
+        patches.assemble_vector::<D>(&forces, &mut internal);
+        let cells = cells.into_iter().map(|c| c.expect("every cell is in a patch")).collect();
+        Ok(Evaluation { cells, patch_stiffness, history: new_history, internal })
     }
 
     fn tangent(&self, eval: &Evaluation) -> Vec<f64> {
+        if let Some(patches) = &self.patches {
+            return patches.assemble_matrix::<D>(&eval.patch_stiffness);
+        }
         let block = |e: usize, a: usize, b: usize| {
             let k = &eval.cells[e].stiffness;
             nalgebra::SMatrix::<f64, D, D>::from_fn(|r, c| k[(a * D + r, b * D + c)])
         };
-        assemble_blocks::<D, N>(&self.model.topology, &self.model.pattern, &self.model.problem.mesh.cells, &block)
+        assemble_blocks::<D, _>(&self.model.topology, &self.model.pattern, &self.model.problem.mesh.cells, &block)
     }
 }
 
@@ -436,7 +523,9 @@ where
     for &r in &mesh.cell_regions {
         offsets.push(offsets.last().unwrap() + laws[r as usize].history_len());
     }
-    let newton = Newton { model: &model, laws, operators, offsets };
+    let patches =
+        (settings.volumetric == Volumetric::FBar).then(|| Patches::new(&mesh.nodes, &mesh.cells, fbar::patch_size(D)));
+    let newton = Newton { model: &model, laws, operators, offsets, patches };
     let mut history = vec![0.0; *newton.offsets.last().unwrap()];
     for (e, h) in split_by_offsets(&mut history, &newton.offsets).into_iter().enumerate() {
         newton.law_of(e).initial_history(h);
@@ -468,7 +557,7 @@ where
         if systems[i].is_none() {
             let c = if released { &model.released } else { &model.attached };
             systems[i] = Some(
-                ReducedSystem::new(&model.pattern, &c.held, Some(&model.node_order))
+                ReducedSystem::new(newton.pattern(), &c.held, Some(newton.node_order()))
                     .map_err(|e| model.singular(0, 0.0, e))?,
             );
         }
@@ -763,7 +852,7 @@ where
             });
         }
         let k = newton.tangent(&eval);
-        let (factor, n) = factor_shifted(system, &k, &model.diagonal_positions, cut)?;
+        let (factor, n) = factor_shifted(system, &k, newton.diagonal_positions(), cut)?;
         factorizations += n;
         let mut du = r.clone();
         factor.solve_in_place(&mut du);
@@ -864,7 +953,7 @@ where
     let k = newton.tangent(&eval);
     let jump: Vec<f64> = (0..u0.len()).map(|d| if held[d] || cut[d] { u0[d] - u_start[d] } else { 0.0 }).collect();
     let mut coupling = vec![0.0; u0.len()];
-    model.pattern.mul_vec(&k, &jump, &mut coupling);
+    newton.pattern().mul_vec(&k, &jump, &mut coupling);
     let mut rhs: Vec<f64> = system
         .dof_of_free
         .iter()
@@ -877,7 +966,7 @@ where
             }
         })
         .collect();
-    let (factor, n) = factor_shifted(system, &k, &model.diagonal_positions, cut)?;
+    let (factor, n) = factor_shifted(system, &k, newton.diagonal_positions(), cut)?;
     factor.solve_in_place(&mut rhs);
     for (i, &d) in system.dof_of_free.iter().enumerate() {
         if !cut[d as usize] {

@@ -142,6 +142,17 @@ pub enum Integrator {
     Seed,
 }
 
+/// How the Newton path's cells take volume changes.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Volumetric {
+    /// Each linear cell its own `J` (default): locks as the Poisson ratio nears 1/2.
+    #[default]
+    Standard,
+    /// F-bar patches: the cells of a patch share its mean `J`; for Poisson
+    /// ratios from about 0.45 to 0.5. Network materials only.
+    FBar,
+}
+
 /// Numerical settings of a run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Settings {
@@ -173,6 +184,8 @@ pub struct Settings {
     /// choosing steps: the quasi-static and dynamic schemes then take exactly those
     /// steps, with no error control. For finite-difference checks of sensitivities.
     pub step_ends_s: Option<Vec<f64>>,
+    /// The Newton path's volumetric treatment; default each cell its own.
+    pub volumetric: Volumetric,
 }
 
 impl Default for Settings {
@@ -186,6 +199,7 @@ impl Default for Settings {
             seed_psi: 2000.0,
             rho_inf: 0.5,
             step_ends_s: None,
+            volumetric: Volumetric::Standard,
         }
     }
 }
@@ -269,6 +283,19 @@ impl AnyPress {
             AnyPress::Plane(p) => p.materials.iter().any(|m| m.network.is_some()),
             AnyPress::Solid(p) => p.materials.iter().any(|m| m.network.is_some()),
             AnyPress::Axisymmetric(p) => p.materials.iter().any(|m| m.network.is_some()),
+        }
+    }
+
+    /// The largest Poisson ratio of the network materials, if any: from about
+    /// 0.45, linear cells lock and [`Volumetric::FBar`] is due.
+    pub fn largest_network_poisson(&self) -> Option<f64> {
+        let largest = |materials: &[Material]| {
+            materials.iter().filter_map(|m| m.network.as_ref().map(|n| n.poisson)).reduce(f64::max)
+        };
+        match self {
+            AnyPress::Plane(p) => largest(&p.materials),
+            AnyPress::Solid(p) => largest(&p.materials),
+            AnyPress::Axisymmetric(p) => largest(&p.materials),
         }
     }
 
