@@ -62,6 +62,11 @@ use crate::solve::ReducedSystem;
 
 /// Converged at this out-of-balance force, relative to the force scale.
 pub(crate) const TOLERANCE: f64 = 1e-10;
+/// Or at this out-of-balance force relative to its rounding floor
+/// ([`Evaluation::magnitude`], about 450 unit roundoffs): a stiff part beside
+/// a soft one (a damper at a short step in series with a soft layer) turns the
+/// displacements' last bits into forces far above the soft part's reactions.
+pub(crate) const ROUNDING_TOLERANCE: f64 = 1e-13;
 /// The most Newton iterations of one step.
 pub(crate) const MAX_ITERATIONS: usize = 30;
 /// The shortest step, as a share of the trial's duration.
@@ -171,6 +176,10 @@ struct Evaluation {
     patch_stiffness: Vec<DMatrix<f64>>,
     history: Vec<f64>,
     internal: Vec<f64>,
+    /// The nodal sums of the cells' rounding bounds `sum_e |K_e| |u_e|`: an
+    /// error of a unit roundoff in every displacement moves `internal` by up to
+    /// this, the floor of the residual.
+    magnitude: Vec<f64>,
 }
 
 /// A failed evaluation: the cell and why.
@@ -250,7 +259,29 @@ where
             .collect();
         let mut internal = vec![0.0; u.len()];
         assemble_vector::<D, N>(&self.model.topology, &per_cell, &mut internal);
-        Ok(Evaluation { cells, patch_stiffness: Vec::new(), history: new_history, internal })
+        // The rounding bound of each cell force, |K_e| |u_e| (|f_e| without a tangent).
+        let per_cell_abs: Vec<[SVector<f64, D>; N]> = cells
+            .iter()
+            .enumerate()
+            .map(|(e, c)| {
+                let bound = |r: usize| -> f64 {
+                    if c.stiffness.is_empty() {
+                        return c.force[r].abs();
+                    }
+                    let mut s = 0.0;
+                    for (b, &v) in mesh.cells[e].iter().enumerate() {
+                        for k in 0..D {
+                            s += c.stiffness[(r, b * D + k)].abs() * u[v as usize * D + k].abs();
+                        }
+                    }
+                    s
+                };
+                std::array::from_fn(|a| SVector::<f64, D>::from_fn(|k, _| bound(a * D + k)))
+            })
+            .collect();
+        let mut magnitude = vec![0.0; u.len()];
+        assemble_vector::<D, N>(&self.model.topology, &per_cell_abs, &mut magnitude);
+        Ok(Evaluation { cells, patch_stiffness: Vec::new(), history: new_history, internal, magnitude })
     }
 
     /// [`Self::evaluate`] on F-bar patches ([`fbar`]).
@@ -311,8 +342,31 @@ where
         }
         let mut internal = vec![0.0; u.len()];
         patches.assemble_vector::<D>(&forces, &mut internal);
+        let forces_abs: Vec<Vec<f64>> = forces
+            .iter()
+            .zip(&patch_stiffness)
+            .zip(&patches.nodes)
+            .map(|((f, k), nodes)| {
+                if k.is_empty() {
+                    return f.iter().map(|x| x.abs()).collect();
+                }
+                (0..f.len())
+                    .map(|r| {
+                        let mut s = 0.0;
+                        for (b, &v) in nodes.iter().enumerate() {
+                            for c in 0..D {
+                                s += k[(r, b * D + c)].abs() * u[v as usize * D + c].abs();
+                            }
+                        }
+                        s
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut magnitude = vec![0.0; u.len()];
+        patches.assemble_vector::<D>(&forces_abs, &mut magnitude);
         let cells = cells.into_iter().map(|c| c.expect("every cell is in a patch")).collect();
-        Ok(Evaluation { cells, patch_stiffness, history: new_history, internal })
+        Ok(Evaluation { cells, patch_stiffness, history: new_history, internal, magnitude })
     }
 
     fn tangent(&self, eval: &Evaluation) -> Vec<f64> {
@@ -494,6 +548,9 @@ struct Converged {
     residual: f64,
     factorizations: usize,
     iterations: usize,
+    /// The out-of-balance norm of every iterate, relative to the force scale.
+    #[cfg_attr(not(test), allow(dead_code, reason = "read by the convergence-rate test"))]
+    norms: Vec<f64>,
 }
 
 /// Why a step attempt failed (retried shorter).
@@ -834,12 +891,24 @@ where
         let norm = r.iter().map(|x| x * x).sum::<f64>().sqrt();
         (r, norm, held_norm)
     };
+    // The rounding floor of the free rows' residual.
+    let floor_of = |eval: &Evaluation| -> f64 {
+        let mut s = 0.0;
+        for (d, m) in eval.magnitude.iter().enumerate() {
+            if !(held[d] || cut[d]) {
+                s += m * m;
+            }
+        }
+        s.sqrt()
+    };
     let mut eval = newton.evaluate(&u, dt, history, true).map_err(law_err)?;
     let (mut r, mut norm, held_norm) = residual_of(&eval);
     let mut scale = largest_force.max(held_norm).max(f64::MIN_POSITIVE);
     let mut factorizations = 0;
+    let mut norms = Vec::new();
     for iteration in 0..MAX_ITERATIONS {
-        if norm <= TOLERANCE * scale {
+        norms.push(norm / scale);
+        if norm <= TOLERANCE * scale || norm <= ROUNDING_TOLERANCE * floor_of(&eval) {
             let stress = cauchy_stresses::<S>(&eval, model.problem.formulation);
             return Ok(Converged {
                 u,
@@ -849,6 +918,7 @@ where
                 residual: norm / scale,
                 factorizations,
                 iterations: iteration,
+                norms,
             });
         }
         let k = newton.tangent(&eval);
@@ -1025,4 +1095,80 @@ fn cauchy_stresses<const S: usize>(eval: &Evaluation, formulation: Formulation) 
         out.extend(voigt);
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::network::{Energy, Equilibrium};
+    use crate::material::Material;
+    use crate::press::{Attachment, Protocol, SolidPress};
+
+    /// Newton's iteration converges quadratically near the solution: a glued
+    /// neo-Hookean block (an inhomogeneous field) pushed 20 % in one step from
+    /// the tangent's prediction at rest, standard cells and F-bar patches. Each iterate's out-of-balance
+    /// norm `r_k` is recorded; the observed order `ln(r_k+1 / r_k) / ln(r_k /
+    /// r_k-1)` of the last step above the rounding floor must exceed 1.8.
+    #[test]
+    fn newtons_iteration_converges_quadratically() {
+        let net = Network {
+            poisson: 0.45,
+            equilibrium: Some(Equilibrium {
+                energy: Energy::Exponential { stiffening: 1.0 },
+                e_mpa: 0.03,
+                mullins: None,
+            }),
+            viscous: vec![],
+            plastic: None,
+            damper_mpa_s: None,
+        };
+        let protocol = Protocol {
+            waypoints: vec![[0.0, 0.0], [1.0, 2.0]],
+            release_s: 1.0,
+            end_s: 1.0,
+            plate: Attachment::Glued,
+            support: Attachment::Glued,
+            gravity: false,
+        };
+        let problem = SolidPress::new_3d(
+            crate::mesh::block([12.0, 10.0, 8.0], 2.0, "m").unwrap(),
+            vec![Material::network(net).unwrap()],
+            protocol,
+        )
+        .unwrap();
+        for volumetric in [Volumetric::Standard, Volumetric::FBar] {
+            let model = Model::new(&problem).unwrap();
+            let laws = region_laws(&problem);
+            let mesh = &problem.mesh;
+            let operators: Vec<DMatrix<f64>> = model.geometry.iter().map(deformation_operator::<3, 4>).collect();
+            let mut offsets = vec![0];
+            for &r in &mesh.cell_regions {
+                offsets.push(offsets.last().unwrap() + laws[r as usize].history_len());
+            }
+            let patches =
+                (volumetric == Volumetric::FBar).then(|| Patches::new(&mesh.nodes, &mesh.cells, fbar::patch_size(3)));
+            let newton = Newton { model: &model, laws, operators, offsets, patches };
+            let mut history = vec![0.0; *newton.offsets.last().unwrap()];
+            for (e, h) in split_by_offsets(&mut history, &newton.offsets).into_iter().enumerate() {
+                newton.law_of(e).initial_history(h);
+            }
+            let system = ReducedSystem::new(newton.pattern(), &model.attached.held, Some(newton.node_order())).unwrap();
+            let mut u0 = vec![0.0; model.num_dofs()];
+            model.prescribe(&model.attached, 1.0, &mut u0);
+            let cut = vec![false; u0.len()];
+            let step =
+                StepSystem { system: &system, held: &model.attached.held, cut: &cut, dt: 1.0, history: &history };
+            let rest = vec![0.0; u0.len()];
+            let Ok((u0, _)) = tangent_predictor(&newton, &step, &rest, u0) else { panic!("{volumetric:?}: predictor") };
+            let Ok(c) = solve_step(&newton, &step, u0, 0.0) else { panic!("{volumetric:?}: no convergence") };
+            let r = &c.norms;
+            let shown: Vec<String> = r.iter().map(|x| format!("{x:.2e}")).collect();
+            let shown = shown.join(", ");
+            // The last ratio of three iterates all above the floor (1e-13).
+            let k = (2..r.len()).rev().find(|&k| r[k] > 1e-13).expect("at least three iterates above the floor");
+            let order = (r[k] / r[k - 1]).ln() / (r[k - 1] / r[k - 2]).ln();
+            eprintln!("{volumetric:?}: norms {shown}, observed order {order:.2}");
+            assert!(order > 1.8, "{volumetric:?}: order {order:.2} ({shown})");
+        }
+    }
 }
