@@ -48,3 +48,27 @@ fn a_network_in_plane_stress_is_refused_naming_both() {
     let line = assert_one_line_error(&o);
     assert!(line.contains("network") && line.contains("plane stress"), "{line}");
 }
+
+/// `--fbar` on the example (poisson 0.45, frictionless plates: a homogeneous
+/// deformation, where F-bar patches are exact): the same peak force to 1e-8,
+/// and the note on locking only without it. On a chain material it is refused
+/// in one line naming both.
+#[test]
+fn fbar_runs_the_network_example_and_is_refused_for_a_chain() {
+    let tmp = tempfile::tempdir().unwrap();
+    let bundle = example("network/gel-cylinder");
+    let plain = press_in(tmp.path(), &bundle, &tmp.path().join("plain"), &["--axisymmetric"]);
+    assert_success(&plain);
+    assert!(stdout(&plain).contains("--fbar removes that"), "{}", stdout(&plain));
+    let patched = press_in(tmp.path(), &bundle, &tmp.path().join("fbar"), &["--axisymmetric", "--fbar"]);
+    assert_success(&patched);
+    assert!(!stdout(&patched).contains("--fbar removes that"), "{}", stdout(&patched));
+    let peak = |dir: &str| read_summary(&tmp.path().join(dir))["peak_force_N"].as_f64().unwrap();
+    let (a, b) = (peak("plain"), peak("fbar"));
+    assert!((a - b).abs() <= 1e-8 * a, "peaks {a} and {b}");
+
+    let chain = example("paper/mat1");
+    let o = press_in(tmp.path(), &chain, &tmp.path().join("chain"), &["--fbar"]);
+    let line = assert_one_line_error(&o);
+    assert!(line.contains("F-bar") && line.contains("network"), "{line}");
+}
