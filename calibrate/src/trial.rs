@@ -122,7 +122,9 @@ impl Unknown {
     /// [1e-6, 1e4] MPa s and the exponential's stiffening in [1e-3, 50], all on a
     /// log scale; Mullins's `r` in [1.01, 50] (log), `m` in [1e-6, 1] MPa (log),
     /// `beta` in [0, 5] (linear); the plastic network's yield stress and
-    /// hardening modulus in [1e-6, 1e2] MPa (log).
+    /// hardening modulus in [1e-6, 1e2] MPa (log); Ogden's `alpha1` and `alpha3`
+    /// in [0.5, 30], `alpha2` in [-30, -0.5] and the shares in [0, 0.45]
+    /// (linear).
     pub fn spec(&self) -> ParameterSpec {
         let label = self.label();
         match self.key {
@@ -132,6 +134,11 @@ impl Unknown {
             k if k.ends_with("mullins.r") => ParameterSpec::log(label, 1.01, 50.0),
             k if k.ends_with("mullins.m_MPa") => ParameterSpec::log(label, 1e-6, 1.0),
             k if k.ends_with("mullins.beta") => ParameterSpec::linear(label, 0.0, 5.0),
+            // Ogden's terms keep their signs (a term through alpha = 0 vanishes):
+            // a stiffening first and third, a softening second.
+            "equilibrium.alpha1" | "equilibrium.alpha3" => ParameterSpec::linear(label, 0.5, 30.0),
+            "equilibrium.alpha2" => ParameterSpec::linear(label, -30.0, -0.5),
+            "equilibrium.share2" | "equilibrium.share3" => ParameterSpec::linear(label, 0.0, 0.45),
             "plastic.yield_MPa" | "plastic.hardening_MPa" => ParameterSpec::log(label, 1e-6, 1e2),
             "poisson" => ParameterSpec::linear(self.label(), 0.0, 0.499),
             k if k.ends_with("_MPa_s") => ParameterSpec::log(self.label(), 1e-5, 1e5),
@@ -533,6 +540,12 @@ fn default_starts(materials: &mut BTreeMap<String, MaterialSpec>, unknowns: &[Un
             // stiffening and softening, a slow damper.
             "equilibrium.E_MPa" => 0.5 * e,
             "equilibrium.stiffening" => 1.0,
+            // Ogden: a stiffening term of alpha 6, a tenth of a softening one.
+            "equilibrium.alpha1" => 6.0,
+            "equilibrium.alpha2" => -2.0,
+            "equilibrium.alpha3" => 4.0,
+            "equilibrium.share2" => 0.1,
+            "equilibrium.share3" => 0.1,
             "equilibrium.mullins.r" => 3.0,
             "equilibrium.mullins.m_MPa" => 0.05 * e,
             "equilibrium.mullins.beta" => 0.1,

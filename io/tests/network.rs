@@ -199,3 +199,55 @@ fn a_homogeneous_trial_is_solved_on_one_cell_as_on_a_fine_mesh() {
     let b = bundle(&[("experiment.toml", &heavy)]);
     assert_eq!(read_bundle(&b.dir).unwrap().homogeneous_size_mm(true), None);
 }
+
+/// Ogden's energy: read with its defaults (absent third term), written back
+/// the same; a `stiffening` beside it, shares summing to 1 and a zero exponent
+/// refused naming the key.
+#[test]
+fn an_ogden_equilibrium_is_read_written_back_and_its_bad_keys_refused() {
+    let ogden = edit(
+        NETWORK,
+        "energy = \"exponential\"\nE_MPa = 0.03\nstiffening = 0.5",
+        "energy = \"ogden\"\nE_MPa = 0.03\nalpha1 = 6.0\nalpha2 = -2.0\nshare2 = 0.25",
+    );
+    let toml = with_network(&ogden);
+    let b = with_experiment(&toml);
+    let bundle = read_bundle(&b.dir).unwrap();
+    let spec = &bundle.experiment.materials["mat1"];
+    let net = spec.to_network().unwrap();
+    let eq = net.equilibrium.unwrap();
+    assert_eq!(
+        eq.energy,
+        fem_core::material::network::Energy::Ogden { alpha: [6.0, -2.0, 4.0], share: [0.75, 0.25, 0.0] }
+    );
+    let again = wagashi_io::bundle::MaterialSpec::from_material(&spec.to_material().unwrap());
+    assert_eq!(again.to_network().unwrap(), net);
+    // Its fit keys: the Ogden keys, not the exponential's.
+    let keys = spec.parameter_keys();
+    assert!(keys.contains(&"equilibrium.alpha1") && keys.contains(&"equilibrium.share3"), "{keys:?}");
+    assert!(!keys.contains(&"equilibrium.stiffening"), "{keys:?}");
+
+    let cases: [(&str, &str, &str, &str, &str); 3] = [
+        (
+            "share2 = 0.25",
+            "share2 = 0.25\nstiffening = 1.0",
+            "stiffening",
+            "materials.mat1.equilibrium.stiffening",
+            "not a key here",
+        ),
+        (
+            "share2 = 0.25",
+            "share2 = 0.7\nshare3 = 0.3",
+            "share2",
+            "materials.mat1.equilibrium.share2",
+            "must be under 1",
+        ),
+        ("alpha1 = 6.0", "alpha1 = 0.0", "alpha1", "materials.mat1.equilibrium.alpha1", "nonzero"),
+    ];
+    for (from, to, line, field, cause) in cases {
+        let toml = with_network(&edit(&ogden, from, to));
+        let b = with_experiment(&toml);
+        let msg = assert_invalid(read_bundle(&b.dir), &b.file("experiment.toml"), line_of(&toml, line), field);
+        assert!(msg.contains(cause), "{msg}");
+    }
+}

@@ -40,9 +40,14 @@
 //! model = "network"
 //! poisson = 0.45                 # of every part, in (-1, 0.4999]
 //! [materials.gel.equilibrium]    # absent: a fluid, like the seed's chain
-//! energy = "exponential"         # or "neo-hookean"
+//! energy = "exponential"         # or "neo-hookean" or "ogden"
 //! E_MPa = 0.03                   # Young's modulus at small strain
 //! stiffening = 0.5               # b of mu/(2b) [exp(b (I1bar - 3)) - 1] (exponential only)
+//! # ogden only: sum_p 2 mu_p/alpha_p^2 sum_i (lbar_i^alpha_p - 1), mu_p = share_p mu
+//! # alpha1 = 6.0                 # first term's exponent (required, nonzero)
+//! # alpha2 = -2.0                # second term's exponent (default -2)
+//! # share2 = 0.2                 # its share of mu (default 0: no second term)
+//! # alpha3, share3               # a third term (defaults 4 and 0); share1 = 1 - share2 - share3
 //! [materials.gel.equilibrium.mullins]  # Ogden-Roxburgh softening (optional)
 //! r = 2.0                        # > 1: the most softening is 1 - 1/r
 //! m_MPa = 0.001                  # its energy scale
@@ -71,7 +76,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use fem_core::material::law::ParameterSpec;
-use fem_core::material::network::{Energy, Equilibrium, Mullins, Network, PlasticNetwork, ViscousNetwork};
+use fem_core::material::network::{Energy, Equilibrium, Mullins, Network, PlasticNetwork, ViscousNetwork, OGDEN_TERMS};
 use fem_core::material::{Material, MaterialError, MullinsDamage, Rheology};
 use serde::{Deserialize, Serialize};
 
@@ -121,6 +126,9 @@ impl Model {
     }
 }
 
+/// Ogden's keys in `[equilibrium]` (with `energy = "ogden"` only).
+const OGDEN_KEYS: [&str; 5] = ["alpha1", "alpha2", "share2", "alpha3", "share3"];
+
 /// The most viscous networks a network material's flat parameter keys reach
 /// ([`NETWORK_KEYS`]).
 pub const MAX_VISCOUS_NETWORKS: usize = 4;
@@ -131,6 +139,11 @@ pub const MAX_VISCOUS_NETWORKS: usize = 4;
 pub const NETWORK_KEYS: &[&str] = &[
     "equilibrium.E_MPa",
     "equilibrium.stiffening",
+    "equilibrium.alpha1",
+    "equilibrium.alpha2",
+    "equilibrium.share2",
+    "equilibrium.alpha3",
+    "equilibrium.share3",
     "equilibrium.mullins.r",
     "equilibrium.mullins.m_MPa",
     "equilibrium.mullins.beta",
@@ -331,6 +344,16 @@ impl MaterialSpec {
                     t.insert("stiffening".into(), toml::Value::Float(stiffening));
                     "exponential"
                 }
+                Energy::Ogden { alpha, share } => {
+                    t.insert("alpha1".into(), toml::Value::Float(alpha[0]));
+                    for p in 1..OGDEN_TERMS {
+                        if share[p] > 0.0 {
+                            t.insert(format!("alpha{}", p + 1), toml::Value::Float(alpha[p]));
+                            t.insert(format!("share{}", p + 1), toml::Value::Float(share[p]));
+                        }
+                    }
+                    "ogden"
+                }
             };
             t.insert("energy".into(), toml::Value::String(energy.into()));
             if let Some(m) = eq.mullins {
@@ -367,26 +390,52 @@ impl MaterialSpec {
             None => None,
             Some(t) => {
                 let energy = match t.get("energy") {
-                    None => return Err(("equilibrium.energy".into(), "missing (neo-hookean or exponential)".into())),
+                    None => {
+                        return Err(("equilibrium.energy".into(), "missing (neo-hookean, exponential or ogden)".into()))
+                    }
                     Some(toml::Value::String(s)) if s == "neo-hookean" => "neo-hookean",
                     Some(toml::Value::String(s)) if s == "exponential" => "exponential",
+                    Some(toml::Value::String(s)) if s == "ogden" => "ogden",
                     Some(other) => {
                         return Err((
                             "equilibrium.energy".into(),
-                            format!("{other} is not an energy (neo-hookean or exponential)"),
+                            format!("{other} is not an energy (neo-hookean, exponential or ogden)"),
                         ))
                     }
                 };
                 let mut allowed: Vec<&str> = vec!["energy", "E_MPa", "mullins"];
-                if energy == "exponential" {
-                    allowed.push("stiffening");
+                match energy {
+                    "exponential" => allowed.push("stiffening"),
+                    "ogden" => allowed.extend(OGDEN_KEYS),
+                    _ => {}
                 }
                 let values = read_table(t, EQUILIBRIUM, &allowed, "equilibrium")?;
                 let e_mpa = values["E_MPa"];
-                let energy = if energy == "exponential" {
-                    Energy::Exponential { stiffening: values["stiffening"] }
-                } else {
-                    Energy::NeoHookean
+                let energy = match energy {
+                    "exponential" => Energy::Exponential { stiffening: values["stiffening"] },
+                    "ogden" => {
+                        let (s2, s3) = (values["share2"], values["share3"]);
+                        if s2 + s3 >= 1.0 {
+                            return Err((
+                                "equilibrium.share2".into(),
+                                format!(
+                                    "share2 + share3 = {} must be under 1 (the first term takes the rest)",
+                                    s2 + s3
+                                ),
+                            ));
+                        }
+                        let alpha = [values["alpha1"], values["alpha2"], values["alpha3"]];
+                        let share = [1.0 - s2 - s3, s2, s3];
+                        let min = fem_core::material::network::parameters::OGDEN_ALPHA_MIN;
+                        if let Some(p) = (0..OGDEN_TERMS).find(|&p| share[p] > 0.0 && alpha[p].abs() < min) {
+                            return Err((
+                                format!("equilibrium.alpha{}", p + 1),
+                                format!("{} must be nonzero (|alpha| >= {min}) for a term with a share", alpha[p]),
+                            ));
+                        }
+                        Energy::Ogden { alpha, share }
+                    }
+                    _ => Energy::NeoHookean,
                 };
                 let mullins = match t.get("mullins") {
                     None => None,
@@ -457,9 +506,11 @@ impl MaterialSpec {
         let (path, leaf) = key.rsplit_once('.')?;
         let parts: Vec<String> = path.split('.').map(str::to_string).collect();
         self.network_table(&parts)?;
-        let exponential =
-            matches!(self.equilibrium.as_ref()?.get("energy"), Some(toml::Value::String(e)) if e == "exponential");
-        if leaf == "stiffening" && !(path == "equilibrium" && exponential) {
+        let energy = |name: &str| matches!(self.equilibrium.as_ref().and_then(|t| t.get("energy")), Some(toml::Value::String(e)) if e == name);
+        if leaf == "stiffening" && !(path == "equilibrium" && energy("exponential")) {
+            return None;
+        }
+        if OGDEN_KEYS.contains(&leaf) && !(path == "equilibrium" && energy("ogden")) {
             return None;
         }
         Some((parts, leaf))

@@ -6,6 +6,17 @@
 //! |---------------|------------------------------------------------|-------------------|
 //! | `neo-hookean` | `mu/2 (I1bar - 3)`                             | Hooke, `E`, `nu`  |
 //! | `exponential` | `mu/(2 b) [exp(b (I1bar - 3)) - 1]`            | Hooke, `E`, `nu`  |
+//! | `ogden`       | `sum_p 2 mu_p / alpha_p^2 sum_i (lbar_i^alpha_p - 1)` | Hooke, `E`, `nu`  |
+//!
+//! Ogden's terms (at most [`OGDEN_TERMS`]) have the shear moduli `mu_p = s_p mu`,
+//! shares `s_p > 0` summing to 1, so `E` keeps its meaning; `lbar_i` are the
+//! isochoric principal stretches. In the principal log strains `eps_i` with
+//! deviatoric parts `e_i`, `lbar_i^alpha = exp(alpha e_i)`: the energy is an
+//! isotropic function of the log strain, its Kirchhoff stress
+//! `tau = sum_p 2 mu_p / alpha_p dev(exp(alpha_p e)) + K J (J - 1) I` is coaxial
+//! with it, and the tangent goes through the log strain's Daleckii-Krein
+//! derivative ([`super::hencky::log_strain_tangent`]). `alpha = 2` (one term)
+//! is the neo-Hookean energy.
 //!
 //! with `mu = E / (2 (1 + nu))`, `K = E / (3 (1 - 2 nu))`: at small strain the
 //! network is the linear spring `E C1(nu)`, the seed's unit-Young shape.
@@ -26,7 +37,13 @@ pub enum Energy {
     NeoHookean,
     /// `mu/(2 b) [exp(b (I1bar - 3)) - 1]`, `b > 0` (dimensionless).
     Exponential { stiffening: f64 },
+    /// Ogden's energy (module docs): exponents `alpha` and shares of `mu`;
+    /// a term whose share is 0 is absent.
+    Ogden { alpha: [f64; OGDEN_TERMS], share: [f64; OGDEN_TERMS] },
 }
+
+/// The most terms of an Ogden energy.
+pub const OGDEN_TERMS: usize = 3;
 
 /// Ogden-Roxburgh softening (module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -59,7 +76,77 @@ impl Equilibrium {
                 let x = b * i1bar_m3;
                 (0.5 * x.exp_m1() / b, 0.5 * x.exp(), 0.5 * b * x.exp())
             }
+            Energy::Ogden { .. } => unreachable!("Ogden's energy is not a function of I1bar"),
         }
+    }
+
+    /// Ogden's stress, tangent and energy at `F = I + h` (module docs).
+    fn ogden(
+        &self,
+        alpha: &[f64; OGDEN_TERMS],
+        share: &[f64; OGDEN_TERMS],
+        h: &Matrix3<f64>,
+        f_inv_t: &Matrix3<f64>,
+        poisson: f64,
+    ) -> (Matrix3<f64>, Tangent, f64) {
+        use super::hencky::{eigen, log_strain_tangent, symmetrize};
+        let mu = self.e_mpa / (2.0 * (1.0 + poisson));
+        let kappa = self.e_mpa / (3.0 * (1.0 - 2.0 * poisson));
+        let f = Matrix3::identity() + h;
+        // b - I = h + h^T + h h^T, its eigenvalues x_i, eps_i = ln(1 + x_i) / 2.
+        let (q, x) = eigen(&symmetrize(&(h + h.transpose() + h * h.transpose())));
+        let eps = x.map(|v| 0.5 * v.ln_1p());
+        let tr = eps[0] + eps[1] + eps[2];
+        let e = eps.map(|v| v - tr / 3.0);
+        let tr_h = h.trace();
+        let j_m1 = tr_h + 0.5 * (tr_h * tr_h - (h * h).trace()) + h.determinant();
+        let j = 1.0 + j_m1;
+        let terms: Vec<(f64, f64)> =
+            alpha.iter().zip(share).filter(|(_, &s)| s > 0.0).map(|(&a, &s)| (a, s * mu)).collect();
+        // Principal Kirchhoff stresses and the energy.
+        let mut tau_p = [kappa * j * j_m1; 3];
+        let mut w = 0.5 * kappa * j_m1 * j_m1;
+        for &(a, mu_p) in &terms {
+            let g = e.map(|v| (a * v).exp_m1());
+            let mean = (g[0] + g[1] + g[2]) / 3.0;
+            for i in 0..3 {
+                tau_p[i] += 2.0 * mu_p / a * (g[i] - mean);
+            }
+            w += 2.0 * mu_p / (a * a) * (g[0] + g[1] + g[2]);
+        }
+        let qt = q.transpose();
+        let tau = q * Matrix3::from_diagonal(&nalgebra::Vector3::from(tau_p)) * qt;
+        // d tau / d eps in the principal frame: per term, dev of the divided
+        // differences of exp(a e) applied to dev(d eps); the volume's
+        // K (2 J - 1) J tr(d eps) I.
+        let divided: Vec<Matrix3<f64>> = terms
+            .iter()
+            .map(|&(a, _)| {
+                Matrix3::from_fn(|i, k| {
+                    let d = e[i] - e[k];
+                    if d == 0.0 {
+                        a * (a * e[i]).exp()
+                    } else {
+                        (a * e[k]).exp() * (a * d).exp_m1() / d
+                    }
+                })
+            })
+            .collect();
+        let d_tau = |d_eps: &Matrix3<f64>| -> Matrix3<f64> {
+            let local = qt * d_eps * q;
+            let trace = local.trace();
+            let dev = local - Matrix3::identity() * (trace / 3.0);
+            let mut out = Matrix3::identity() * (kappa * (2.0 * j - 1.0) * j * trace);
+            for (&(a, mu_p), g) in terms.iter().zip(&divided) {
+                let m = dev.component_mul(g);
+                let m = m - Matrix3::identity() * (m.trace() / 3.0);
+                out += m * (2.0 * mu_p / a);
+            }
+            q * out * qt
+        };
+        let p = tau * f_inv_t;
+        let tangent = log_strain_tangent(&f, &Matrix3::zeros(), &q, x, &tau, f_inv_t, d_tau);
+        (p, tangent, w)
     }
 
     /// The virgin stress `P0`, tangent and energy `W` at `F = I + h`
@@ -73,6 +160,9 @@ impl Equilibrium {
         f_inv_t: &Matrix3<f64>,
         poisson: f64,
     ) -> (Matrix3<f64>, Tangent, f64) {
+        if let Energy::Ogden { alpha, share } = &self.energy {
+            return self.ogden(alpha, share, h, f_inv_t, poisson);
+        }
         let mu = self.e_mpa / (2.0 * (1.0 + poisson));
         let kappa = self.e_mpa / (3.0 * (1.0 - 2.0 * poisson));
         let f = Matrix3::identity() + h;
@@ -192,6 +282,16 @@ mod tests {
                 e_mpa: 0.03,
                 mullins: Some(Mullins { r: 2.0, m_mpa: 1e-3, beta: 0.1 }),
             },
+            Equilibrium {
+                energy: Energy::Ogden { alpha: [5.0, -2.5, 1.3], share: [0.5, 0.3, 0.2] },
+                e_mpa: 0.03,
+                mullins: None,
+            },
+            Equilibrium {
+                energy: Energy::Ogden { alpha: [8.0, 2.0, 2.0], share: [0.6, 0.4, 0.0] },
+                e_mpa: 0.03,
+                mullins: Some(Mullins { r: 2.0, m_mpa: 1e-3, beta: 0.1 }),
+            },
         ];
         for law in laws {
             let w_max = 0.02; // above W at f: the softened branch
@@ -234,5 +334,44 @@ mod tests {
         let p = law.virgin(&(f - Matrix3::identity()), &f.try_inverse().unwrap().transpose(), nu).0[(1, 1)];
         let closed = mu * (lambda - lambda.powi(-2));
         assert!(((p - closed) / closed).abs() < 1e-3, "{p} vs {closed}");
+    }
+
+    /// Ogden's energy: one term of alpha = 2 is the neo-Hookean energy (stress
+    /// and tangent to 1e-12 and 1e-10, at a general F and at F = I + 1e-9 h,
+    /// where the stress keeps its relative precision); the tangent at a repeated
+    /// eigenvalue (a uniaxial stretch) matches central differences.
+    #[test]
+    fn ogden_with_alpha_2_is_neo_hookean_and_its_tangent_holds_at_repeated_stretches() {
+        let nh = Equilibrium { energy: Energy::NeoHookean, e_mpa: 0.03, mullins: None };
+        let og = Equilibrium {
+            energy: Energy::Ogden { alpha: [2.0, 3.0, 3.0], share: [1.0, 0.0, 0.0] },
+            e_mpa: 0.03,
+            mullins: None,
+        };
+        let general = Matrix3::new(0.1, 0.2, -0.05, 0.03, -0.3, 0.1, -0.02, 0.07, 0.25);
+        for h in [general, general * 1e-9] {
+            let fit = (Matrix3::identity() + h).try_inverse().unwrap().transpose();
+            let (p1, t1, w1) = nh.virgin(&h, &fit, 0.45);
+            let (p2, t2, w2) = og.virgin(&h, &fit, 0.45);
+            assert!((p1 - p2).amax() <= 1e-12 * p1.amax(), "stress {:.3e}", (p1 - p2).amax() / p1.amax());
+            assert!((t1 - t2).amax() <= 1e-10 * t1.amax(), "tangent {:.3e}", (t1 - t2).amax() / t1.amax());
+            // The energy's first-order terms cancel (sum_i e_i = 0), so at 1e-9
+            // it keeps about 1e-7 relative precision; it only sets the softening.
+            let rel = if h == general { 1e-12 } else { 1e-6 };
+            assert!((w1 - w2).abs() <= rel * w1.abs(), "energy {w1} vs {w2}");
+        }
+        let three = Equilibrium {
+            energy: Energy::Ogden { alpha: [5.0, -2.5, 1.3], share: [0.5, 0.3, 0.2] },
+            e_mpa: 0.03,
+            mullins: None,
+        };
+        let f = Matrix3::from_diagonal(&nalgebra::Vector3::new(1.2, 0.7, 1.2));
+        let respond = |f: &Matrix3<f64>| {
+            let fit = f.try_inverse().unwrap().transpose();
+            three.virgin(&(f - Matrix3::identity()), &fit, 0.45)
+        };
+        let (_, t, _) = respond(&f);
+        let fd = tangent_by_differences(&f, 1e-6, &|f| respond(f).0);
+        assert!((t - fd).amax() < 1e-6 * t.amax(), "tangent error {:.3e}", (t - fd).amax() / t.amax());
     }
 }

@@ -74,7 +74,7 @@ mod equilibrium;
 mod hencky;
 pub mod plastic;
 
-pub use equilibrium::{Energy, Equilibrium, Mullins};
+pub use equilibrium::{Energy, Equilibrium, Mullins, OGDEN_TERMS};
 pub use plastic::PlasticNetwork;
 
 use nalgebra::Matrix3;
@@ -136,11 +136,21 @@ pub mod parameters {
     /// The material's own keys (beside `model = "network"`).
     pub const MATERIAL: &[ParameterSpec] =
         &[spec("poisson", "Poisson's ratio of every part", "1", -1.0, true, 0.4999, None)];
-    /// `[equilibrium]`: `energy = "neo-hookean" | "exponential"` and these.
+    /// `[equilibrium]`: `energy = "neo-hookean" | "exponential" | "ogden"` and
+    /// these (`stiffening` with the exponential energy only, the `alpha` and
+    /// `share` keys with Ogden's only; the first term's share is one less the
+    /// others').
     pub const EQUILIBRIUM: &[ParameterSpec] = &[
         spec("E_MPa", "Young's modulus at small strain", "MPa", 0.0, true, 1e4, None),
         spec("stiffening", "b of the exponential energy", "1", 0.0, true, 100.0, None),
+        spec("alpha1", "exponent of Ogden's first term (nonzero)", "1", -30.0, false, 30.0, None),
+        spec("alpha2", "exponent of Ogden's second term (nonzero)", "1", -30.0, false, 30.0, Some(-2.0)),
+        spec("alpha3", "exponent of Ogden's third term (nonzero)", "1", -30.0, false, 30.0, Some(4.0)),
+        spec("share2", "Ogden's second term's share of the shear modulus", "1", 0.0, false, 1.0, Some(0.0)),
+        spec("share3", "Ogden's third term's share of the shear modulus", "1", 0.0, false, 1.0, Some(0.0)),
     ];
+    /// The smallest accepted `|alpha|` of an Ogden term.
+    pub const OGDEN_ALPHA_MIN: f64 = 1e-2;
     /// `[equilibrium.mullins]`: Ogden-Roxburgh softening.
     pub const MULLINS: &[ParameterSpec] = &[
         spec("r", "the softened stress is at least 1 - 1/r of the virgin", "1", 1.0, true, 1e3, None),
@@ -211,6 +221,29 @@ impl Network {
             check(EQUILIBRIUM, "E_MPa", eq.e_mpa, "equilibrium.")?;
             if let Energy::Exponential { stiffening } = eq.energy {
                 check(EQUILIBRIUM, "stiffening", stiffening, "equilibrium.")?;
+            }
+            if let Energy::Ogden { alpha, share } = eq.energy {
+                for p in 0..OGDEN_TERMS {
+                    let key = format!("alpha{}", p + 1);
+                    check(EQUILIBRIUM, &key, alpha[p], "equilibrium.")?;
+                    if share[p] > 0.0 && alpha[p].abs() < OGDEN_ALPHA_MIN {
+                        return Err(NetworkError::OutOfBounds {
+                            key: format!("equilibrium.{key}"),
+                            value: alpha[p],
+                            range: format!("[-30, -{OGDEN_ALPHA_MIN}] or [{OGDEN_ALPHA_MIN}, 30] (nonzero)"),
+                        });
+                    }
+                }
+                for p in 1..OGDEN_TERMS {
+                    check(EQUILIBRIUM, &format!("share{}", p + 1), share[p], "equilibrium.")?;
+                }
+                if !(share[0] > 0.0 && (share.iter().sum::<f64>() - 1.0).abs() < 1e-12) {
+                    return Err(NetworkError::OutOfBounds {
+                        key: "equilibrium.share2".into(),
+                        value: share[1],
+                        range: "[0, 1) with share2 + share3 < 1".into(),
+                    });
+                }
             }
             if let Some(m) = eq.mullins {
                 check(MULLINS, "r", m.r, "equilibrium.mullins.")?;
