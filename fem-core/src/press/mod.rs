@@ -32,6 +32,7 @@ mod contact;
 mod inelastic;
 mod model;
 mod network;
+mod network_contact;
 mod problem;
 mod result;
 mod seed;
