@@ -112,7 +112,9 @@ fn sphere_on_cylinder(
 /// a/R <= 0.045 the finite-strain terms are O(a/R) of the force. The force
 /// follows `4/3 E* R^(1/2) d^(3/2)` within 3 % on the finest mesh (where the
 /// contact spans several elements, d >= 0.05 mm), the error falls under
-/// refinement, and the floor carries the sphere's load within 1e-4 (measured
+/// refinement (measured 1.84, 1.24 and 1.07 %: the discretization's part falls
+/// at order 1.8 toward a limit of 1.0 %, the finite-strain and finite-body
+/// departure from Hertz), and the floor carries the sphere's load within 1e-4 (measured
 /// 3e-6 to 1.5e-5, growing under refinement: the contact iteration accepts a
 /// gap of 1e-11 of the local size, whose penalty force, a million times the
 /// node's stiffness, is 1e-5 of the node's stiffness times its size).
@@ -142,7 +144,14 @@ fn hertz_sphere_indentation_of_a_neo_hookean_cylinder_converges() {
         errors.push(worst);
     }
     let orders: Vec<f64> = errors.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
-    eprintln!("Hertz (neo-Hookean) errors {errors:?}, observed orders {orders:?}");
+    // The errors tend to a limit, not to zero (the finite-strain and finite-body
+    // departures from Hertz): Richardson on the three meshes (size halved).
+    let p = ((errors[0] - errors[1]) / (errors[1] - errors[2])).log2();
+    let limit = errors[2] - (errors[1] - errors[2]) / (2f64.powf(p) - 1.0);
+    eprintln!(
+        "Hertz (neo-Hookean) errors {errors:?}, orders of the errors {orders:?}; of the discretization's part {p:.2}, \
+         toward {limit:.4}"
+    );
     assert!(errors[2] <= 0.03, "finest mesh: {:.4} off Hertz", errors[2]);
     assert!(errors[2] < errors[1] && errors[1] < errors[0], "errors do not fall under refinement: {errors:?}");
 }
@@ -336,5 +345,64 @@ fn a_sphere_leaves_and_touches_again_on_the_network_path() {
     for (t1, t2) in [(3.0, 13.0), (4.0, 14.0)] {
         let (a, b) = (at(t1).force_n[1], at(t2).force_n[1]);
         assert!(a > 0.0 && (a - b).abs() <= 1e-4 * first.force_n[1], "t = {t1}/{t2}: {a} vs {b}");
+    }
+}
+
+/// Every tool shape and contact law on the Newton path against the chain at
+/// small strain: a flat punch (glued), a capsule (Coulomb, mu = 0.3), a convex
+/// hull (a wedge with a 4 mm flat) and a triangle mesh (a faceted sphere of 10 mm),
+/// frictionless where not said, each pressed 0.05 mm into the plane-strain
+/// block (elastic chain and its network equivalent, the chain's step ends).
+/// The forces agree within 1 % (measured 2.1e-3): the kinematics' O(strain),
+/// with the strain under the tools of the order of the depth over the element
+/// size (2e-2) where one to three nodes touch.
+#[test]
+fn every_tool_shape_and_law_runs_on_the_network_path() {
+    let chain = elastic(0.05, 0.3);
+    let sphere_surface = Tool::moving_down(
+        "s",
+        ToolShape::Sphere { radius: 10.0 },
+        [0.0; 3],
+        &[[0.0, 0.0]],
+        ToolContact::Frictionless,
+        f64::INFINITY,
+    )
+    .surface_mesh();
+    let lowest = sphere_surface.0.iter().map(|p| p[1]).fold(f64::INFINITY, f64::min);
+    let wedge: Vec<[f64; 3]> = [[-6.0, 0.0], [6.0, 0.0], [-2.0, -3.0], [2.0, -3.0]]
+        .iter()
+        .flat_map(|&[x, y]| [[x, y, -5.0], [x, y, 5.0]])
+        .collect();
+    let cases = [
+        ("punch", ToolShape::Punch { radius: 4.0, half_height: 5.0 }, 5.0, ToolContact::Glued),
+        ("capsule", ToolShape::Capsule { radius: 4.0, half_height: 2.0 }, 6.0, ToolContact::Friction(0.3)),
+        ("hull", ToolShape::ConvexHull { points: wedge }, 3.0, ToolContact::Frictionless),
+        (
+            "mesh",
+            ToolShape::Mesh { vertices: sphere_surface.0.clone(), triangles: sphere_surface.1.clone() },
+            -lowest,
+            ToolContact::Frictionless,
+        ),
+    ];
+    for (name, shape, offset, contact) in cases {
+        let tool = Tool::moving_down(
+            name,
+            shape,
+            [10.0, 15.0 + offset, 0.0],
+            &[[0.0, -0.02], [1.0, 0.05]],
+            contact,
+            f64::INFINITY,
+        );
+        let settings = Settings { fixed_dt_s: Some(0.125), ..Settings::default() };
+        let linear = plane_block(chain.clone(), tool.clone(), 1.0, &settings, &format!("{name}, chain"));
+        let finite = plane_block(as_network(&chain), tool, 1.0, &same_steps(&linear), &format!("{name}, network"));
+        let (a, b) = (linear.tools[0].samples.last().unwrap(), finite.tools[0].samples.last().unwrap());
+        let rel = (a.force_n[1] - b.force_n[1]).abs() / a.force_n[1];
+        eprintln!(
+            "{name} {contact:?}: chain {:.6e} N, network {:.6e} N ({rel:.2e}), area {} / {} mm^2",
+            a.force_n[1], b.force_n[1], a.area_mm2, b.area_mm2
+        );
+        assert!(a.force_n[1] > 0.0 && b.area_mm2 > 0.0, "{name}: no contact");
+        assert!(rel <= 1e-2, "{name}: chain {} vs network {} ({rel:.3e})", a.force_n[1], b.force_n[1]);
     }
 }
