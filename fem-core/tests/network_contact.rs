@@ -406,3 +406,39 @@ fn every_tool_shape_and_law_runs_on_the_network_path() {
         assert!(rel <= 1e-2, "{name}: chain {} vs network {} ({rel:.3e})", a.force_n[1], b.force_n[1]);
     }
 }
+
+/// A glued flat plate tool (the exact elimination of the chain's flat tools,
+/// each solve a Newton solve with the held dofs cut off) reproduces the
+/// protocol's glued plate on a neo-Hookean plane-strain block pushed to 20 %
+/// strain, on the plate's step ends: plate and floor forces within 1e-8 of the
+/// peak (both are Newton solves to 1e-10 of the force scale).
+#[test]
+fn a_glued_plate_tool_on_the_network_path_reproduces_the_glued_plate() {
+    let material = neo_hookean(0.05, 0.3);
+    let mut glued = protocol(10.0, Attachment::Glued);
+    glued.waypoints = vec![[0.0, 0.0], [10.0, 3.0]];
+    glued.plate = Attachment::Glued;
+    let block = || {
+        let mut p = PlanePress::new_2d(
+            mesh::rectangle(20.0, 15.0, 2.5, "block").unwrap(),
+            10.0,
+            vec![material.clone()],
+            glued.clone(),
+        )
+        .unwrap();
+        p.formulation = Formulation::PlaneStrain { thickness_mm: 10.0 };
+        p
+    };
+    let reference = run_timed("glued plate", &block(), &Settings::default());
+    let mut with_tool = block();
+    with_tool.tools = vec![plate(0.0, &glued.waypoints, ToolContact::Glued)];
+    let result = run_timed("glued plate tool", &with_tool, &same_steps(&reference));
+    let peak = reference.peak_force();
+    let mut worst: f64 = 0.0;
+    for (a, (b, s)) in reference.steps.iter().zip(result.steps.iter().zip(&result.tools[0].samples[1..])) {
+        worst = worst.max((a.plate_force_n - s.force_n[1]).abs() / peak);
+        worst = worst.max((a.bottom_force_n - b.bottom_force_n).abs() / peak);
+    }
+    eprintln!("glued plate tool: peak {peak:.6e} N, worst difference {worst:.3e} of the peak");
+    assert!(worst <= 1e-8, "worst {worst:.3e}");
+}
