@@ -318,6 +318,11 @@ pub(crate) struct ContactModel<'t> {
     /// `super::stepper`, "Machine compliance"). Its pose is lifted by
     /// [`StepInput::lift`].
     pub crosshead: Vec<bool>,
+    /// Whether curved tools may take the low-rank path ("Curved tools: the
+    /// low-rank path"): only where the step matrix without penalties is the same
+    /// for every solve of a step (the linear chain). The Newton path's solves
+    /// each run Newton's iteration on the penalized problem and clear it.
+    pub low_rank: bool,
 }
 
 /// The adhesion of one pair: the node's strength `sigma_a A` [N] (`A` its facets'
@@ -546,6 +551,7 @@ impl<'t> ContactModel<'t> {
         let crosshead = tools.iter().map(|t| on_crosshead(t.tool)).collect();
         Ok(Self {
             crosshead,
+            low_rank: true,
             adhesion,
             adheres,
             facets,
@@ -812,7 +818,11 @@ impl<'t> ContactModel<'t> {
                 }
                 v
             };
-            let low_rank = if all_flat { None } else { self.low_rank_solve(input, solve, &blocks, &rhs, &u, nnz)? };
+            let low_rank = if all_flat || !self.low_rank {
+                None
+            } else {
+                self.low_rank_solve(input, solve, &blocks, &rhs, &u, nnz)?
+            };
             let next = match low_rank {
                 Some(next) => next,
                 None => solve(hash_signature(&signature), &values, &rhs, None)?,

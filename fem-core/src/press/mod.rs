@@ -33,6 +33,7 @@ mod fbar;
 mod inelastic;
 mod model;
 mod network;
+mod network_contact;
 mod problem;
 mod result;
 mod seed;

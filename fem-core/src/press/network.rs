@@ -19,6 +19,27 @@
 //! the chain itself at small strain. Plane stress is refused (its `F_zz` would
 //! need a local iteration); use plane strain, axisymmetric or 3D.
 //!
+//! ## Contact tools
+//!
+//! Every tool shape and contact law runs, in plane strain, axisymmetric and 3D:
+//!
+//! - **Flat, unrotated, frictionless plates only** (plate tools and floors):
+//!   unilateral contact on the `y` dofs of the boundary nodes, by an active set.
+//!   A node past a plate's face is held on it, its `y` dof cut off the matrix
+//!   (the same symbolic factorization); a held node whose reaction pulls is let
+//!   go; the step is solved again until the set holds ([`FlatPlate`]).
+//! - **Any other tool** (sphere, punch, capsule, convex hull, triangle mesh,
+//!   turned plates; frictionless, Coulomb friction or glued; each with its
+//!   release): the contact iteration of the linear chain's tools
+//!   ([`super::contact`]: an augmented Lagrangian on the boundary nodes with
+//!   closest points and normals from [`super::tools`], stick and slip, glued
+//!   anchors), each of its solves a Newton solve of the step with the
+//!   contact's node penalties in the tangent ([`super::network_contact`]).
+//!   The tools' samples (force, normal and tangential parts, area, nodes at
+//!   kept times) are the chain's. Such a step starts from the last step's end
+//!   (friction's trial tractions are measured from there), not from the
+//!   velocity's extrapolation.
+//!
 //! ## A step
 //!
 //! Newton-Raphson with the consistent tangent and a backtracking line search on
@@ -47,8 +68,10 @@ use std::time::Instant;
 use nalgebra::{DMatrix, DVector, Matrix3, SVector};
 use rayon::prelude::*;
 
+use super::contact::{ContactState, Settled};
 use super::fbar::{self, PatchCell, Patches};
 use super::model::Model;
+use super::network_contact::{ContactStep, NetworkContact, Penalty};
 use super::stepper::emit_markers;
 use super::{
     Integrator, MarkerTrack, PressError, PressProblem, PressResult, Progress, Settings, Snapshot, StepRecord, Tool,
@@ -91,16 +114,8 @@ fn check<const D: usize, const N: usize, const S: usize>(
     if let Formulation::PlaneStress { .. } = problem.formulation {
         return bad("in plane stress (use plane strain, axisymmetric or 3D)");
     }
-    for tool in &problem.tools {
-        if FlatPlate::of(tool).is_none() {
-            return bad(&format!(
-                "with tool `{}`: its contact tools are flat, unrotated, frictionless plates (plate tools and floors)",
-                tool.name
-            ));
-        }
-    }
     if !problem.effects.is_null() {
-        return bad("with the diagnosis's effects");
+        return bad("with the diagnosis's effects (adhesion and machine compliance included)");
     }
     if problem.materials.iter().any(|m| m.damage.is_some()) {
         return bad("beside a chain with Mullins damage (give the network's own `[equilibrium.mullins]`)");
@@ -540,10 +555,10 @@ where
 }
 
 /// What a converged step gives.
-struct Converged {
-    u: Vec<f64>,
+pub(super) struct Converged {
+    pub(super) u: Vec<f64>,
     history: Vec<f64>,
-    internal: Vec<f64>,
+    pub(super) internal: Vec<f64>,
     stress: Vec<f64>,
     residual: f64,
     factorizations: usize,
@@ -553,12 +568,15 @@ struct Converged {
     norms: Vec<f64>,
 }
 
-/// Why a step attempt failed (retried shorter).
-enum StepFailure {
+/// Why a step attempt failed (retried shorter). `Contact` is the error of the
+/// contact iteration of [`super::network_contact`], naming the step, the time,
+/// the tool and the nodes.
+pub(super) enum StepFailure {
     Law { element: usize, failure: LawFailure },
     ContactNotSettled { tool: usize, nodes: Vec<u32> },
     NotConverged { residual: f64, element: usize },
     Singular(crate::solve::SolveError),
+    Contact(PressError),
 }
 
 /// Runs a problem with network materials on the Newton path.
@@ -595,7 +613,14 @@ where
     for tool in &problem.tools {
         landings.extend(tool.kinks(end));
     }
-    let plates: Vec<FlatPlate> = problem.tools.iter().map(|t| FlatPlate::of(t).expect("checked")).collect();
+    // Flat, unrotated, frictionless plates only: the active set below. Any other
+    // tool: the contact iteration of `network_contact` around Newton's solves.
+    let all_flat = problem.tools.iter().all(|t| FlatPlate::of(t).is_some());
+    let plates: Vec<FlatPlate> =
+        if all_flat { problem.tools.iter().filter_map(FlatPlate::of).collect() } else { Vec::new() };
+    let tool_contact =
+        if all_flat { None } else { Some(NetworkContact::new(problem, newton.pattern(), &model.attached.held)?) };
+    let mut contact_state: Option<ContactState> = tool_contact.as_ref().map(NetworkContact::initial_state);
     let candidates = boundary_nodes(mesh);
     let mut tool_tracks: Vec<ToolTrack> = problem
         .tools
@@ -695,14 +720,29 @@ where
         let mut start = state.u.clone();
         let mut predict = after_kink;
         let mut passes = 0;
+        let mut settled: Option<Settled> = None;
         let attempt = loop {
+            if let (Some(nc), Some(cs)) = (&tool_contact, &contact_state) {
+                // From the step's start, as the chain's contact steps: the contact
+                // iteration predicts the nodes on the tools itself (stuck nodes move
+                // with their anchors), and friction's trial tractions are measured
+                // from there.
+                let mut start = state.u.clone();
+                model.prescribe(constraints, t1, &mut start);
+                let step = ContactSolve { system, held: &constraints.held, dt, t1, step_index, largest_force };
+                break contact_step(&newton, nc, cs, &step, &state, start).map(|(c, s)| {
+                    settled = Some(s);
+                    c
+                });
+            }
             let cut = cut_dofs::<D>(&holder);
             for (node, &h) in holder.iter().enumerate() {
                 if h != FREE {
                     u0[node * D + 1] = faces[h as usize].unwrap() - mesh.nodes[node][1];
                 }
             }
-            let step = StepSystem { system, held: &constraints.held, cut: &cut, dt, history: &state.history };
+            let step =
+                StepSystem { system, held: &constraints.held, cut: &cut, dt, history: &state.history, penalty: None };
             let solved = if predict {
                 tangent_predictor(&newton, &step, &start, u0)
                     .map(|(u, n)| {
@@ -766,6 +806,22 @@ where
         // Accept.
         retry_dt = None;
         let [mut bottom, mut plate] = reactions(&model, &converged.internal, released);
+        if let Some(s) = settled {
+            let keep_nodes = keep(t1);
+            plate = 0.0;
+            for ((track, mut sample), tool) in tool_tracks.iter_mut().zip(s.samples).zip(&problem.tools) {
+                if !tool.floor {
+                    plate += sample.force_n[1];
+                } else if problem.protocol.support == super::Attachment::Free {
+                    bottom -= sample.force_n[1];
+                }
+                if !keep_nodes {
+                    sample.nodes = Vec::new();
+                }
+                track.samples.push(sample);
+            }
+            contact_state = Some(s.state);
+        }
         if !plates.is_empty() {
             let keep_nodes = keep(t1);
             plate = 0.0;
@@ -832,6 +888,61 @@ where
     })
 }
 
+/// What a contact step's Newton solves share beside the contact's own data.
+struct ContactSolve<'a> {
+    system: &'a ReducedSystem,
+    held: &'a [bool],
+    dt: f64,
+    t1: f64,
+    step_index: usize,
+    largest_force: f64,
+}
+
+/// A step with contact tools other than flat frictionless plates: the contact
+/// iteration of [`super::network_contact`] from `u0`, each of its solves a
+/// Newton solve of the step ([`solve_step`]) with the contact's penalties or
+/// held dofs. The penalties scale with the tangent's diagonal at the step's start.
+fn contact_step<const D: usize, const N: usize, const S: usize>(
+    newton: &Newton<'_, '_, D, N, S>,
+    contact: &NetworkContact<'_>,
+    contact_state: &ContactState,
+    solve: &ContactSolve<'_>,
+    state: &State,
+    u0: Vec<f64>,
+) -> Result<(Converged, Settled), StepFailure>
+where
+    Simplex<D, N>: ReferenceSimplex<D, N>,
+{
+    let model = newton.model;
+    let ContactSolve { system, held, dt, t1, step_index, largest_force } = *solve;
+    let eval = newton
+        .evaluate(&state.u, dt, &state.history, true)
+        .map_err(|c| StepFailure::Law { element: c.element, failure: c.failure })?;
+    let k = newton.tangent(&eval);
+    let diagonal: Vec<f64> = newton.diagonal_positions().iter().map(|&p| k[p].abs()).collect();
+    let step = ContactStep {
+        t0: state.t,
+        t1,
+        step: step_index,
+        u_start: &state.u,
+        diagonal: &diagonal,
+        body_force: &model.body_force,
+        pattern: newton.pattern(),
+    };
+    let mut factorizations = 0;
+    let mut newton_solve = |penalty: Option<&Penalty>, fixed: &[(usize, f64)], u: Vec<f64>| {
+        let mut cut = vec![false; u.len()];
+        fixed.iter().for_each(|&(d, _)| cut[d] = true);
+        let step = StepSystem { system, held, cut: &cut, dt, history: &state.history, penalty };
+        let c = solve_step(newton, &step, u, largest_force)?;
+        factorizations += c.factorizations;
+        Ok(c)
+    };
+    let (mut converged, settled) = contact.settle(&step, contact_state, u0, &mut newton_solve)?;
+    converged.factorizations = factorizations;
+    Ok((converged, settled))
+}
+
 /// The bottom and plate reactions (compression positive) from the internal force.
 fn reactions<const D: usize, const N: usize, const S: usize>(
     model: &Model<'_, D, N, S>,
@@ -861,6 +972,8 @@ struct StepSystem<'a> {
     cut: &'a [bool],
     dt: f64,
     history: &'a [f64],
+    /// Contact tools' node penalties ([`super::network_contact`]), if any.
+    penalty: Option<&'a Penalty>,
 }
 
 /// Newton's iteration of one step from `u` (held dofs already prescribed).
@@ -873,15 +986,25 @@ fn solve_step<const D: usize, const N: usize, const S: usize>(
 where
     Simplex<D, N>: ReferenceSimplex<D, N>,
 {
-    let StepSystem { system, held, cut, dt, history } = *step;
+    let StepSystem { system, held, cut, dt, history, penalty } = *step;
     let model = newton.model;
     let body = &model.body_force;
     let law_err = |c: CellFailure| StepFailure::Law { element: c.element, failure: c.failure };
-    let residual_of = |eval: &Evaluation| -> (Vec<f64>, f64, f64) {
+    let residual_of = |eval: &Evaluation, u: &[f64]| -> (Vec<f64>, f64, f64) {
         let mut r = vec![0.0; system.num_free()];
         let mut held_norm: f64 = 0.0;
+        // Contact penalties: their forces count in the force scale as reactions do.
+        let contact = penalty.map(|p| {
+            let mut f = vec![0.0; u.len()];
+            p.add_forces(newton.pattern(), u, &mut f);
+            held_norm = f.iter().fold(0.0, |m, x| m.max(x.abs()));
+            f
+        });
         for d in 0..eval.internal.len() {
-            let x = body[d] - eval.internal[d];
+            let x = match &contact {
+                Some(f) => body[d] + f[d] - eval.internal[d],
+                None => body[d] - eval.internal[d],
+            };
             if held[d] || cut[d] {
                 held_norm = held_norm.max(x.abs());
             } else {
@@ -902,13 +1025,14 @@ where
         s.sqrt()
     };
     let mut eval = newton.evaluate(&u, dt, history, true).map_err(law_err)?;
-    let (mut r, mut norm, held_norm) = residual_of(&eval);
+    let (mut r, mut norm, held_norm) = residual_of(&eval, &u);
     let mut scale = largest_force.max(held_norm).max(f64::MIN_POSITIVE);
     let mut factorizations = 0;
     let mut norms = Vec::new();
     for iteration in 0..MAX_ITERATIONS {
         norms.push(norm / scale);
-        if norm <= TOLERANCE * scale || norm <= ROUNDING_TOLERANCE * floor_of(&eval) {
+        let rounding = penalty.map_or(0.0, |p| p.rounding(newton.diagonal_positions(), &u));
+        if norm <= TOLERANCE * scale || norm <= ROUNDING_TOLERANCE * floor_of(&eval) || norm <= rounding {
             let stress = cauchy_stresses::<S>(&eval, model.problem.formulation);
             return Ok(Converged {
                 u,
@@ -921,7 +1045,10 @@ where
                 norms,
             });
         }
-        let k = newton.tangent(&eval);
+        let mut k = newton.tangent(&eval);
+        if let Some(p) = penalty {
+            k.iter_mut().zip(&p.values).for_each(|(a, b)| *a += b);
+        }
         let (factor, n) = factor_shifted(system, &k, newton.diagonal_positions(), cut)?;
         factorizations += n;
         let mut du = r.clone();
@@ -935,7 +1062,7 @@ where
                 trial[d as usize] += alpha * du[i];
             }
             if let Ok(e) = newton.evaluate(&trial, dt, history, true) {
-                let (r1, n1, h1) = residual_of(&e);
+                let (r1, n1, h1) = residual_of(&e, &trial);
                 if n1 < (1.0 - 1e-4 * alpha) * norm || alpha < 1e-3 {
                     accepted = Some((trial, e, r1, n1, h1));
                     break;
@@ -1015,7 +1142,7 @@ fn tangent_predictor<const D: usize, const N: usize, const S: usize>(
 where
     Simplex<D, N>: ReferenceSimplex<D, N>,
 {
-    let StepSystem { system, held, cut, dt, history } = *step;
+    let StepSystem { system, held, cut, dt, history, .. } = *step;
     let model = newton.model;
     let eval = newton
         .evaluate(u_start, dt, history, true)
@@ -1079,6 +1206,7 @@ where
         StepFailure::ContactNotSettled { tool, nodes } => {
             PressError::ContactNotSettled { step, time_s, tool: model.problem.tools[tool].name.clone(), nodes }
         }
+        StepFailure::Contact(e) => e,
     }
 }
 
@@ -1156,8 +1284,14 @@ mod tests {
             let mut u0 = vec![0.0; model.num_dofs()];
             model.prescribe(&model.attached, 1.0, &mut u0);
             let cut = vec![false; u0.len()];
-            let step =
-                StepSystem { system: &system, held: &model.attached.held, cut: &cut, dt: 1.0, history: &history };
+            let step = StepSystem {
+                system: &system,
+                held: &model.attached.held,
+                cut: &cut,
+                dt: 1.0,
+                history: &history,
+                penalty: None,
+            };
             let rest = vec![0.0; u0.len()];
             let Ok((u0, _)) = tangent_predictor(&newton, &step, &rest, u0) else { panic!("{volumetric:?}: predictor") };
             let Ok(c) = solve_step(&newton, &step, u0, 0.0) else { panic!("{volumetric:?}: no convergence") };
