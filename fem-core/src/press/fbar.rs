@@ -381,18 +381,7 @@ mod tests {
     use crate::material::network::{Energy, Equilibrium, Network, ViscousNetwork};
     use crate::mesh;
 
-    fn operator<const D: usize, const N: usize>(g: &crate::element::CellGeometry<D, N>) -> DMatrix<f64> {
-        let mut op = DMatrix::zeros(9, N * D);
-        for a in 0..N {
-            for i in 0..D {
-                for j in 0..D {
-                    op[(3 * i + j, a * D + i)] = g.gradients[(a, j)];
-                }
-            }
-            op[(8, a * D)] += g.gradients.hoop;
-        }
-        op
-    }
+    use super::super::network::deformation_operator as operator;
 
     /// Runs `respond` on every patch of a small mesh at displacement `u` with
     /// `law`, returning the global force and, per patch, the tangent.

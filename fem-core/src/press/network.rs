@@ -161,7 +161,7 @@ impl FlatPlate {
 }
 
 /// The cell operator `G` (`F - I = G u_e`), `9 x N D`, node-major dofs.
-fn deformation_operator<const D: usize, const N: usize>(g: &CellGeometry<D, N>) -> DMatrix<f64> {
+pub(super) fn deformation_operator<const D: usize, const N: usize>(g: &CellGeometry<D, N>) -> DMatrix<f64> {
     let mut op = DMatrix::zeros(9, N * D);
     for a in 0..N {
         for i in 0..D {

@@ -1,0 +1,67 @@
+//! The network model's cost against the chain's on a 3D cylinder: a
+//! fungi-like double compression to 50 % by a frictionless plate tool that
+//! leaves the specimen and touches it again, with the default network
+//! structure at the fungi fit's values (VALIDATION.md) and with the seed's
+//! five-element chain. Prints the wall time, steps, Newton iterations and
+//! factorizations of each.
+//!
+//! `cargo run --release -p wagashi-workspace-tests --example network_cost -- SIZE_MM`
+
+use std::time::Instant;
+
+use fem_core::material::network::{Energy, Equilibrium, Mullins, Network, ViscousNetwork};
+use fem_core::material::Material;
+use fem_core::mesh;
+use fem_core::press::{self, Attachment, Protocol, Settings, SolidPress, Tool, ToolContact};
+
+fn main() {
+    let size: f64 = std::env::args().nth(1).map_or(1.0, |s| s.parse().expect("SIZE_MM: a number"));
+    let (r, h) = (4.0, 10.0);
+    let network = Material::network(Network {
+        poisson: 0.374,
+        equilibrium: Some(Equilibrium {
+            energy: Energy::Exponential { stiffening: 1.12 },
+            e_mpa: 5.25e-3,
+            mullins: Some(Mullins { r: 1.01, m_mpa: 2.69e-3, beta: 0.0 }),
+        }),
+        viscous: vec![ViscousNetwork { e_mpa: 0.385, tau_s: 0.107 }, ViscousNetwork { e_mpa: 0.0162, tau_s: 7.19 }],
+        plastic: None,
+        damper_mpa_s: Some(4.36e-3),
+    })
+    .unwrap();
+    let chain = Material::seed_mat1_force();
+    // Down 5 mm in 22.7 s, up 5.5 mm, down again: the slowest fungi records' speed.
+    let strokes = vec![[0.0, 0.0], [22.7, 5.0], [45.4, -0.5], [50.0, -0.5], [72.7, 5.0]];
+    let protocol = Protocol {
+        waypoints: strokes.clone(),
+        release_s: 72.7,
+        end_s: 72.7,
+        plate: Attachment::Frictionless,
+        support: Attachment::Frictionless,
+        gravity: false,
+    };
+    let m = mesh::cylinder(r, h, size, "m").unwrap();
+    println!("cylinder R = {r} mm, H = {h} mm, {size} mm cells: {} tets, {} nodes", m.cells.len(), m.nodes.len());
+    for (name, material) in [("chain", chain), ("network", network)] {
+        let mut problem = SolidPress::new_3d(m.clone(), vec![material], protocol.clone()).unwrap();
+        problem.tools = vec![Tool::plate_above(
+            "plate",
+            [-r, 0.0, -r],
+            [r, h, r],
+            &strokes,
+            ToolContact::Frictionless,
+            f64::INFINITY,
+        )];
+        let clock = Instant::now();
+        let result = press::simulate(&problem, &Settings::default(), &mut |_| {}).unwrap();
+        let wall = clock.elapsed().as_secs_f64();
+        let steps = result.steps.len();
+        let iterations: usize = result.steps.iter().map(|s| s.newton_iterations).sum();
+        println!(
+            "{name}: {wall:.1} s, {steps} steps, {:.2} Newton iterations and {:.2} factorizations per step, peak {:.4} N",
+            iterations as f64 / steps as f64,
+            result.num_factorizations as f64 / steps as f64,
+            result.peak_force()
+        );
+    }
+}
