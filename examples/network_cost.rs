@@ -3,16 +3,17 @@
 //! leaves the specimen and touches it again, with the default network
 //! structure at the fungi fit's values (VALIDATION.md) and with the seed's
 //! five-element chain. Prints the wall time, steps, Newton iterations and
-//! factorizations of each.
+//! factorizations of each; with `fbar` after the size, the network with F-bar
+//! patches too.
 //!
-//! `cargo run --release -p wagashi-workspace-tests --example network_cost -- SIZE_MM`
+//! `cargo run --release -p wagashi-workspace-tests --example network_cost -- SIZE_MM [fbar]`
 
 use std::time::Instant;
 
 use fem_core::material::network::{Energy, Equilibrium, Mullins, Network, ViscousNetwork};
 use fem_core::material::Material;
 use fem_core::mesh;
-use fem_core::press::{self, Attachment, Protocol, Settings, SolidPress, Tool, ToolContact};
+use fem_core::press::{self, Attachment, Protocol, Settings, SolidPress, Tool, ToolContact, Volumetric};
 
 fn main() {
     let size: f64 = std::env::args().nth(1).map_or(1.0, |s| s.parse().expect("SIZE_MM: a number"));
@@ -42,7 +43,11 @@ fn main() {
     };
     let m = mesh::cylinder(r, h, size, "m").unwrap();
     println!("cylinder R = {r} mm, H = {h} mm, {size} mm cells: {} tets, {} nodes", m.cells.len(), m.nodes.len());
-    for (name, material) in [("chain", chain), ("network", network)] {
+    let mut runs = vec![("chain", chain, Volumetric::Standard), ("network", network.clone(), Volumetric::Standard)];
+    if std::env::args().nth(2).as_deref() == Some("fbar") {
+        runs.push(("network, F-bar", network, Volumetric::FBar));
+    }
+    for (name, material, volumetric) in runs {
         let mut problem = SolidPress::new_3d(m.clone(), vec![material], protocol.clone()).unwrap();
         problem.tools = vec![Tool::plate_above(
             "plate",
@@ -53,7 +58,8 @@ fn main() {
             f64::INFINITY,
         )];
         let clock = Instant::now();
-        let result = press::simulate(&problem, &Settings::default(), &mut |_| {}).unwrap();
+        let settings = Settings { volumetric, ..Settings::default() };
+        let result = press::simulate(&problem, &settings, &mut |_| {}).unwrap();
         let wall = clock.elapsed().as_secs_f64();
         let steps = result.steps.len();
         let iterations: usize = result.steps.iter().map(|s| s.newton_iterations).sum();
