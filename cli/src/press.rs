@@ -194,7 +194,7 @@ pub struct PressArgs {
     /// F-bar patches for network materials near incompressibility (poisson
     /// from about 0.45): the cells of each patch of 4 tetrahedra (3
     /// triangles) share its volume change, so the mesh does not lock. Costs
-    /// about 3x per step. Refused without a network material.
+    /// 1.6-3x per step in 3D. Refused without a network material.
     #[arg(long)]
     pub fbar: bool,
 }
