@@ -135,8 +135,14 @@ pub fn run(args: &FitArgs) -> anyhow::Result<()> {
     let mut campaign = Campaign::new(&bundles, &start, size_mm, args.axisymmetric)?;
     campaign.marker_sigma_mm = args.marker_sigma_mm;
     if args.fbar {
-        if !campaign.materials.values().any(|m| m.model == wagashi_io::Model::Network) {
-            bail!("--fbar: F-bar patches run with network materials only, and no material is a network");
+        // Every trial runs on the Newton path: each names a network material.
+        for b in &bundles {
+            if !b.experiment.materials.values().any(|m| m.model == wagashi_io::Model::Network) {
+                bail!(
+                    "{}: --fbar: F-bar patches run with network materials only, and this trial has none",
+                    b.experiment_file().display()
+                );
+            }
         }
         campaign.settings.volumetric = fem_core::press::Volumetric::FBar;
     }

@@ -95,3 +95,17 @@ fn a_network_layer_under_the_seeds_chain_follows_the_chain_path() {
     eprintln!("seed material 1 on top, strain 1e-4: largest difference {g:.3e} of the peak");
     assert!(g < 5e-4, "{g:.3e}");
 }
+
+/// The rounding floor of Newton's convergence test: replayed on the chain's
+/// own first steps (7.6e-6 s), the seed's damper (`c/dt` far above the gel's
+/// modulus) carries the displacements' last bits into forces above the gel's
+/// reactions, which `TOLERANCE` alone cannot reach; the steps converge at
+/// their floor, dof by dof, and the run ends.
+#[test]
+fn a_stiff_damper_at_a_short_step_beside_a_soft_layer_converges_at_the_rounding_floor() {
+    let (reference, result) = both_paths(&Material::seed_mat1_force(), 1e-4, &Settings::default());
+    assert!((result.steps.last().unwrap().t_s - reference.steps.last().unwrap().t_s).abs() < 1e-9);
+    let g = gap(&reference, &result);
+    eprintln!("chain's default steps: largest difference {g:.3e} of the peak");
+    assert!(g < 2e-3, "{g:.3e}");
+}

@@ -85,11 +85,13 @@ use crate::solve::ReducedSystem;
 
 /// Converged at this out-of-balance force, relative to the force scale.
 pub(crate) const TOLERANCE: f64 = 1e-10;
-/// Or at this out-of-balance force relative to its rounding floor
-/// ([`Evaluation::magnitude`], about 450 unit roundoffs): a stiff part beside
-/// a soft one (a damper at a short step in series with a soft layer) turns the
-/// displacements' last bits into forces far above the soft part's reactions.
-pub(crate) const ROUNDING_TOLERANCE: f64 = 1e-13;
+/// Or, after at least one Newton step, when every free dof's out-of-balance
+/// force is within this many unit roundoffs of its rounding bound
+/// ([`Evaluation::magnitude`]): a stiff part beside a soft one (a damper at a
+/// short step in series with a soft layer) turns the displacements' last bits
+/// into forces far above the soft part's reactions. Dof by dof, so a stiff
+/// region's floor never hides a soft region's residual.
+pub(crate) const ROUNDING_ULPS: f64 = 64.0;
 /// The most Newton iterations of one step.
 pub(crate) const MAX_ITERATIONS: usize = 30;
 /// The shortest step, as a share of the trial's duration.
@@ -336,8 +338,10 @@ where
                     let old = &history[self.offsets[e]..self.offsets[e + 1]];
                     self.law_of(e).update(h, dt, old, &mut new[i])
                 };
-                let response = fbar::respond::<D>(patches.nodes[p].len(), &cells, &mut update, with_tangent)
-                    .map_err(|(i, failure)| CellFailure { element: group[i] as usize, failure })?;
+                let plane_strain = matches!(self.model.problem.formulation, Formulation::PlaneStrain { .. });
+                let response =
+                    fbar::respond::<D>(patches.nodes[p].len(), &cells, plane_strain, &mut update, with_tangent)
+                        .map_err(|(i, failure)| CellFailure { element: group[i] as usize, failure })?;
                 Ok((response, new))
             })
             .collect::<Result<Vec<_>, CellFailure>>()?;
@@ -598,8 +602,8 @@ where
     for &r in &mesh.cell_regions {
         offsets.push(offsets.last().unwrap() + laws[r as usize].history_len());
     }
-    let patches =
-        (settings.volumetric == Volumetric::FBar).then(|| Patches::new(&mesh.nodes, &mesh.cells, fbar::patch_size(D)));
+    let patches = (settings.volumetric == Volumetric::FBar)
+        .then(|| Patches::new(&mesh.nodes, &mesh.cells, &mesh.cell_regions, fbar::patch_size(D)));
     let newton = Newton { model: &model, laws, operators, offsets, patches };
     let mut history = vec![0.0; *newton.offsets.last().unwrap()];
     for (e, h) in split_by_offsets(&mut history, &newton.offsets).into_iter().enumerate() {
@@ -1014,15 +1018,11 @@ where
         let norm = r.iter().map(|x| x * x).sum::<f64>().sqrt();
         (r, norm, held_norm)
     };
-    // The rounding floor of the free rows' residual.
-    let floor_of = |eval: &Evaluation| -> f64 {
-        let mut s = 0.0;
-        for (d, m) in eval.magnitude.iter().enumerate() {
-            if !(held[d] || cut[d]) {
-                s += m * m;
-            }
-        }
-        s.sqrt()
+    // Every free dof's residual at its rounding floor.
+    let at_floor = |eval: &Evaluation, r: &[f64]| -> bool {
+        eval.magnitude.iter().enumerate().all(|(d, m)| {
+            held[d] || cut[d] || r[system.free_of_dof[d] as usize].abs() <= ROUNDING_ULPS * f64::EPSILON * m
+        })
     };
     let mut eval = newton.evaluate(&u, dt, history, true).map_err(law_err)?;
     let (mut r, mut norm, held_norm) = residual_of(&eval, &u);
@@ -1032,7 +1032,7 @@ where
     for iteration in 0..MAX_ITERATIONS {
         norms.push(norm / scale);
         let rounding = penalty.map_or(0.0, |p| p.rounding(newton.diagonal_positions(), &u));
-        if norm <= TOLERANCE * scale || norm <= ROUNDING_TOLERANCE * floor_of(&eval) || norm <= rounding {
+        if norm <= TOLERANCE * scale || (iteration > 0 && at_floor(&eval, &r)) || norm <= rounding {
             let stress = cauchy_stresses::<S>(&eval, model.problem.formulation);
             return Ok(Converged {
                 u,
@@ -1273,8 +1273,8 @@ mod tests {
             for &r in &mesh.cell_regions {
                 offsets.push(offsets.last().unwrap() + laws[r as usize].history_len());
             }
-            let patches =
-                (volumetric == Volumetric::FBar).then(|| Patches::new(&mesh.nodes, &mesh.cells, fbar::patch_size(3)));
+            let patches = (volumetric == Volumetric::FBar)
+                .then(|| Patches::new(&mesh.nodes, &mesh.cells, &mesh.cell_regions, fbar::patch_size(3)));
             let newton = Newton { model: &model, laws, operators, offsets, patches };
             let mut history = vec![0.0; *newton.offsets.last().unwrap()];
             for (e, h) in split_by_offsets(&mut history, &newton.offsets).into_iter().enumerate() {
