@@ -10,7 +10,7 @@
 
 use std::time::Instant;
 
-use fem_core::material::network::{Energy, Equilibrium, Mullins, Network, ViscousNetwork};
+use fem_core::material::network::{Damper, Energy, Equilibrium, Mullins, Network, ViscousNetwork};
 use fem_core::material::Material;
 use fem_core::mesh;
 use fem_core::press::{self, Attachment, Protocol, Settings, SolidPress, Tool, ToolContact, Volumetric};
@@ -18,17 +18,17 @@ use fem_core::press::{self, Attachment, Protocol, Settings, SolidPress, Tool, To
 fn main() {
     let size: f64 = std::env::args().nth(1).map_or(1.0, |s| s.parse().expect("SIZE_MM: a number"));
     let (r, h) = (4.0, 10.0);
-    let network = Material::network(Network {
-        poisson: 0.374,
-        equilibrium: Some(Equilibrium {
-            energy: Energy::Exponential { stiffening: 1.12 },
-            e_mpa: 5.25e-3,
-            mullins: Some(Mullins { r: 1.01, m_mpa: 2.69e-3, beta: 0.0 }),
-        }),
-        viscous: vec![ViscousNetwork { e_mpa: 0.385, tau_s: 0.107 }, ViscousNetwork { e_mpa: 0.0162, tau_s: 7.19 }],
-        plastic: None,
-        damper_mpa_s: Some(4.36e-3),
-    })
+    let network = Material::network(
+        Network::new(0.374)
+            .with_equilibrium(Equilibrium {
+                energy: Energy::Exponential { stiffening: 1.12 },
+                e_mpa: 5.25e-3,
+                mullins: Some(Mullins { r: 1.01, m_mpa: 2.69e-3, beta: 0.0 }),
+            })
+            .with(ViscousNetwork { e_mpa: 0.385, tau_s: 0.107 })
+            .with(ViscousNetwork { e_mpa: 0.0162, tau_s: 7.19 })
+            .with(Damper { c_mpa_s: 4.36e-3 }),
+    )
     .unwrap();
     let chain = Material::seed_mat1_force();
     // Down 5 mm in 22.7 s, up 5.5 mm, down again: the slowest fungi records' speed.

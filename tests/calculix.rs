@@ -251,13 +251,8 @@ fn our_forces(size_mm: f64) -> [f64; 3] {
             p[k] = SIZE_MM[k] * g(p[k] / SIZE_MM[k]);
         }
     }
-    let network = Network {
-        poisson: NU,
-        equilibrium: Some(Equilibrium { energy: Energy::NeoHookean, e_mpa: E_MPA, mullins: None }),
-        viscous: vec![],
-        plastic: None,
-        damper_mpa_s: None,
-    };
+    let network =
+        Network::new(NU).with_equilibrium(Equilibrium { energy: Energy::NeoHookean, e_mpa: E_MPA, mullins: None });
     let end = DEPTHS_MM[2];
     // 1 mm/s, so that time [s] reads as the plate's displacement [mm].
     let protocol = Protocol {

@@ -116,33 +116,21 @@ impl Unknown {
 
     /// Default bounds and scale: moduli in [1e-5, 1e2] MPa and viscosities in
     /// [1e-5, 1e5] MPa s on a log scale; Poisson's ratio in [0, 0.499], linear.
-    ///
-    /// A network's keys ([`wagashi_io::bundle::NETWORK_KEYS`]): moduli in
-    /// [1e-5, 1e2] MPa, relaxation times in [1e-3, 1e5] s, the damper in
-    /// [1e-6, 1e4] MPa s and the exponential's stiffening in [1e-3, 50], all on a
-    /// log scale; Mullins's `r` in [1.01, 50] (log), `m` in [1e-6, 1] MPa (log),
-    /// `beta` in [0, 5] (linear); the plastic network's yield stress and
-    /// hardening modulus in [1e-6, 1e2] MPa (log); Ogden's `alpha1` and `alpha3`
-    /// in [0.5, 30], `alpha2` in [-30, -0.5] and the shares in [0, 0.45]
-    /// (linear).
+    /// A network's keys ([`wagashi_io::bundle::network_keys`]) take the fit
+    /// range of their law's table ([`fem_core::material::law::ParameterSpec::fit`]).
     pub fn spec(&self) -> ParameterSpec {
         let label = self.label();
+        if let Some((s, _)) = fem_core::material::network::parameters::spec_of(self.key) {
+            return if s.fit.log {
+                ParameterSpec::log(label, s.fit.lower, s.fit.upper)
+            } else {
+                ParameterSpec::linear(label, s.fit.lower, s.fit.upper)
+            };
+        }
         match self.key {
-            k if k.ends_with(".tau_s") => ParameterSpec::log(label, 1e-3, 1e5),
-            k if k.ends_with(".c_MPa_s") => ParameterSpec::log(label, 1e-6, 1e4),
-            k if k.ends_with(".stiffening") => ParameterSpec::log(label, 1e-3, 50.0),
-            k if k.ends_with("mullins.r") => ParameterSpec::log(label, 1.01, 50.0),
-            k if k.ends_with("mullins.m_MPa") => ParameterSpec::log(label, 1e-6, 1.0),
-            k if k.ends_with("mullins.beta") => ParameterSpec::linear(label, 0.0, 5.0),
-            // Ogden's terms keep their signs (a term through alpha = 0 vanishes):
-            // a stiffening first and third, a softening second.
-            "equilibrium.alpha1" | "equilibrium.alpha3" => ParameterSpec::linear(label, 0.5, 30.0),
-            "equilibrium.alpha2" => ParameterSpec::linear(label, -30.0, -0.5),
-            "equilibrium.share2" | "equilibrium.share3" => ParameterSpec::linear(label, 0.0, 0.45),
-            "plastic.yield_MPa" | "plastic.hardening_MPa" => ParameterSpec::log(label, 1e-6, 1e2),
-            "poisson" => ParameterSpec::linear(self.label(), 0.0, 0.499),
-            k if k.ends_with("_MPa_s") => ParameterSpec::log(self.label(), 1e-5, 1e5),
-            _ => ParameterSpec::log(self.label(), 1e-5, 1e2),
+            "poisson" => ParameterSpec::linear(label, 0.0, 0.499),
+            k if k.ends_with("_MPa_s") => ParameterSpec::log(label, 1e-5, 1e5),
+            _ => ParameterSpec::log(label, 1e-5, 1e2),
         }
     }
 }
@@ -171,7 +159,7 @@ fn merge_spec(old: &mut MaterialSpec, new: &MaterialSpec) -> Result<(), (&'stati
     let pairs = |s: &MaterialSpec| {
         let mut v: Vec<(&'static str, Option<f64>)> = vec![("poisson", s.poisson)];
         v.extend(s.parameters());
-        v.extend(wagashi_io::bundle::NETWORK_KEYS.iter().map(|&k| (k, s.get(k))));
+        v.extend(wagashi_io::bundle::network_keys().iter().map(|&k| (k, s.get(k))));
         v.push(("mullins_d_inf", s.mullins_d_inf));
         v.push(("mullins_strain_c", s.mullins_strain_c));
         v
@@ -199,16 +187,18 @@ fn merge_spec(old: &mut MaterialSpec, new: &MaterialSpec) -> Result<(), (&'stati
     Ok(())
 }
 
-/// The bundle key of an engine rheology parameter name (`E1` -> `E1_MPa`).
-fn key_of(name: &str) -> &'static str {
-    match name {
+/// The bundle key of an engine rheology parameter name (`E1` -> `E1_MPa`);
+/// `None` for a name the chain's models do not have.
+fn key_of(name: &str) -> Option<&'static str> {
+    Some(match name {
         "E" => "E_MPa",
         "E1" => "E1_MPa",
         "E2" => "E2_MPa",
         "c1" => "c1_MPa_s",
         "c2" => "c2_MPa_s",
-        _ => "c3_MPa_s",
-    }
+        "c3" => "c3_MPa_s",
+        _ => return None,
+    })
 }
 
 /// The engine's sensitivity parameter of unknown `u` on a trial whose regions
@@ -228,7 +218,7 @@ pub(crate) fn sensitivity_parameter(
         ParameterKind::Poisson
     } else {
         let names = materials[regions[0]].rheology.parameters();
-        ParameterKind::Rheology(names.iter().position(|(n, _)| key_of(n) == u.key)?)
+        ParameterKind::Rheology(names.iter().position(|(n, _)| key_of(n) == Some(u.key))?)
     };
     Some(SensitivityParameter { regions, kind })
 }
@@ -533,37 +523,20 @@ fn default_starts(materials: &mut BTreeMap<String, MaterialSpec>, unknowns: &[Un
         if spec.get(u.key).is_some() {
             continue;
         }
-        let v = match u.key {
-            "poisson" => 0.3,
-            // A network: the apparent modulus shared by the equilibrium and the
-            // viscous networks, relaxation times spread by decades, a mild
-            // stiffening and softening, a slow damper.
-            "equilibrium.E_MPa" => 0.5 * e,
-            "equilibrium.stiffening" => 1.0,
-            // Ogden: a stiffening term of alpha 6, a tenth of a softening one.
-            "equilibrium.alpha1" => 6.0,
-            "equilibrium.alpha2" => -2.0,
-            "equilibrium.alpha3" => 4.0,
-            "equilibrium.share2" => 0.1,
-            "equilibrium.share3" => 0.1,
-            "equilibrium.mullins.r" => 3.0,
-            "equilibrium.mullins.m_MPa" => 0.05 * e,
-            "equilibrium.mullins.beta" => 0.1,
-            k if k.starts_with("viscous[") && k.ends_with(".E_MPa") => 0.25 * e,
-            k if k.starts_with("viscous[") && k.ends_with(".tau_s") => {
-                10f64.powi(k.as_bytes()["viscous[".len()] as i32 - b'0' as i32)
-            }
-            "damper.c_MPa_s" => 0.1 * e,
-            // A plastic network of a quarter of the modulus that yields at a
-            // tenth of the apparent stress at 20 % strain, hardening gently.
-            "plastic.E_MPa" => 0.25 * e,
-            "plastic.yield_MPa" => 0.02 * e,
-            "plastic.hardening_MPa" => 0.1 * e,
-            "E_MPa" => e,
-            "E1_MPa" | "E2_MPa" => 2.0 * e,
-            "c1_MPa_s" => 2.0 * e * 0.1,
-            "c2_MPa_s" => 2.0 * e * 10.0,
-            _ => 2.0 * e * 1000.0,
+        // A network's keys start where their law's table says
+        // ([`fem_core::material::law::Start`]): the apparent modulus shared by
+        // the equilibrium and the viscous networks, relaxation times spread by
+        // decades, a mild stiffening and softening, a slow damper.
+        let v = match fem_core::material::network::parameters::spec_of(u.key) {
+            Some((s, index)) => s.start.value(e, index),
+            None => match u.key {
+                "poisson" => 0.3,
+                "E_MPa" => e,
+                "E1_MPa" | "E2_MPa" => 2.0 * e,
+                "c1_MPa_s" => 2.0 * e * 0.1,
+                "c2_MPa_s" => 2.0 * e * 10.0,
+                _ => 2.0 * e * 1000.0,
+            },
         };
         set_parameter(spec, u.key, v);
     }

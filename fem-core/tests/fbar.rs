@@ -2,7 +2,7 @@
 //! homogeneous deformations (the patch test), and free of the volumetric
 //! locking of linear cells near incompressibility.
 
-use fem_core::material::network::{Energy, Equilibrium, Network, PlasticNetwork, ViscousNetwork};
+use fem_core::material::network::{Damper, Energy, Equilibrium, Network, PlasticNetwork, ViscousNetwork};
 use fem_core::material::Material;
 use fem_core::mesh;
 use fem_core::press::{self, Attachment, AxisymmetricPress, Protocol, Settings, SolidPress, Volumetric};
@@ -19,13 +19,7 @@ fn push(depth: f64, push_s: f64, end_s: f64, attachment: Attachment) -> Protocol
 }
 
 fn neo_hookean(nu: f64) -> Network {
-    Network {
-        poisson: nu,
-        equilibrium: Some(Equilibrium { energy: Energy::NeoHookean, e_mpa: 0.03, mullins: None }),
-        viscous: vec![],
-        plastic: None,
-        damper_mpa_s: None,
-    }
+    Network::new(nu).with_equilibrium(Equilibrium { energy: Energy::NeoHookean, e_mpa: 0.03, mullins: None })
 }
 
 fn fbar() -> Settings {
@@ -34,13 +28,12 @@ fn fbar() -> Settings {
 
 /// Every part of the network at once, nearly incompressible.
 fn every_part(nu: f64) -> Network {
-    Network {
-        poisson: nu,
-        equilibrium: Some(Equilibrium { energy: Energy::Exponential { stiffening: 1.0 }, e_mpa: 0.01, mullins: None }),
-        viscous: vec![ViscousNetwork { e_mpa: 0.05, tau_s: 0.5 }, ViscousNetwork { e_mpa: 0.02, tau_s: 5.0 }],
-        plastic: Some(PlasticNetwork { e_mpa: 0.02, yield_mpa: 0.002, hardening_mpa: 0.004 }),
-        damper_mpa_s: Some(0.005),
-    }
+    Network::new(nu)
+        .with_equilibrium(Equilibrium { energy: Energy::Exponential { stiffening: 1.0 }, e_mpa: 0.01, mullins: None })
+        .with(ViscousNetwork { e_mpa: 0.05, tau_s: 0.5 })
+        .with(ViscousNetwork { e_mpa: 0.02, tau_s: 5.0 })
+        .with(PlasticNetwork { e_mpa: 0.02, yield_mpa: 0.002, hardening_mpa: 0.004 })
+        .with(Damper { c_mpa_s: 0.005 })
 }
 
 /// The patch test: between frictionless plates a block or a cylinder deforms

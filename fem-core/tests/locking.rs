@@ -37,13 +37,7 @@ fn dimitriadis(nu: f64, d: f64) -> f64 {
 /// The sphere's force at 0.15 and 0.3 mm on the section graded toward the
 /// contact (`fine` mm within 3 mm, then growing by `growth`).
 fn indent(nu: f64, fine: f64, growth: f64, volumetric: Volumetric) -> [f64; 2] {
-    let net = Network {
-        poisson: nu,
-        equilibrium: Some(Equilibrium { energy: Energy::NeoHookean, e_mpa: E, mullins: None }),
-        viscous: vec![],
-        plastic: None,
-        damper_mpa_s: None,
-    };
+    let net = Network::new(nu).with_equilibrium(Equilibrium { energy: Energy::NeoHookean, e_mpa: E, mullins: None });
     let section = mesh::indentation_section(12.0, THICKNESS, fine, 3.0, growth, "gel").unwrap();
     let protocol = Protocol {
         waypoints: vec![[0.0, 0.0], [1.0, 0.3]],

@@ -52,13 +52,7 @@ fn neo_hookean_uniaxial(e: f64, nu: f64, lambda: f64) -> f64 {
 #[test]
 fn a_neo_hookean_block_in_uniaxial_compression_follows_the_closed_form_to_50_percent() {
     let (e, nu) = (0.03, 0.3);
-    let net = Network {
-        poisson: nu,
-        equilibrium: Some(Equilibrium { energy: Energy::NeoHookean, e_mpa: e, mullins: None }),
-        viscous: vec![],
-        plastic: None,
-        damper_mpa_s: None,
-    };
+    let net = Network::new(nu).with_equilibrium(Equilibrium { energy: Energy::NeoHookean, e_mpa: e, mullins: None });
     let h = 10.0;
     let problem = SolidPress::new_3d(
         mesh::block([12.0, h, 8.0], 4.0, "m").unwrap(),
@@ -131,13 +125,7 @@ fn the_seeds_chain_as_a_network_equals_the_chain_at_small_strain() {
 #[test]
 fn a_viscous_network_in_uniaxial_compression_converges_to_an_independent_integration() {
     let (e, nu, tau) = (0.02, 0.3, 2.0);
-    let net = Network {
-        poisson: nu,
-        equilibrium: None,
-        viscous: vec![ViscousNetwork { e_mpa: e, tau_s: tau }],
-        plastic: None,
-        damper_mpa_s: None,
-    };
+    let net = Network::new(nu).with(ViscousNetwork { e_mpa: e, tau_s: tau });
     let h = 10.0;
     let (depth, push_s, end_s) = (5.0, 4.0, 8.0);
     let protocol = frictionless(depth, push_s, end_s);
@@ -213,13 +201,7 @@ fn a_viscous_network_in_uniaxial_compression_converges_to_an_independent_integra
 #[test]
 fn a_plastic_network_in_uniaxial_compression_and_reverse_yield_follows_the_1d_element() {
     let (e, nu, sigma_y, hardening) = (0.04, 0.3, 2e-3, 0.01);
-    let net = Network {
-        poisson: nu,
-        equilibrium: None,
-        viscous: vec![],
-        plastic: Some(PlasticNetwork { e_mpa: e, yield_mpa: sigma_y, hardening_mpa: hardening }),
-        damper_mpa_s: None,
-    };
+    let net = Network::new(nu).with(PlasticNetwork { e_mpa: e, yield_mpa: sigma_y, hardening_mpa: hardening });
     let h = 10.0;
     let mut protocol = frictionless(5.0, 10.0, 25.0);
     protocol.waypoints = vec![[0.0, 0.0], [10.0, 5.0], [20.0, 0.0]];
@@ -271,13 +253,11 @@ fn a_plastic_network_in_uniaxial_compression_and_reverse_yield_follows_the_1d_el
 #[test]
 fn a_plate_tool_leaves_an_elastic_network_cylinder_and_touches_it_again() {
     use fem_core::press::{AxisymmetricPress, Tool, ToolContact};
-    let net = Network {
-        poisson: 0.3,
-        equilibrium: Some(Equilibrium { energy: Energy::Exponential { stiffening: 1.0 }, e_mpa: 0.03, mullins: None }),
-        viscous: vec![],
-        plastic: None,
-        damper_mpa_s: None,
-    };
+    let net = Network::new(0.3).with_equilibrium(Equilibrium {
+        energy: Energy::Exponential { stiffening: 1.0 },
+        e_mpa: 0.03,
+        mullins: None,
+    });
     let (r, h) = (4.0, 8.0);
     let section = mesh::axisymmetric_section(r, h, 1.0, "m").unwrap();
     let strokes = vec![[0.0, 0.0], [10.0, 3.0], [15.0, -0.5], [20.0, 0.0], [30.0, 3.0]];

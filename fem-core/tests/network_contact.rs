@@ -26,13 +26,11 @@ fn as_network(m: &Material) -> Material {
 
 /// A compressible neo-Hookean solid (`e` [MPa], `nu`).
 fn neo_hookean(e: f64, nu: f64) -> Material {
-    Material::network(Network {
-        poisson: nu,
-        equilibrium: Some(Equilibrium { energy: Energy::NeoHookean, e_mpa: e, mullins: None }),
-        viscous: vec![],
-        plastic: None,
-        damper_mpa_s: None,
-    })
+    Material::network(Network::new(nu).with_equilibrium(Equilibrium {
+        energy: Energy::NeoHookean,
+        e_mpa: e,
+        mullins: None,
+    }))
     .unwrap()
 }
 

@@ -13,13 +13,11 @@ const E_GEL: f64 = 0.03;
 const NU: f64 = 0.3;
 
 fn gel() -> Material {
-    Material::network(Network {
-        poisson: NU,
-        equilibrium: Some(Equilibrium { energy: Energy::NeoHookean, e_mpa: E_GEL, mullins: None }),
-        viscous: vec![],
-        plastic: None,
-        damper_mpa_s: None,
-    })
+    Material::network(Network::new(NU).with_equilibrium(Equilibrium {
+        energy: Energy::NeoHookean,
+        e_mpa: E_GEL,
+        mullins: None,
+    }))
     .unwrap()
 }
 

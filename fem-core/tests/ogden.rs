@@ -44,13 +44,11 @@ fn ogden_uniaxial(terms: &[(f64, f64)], kappa: f64, lambda: f64) -> f64 {
 fn an_ogden_block_in_uniaxial_compression_follows_the_closed_form_to_50_percent() {
     let (e, nu) = (0.03, 0.45);
     let (alpha, share) = ([6.0, -2.0, 1.5], [0.6, 0.3, 0.1]);
-    let net = Network {
-        poisson: nu,
-        equilibrium: Some(Equilibrium { energy: Energy::Ogden { alpha, share }, e_mpa: e, mullins: None }),
-        viscous: vec![],
-        plastic: None,
-        damper_mpa_s: None,
-    };
+    let net = Network::new(nu).with_equilibrium(Equilibrium {
+        energy: Energy::Ogden { alpha, share },
+        e_mpa: e,
+        mullins: None,
+    });
     let mu = e / (2.0 * (1.0 + nu));
     let kappa = e / (3.0 * (1.0 - 2.0 * nu));
     let terms: Vec<(f64, f64)> = alpha.iter().zip(share).map(|(&a, s)| (a, s * mu)).collect();

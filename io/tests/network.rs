@@ -31,6 +31,10 @@ tau_s = 40.0
 E_MPa = 0.01
 yield_MPa = 0.002
 
+[[materials.mat1.flow]]
+E_MPa = 0.005
+stress_MPa = 0.003
+
 [materials.mat1.damper]
 c_MPa_s = 0.005
 "#;
@@ -49,12 +53,19 @@ fn a_network_material_is_read_with_its_parts_and_defaults() {
     let bundle = read_bundle(&b.dir).unwrap();
     let spec = &bundle.experiment.materials["mat1"];
     let net = spec.to_network().unwrap();
-    assert_eq!(net.viscous.len(), 2);
-    assert_eq!(net.viscous[1].tau_s, 40.0);
-    assert_eq!(net.damper_mpa_s, Some(0.005));
-    let plastic = net.plastic.unwrap();
-    // The hardening's default.
-    assert_eq!((plastic.e_mpa, plastic.yield_mpa, plastic.hardening_mpa), (0.01, 0.002, 0.0));
+    // The parts in the registry's order, each with its values in its table's
+    // order, defaults filled in (the hardening's, the flow's exponent).
+    let parts: Vec<(&str, Vec<f64>)> = net.parts.iter().map(|p| (p.kind().table, p.values())).collect();
+    assert_eq!(
+        parts,
+        vec![
+            ("viscous", vec![0.02, 2.0]),
+            ("viscous", vec![0.01, 40.0]),
+            ("plastic", vec![0.01, 0.002, 0.0]),
+            ("flow", vec![0.005, 0.003, 1.0]),
+            ("damper", vec![0.005]),
+        ]
+    );
     let eq = net.equilibrium.unwrap();
     assert_eq!(eq.e_mpa, 0.03);
     // beta's default.
@@ -66,7 +77,7 @@ fn a_network_material_is_read_with_its_parts_and_defaults() {
 
 #[test]
 fn bad_network_keys_are_refused_naming_file_line_and_key() {
-    let cases: [(&str, &str, &str, &str, &str); 7] = [
+    let cases: [(&str, &str, &str, &str, &str); 10] = [
         ("tau_s = 40.0", "tau_s = -4.0", "tau_s = -4.0", "materials.mat1.viscous[1].tau_s", "outside (0, 1000000000]"),
         (
             "stiffening = 0.5",
@@ -86,6 +97,27 @@ fn bad_network_keys_are_refused_naming_file_line_and_key() {
         ("r = 2.0", "r = 0.5", "r = 0.5", "materials.mat1.equilibrium.mullins.r", "outside (1, 1000]"),
         ("c_MPa_s = 0.005", "c_MPa_s = \"fast\"", "c_MPa_s", "materials.mat1.damper.c_MPa_s", "is not a number"),
         ("yield_MPa = 0.002", "yield_MPa = 0.0", "yield_MPa", "materials.mat1.plastic.yield_MPa", "outside (0, 10000]"),
+        (
+            "stress_MPa = 0.003",
+            "stress_MPa = 0.003\nexponent = 0.5",
+            "exponent = 0.5",
+            "materials.mat1.flow[0].exponent",
+            "outside [1, 20]",
+        ),
+        (
+            "[[materials.mat1.flow]]",
+            "[[materials.mat1.flwo]]",
+            "[[materials.mat1.flwo]]",
+            "materials.mat1.flwo",
+            "its parts: [equilibrium], [[viscous]], [plastic], [[flow]], [damper]",
+        ),
+        (
+            "[materials.mat1.damper]\n",
+            "[[materials.mat1.damper]]\nc_MPa_s = 0.001\n[[materials.mat1.damper]] # a second\n",
+            "# a second",
+            "materials.mat1.damper[1]",
+            "at most 1 damper parts",
+        ),
     ];
     for (from, to, line, field, cause) in cases {
         let toml = with_network(&edit(NETWORK, from, to));

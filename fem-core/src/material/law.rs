@@ -41,9 +41,89 @@ pub struct ParameterSpec {
     pub upper: f64,
     /// The value when the key is absent; `None`: the key is required.
     pub default: Option<f64>,
+    /// Where identification searches for it when it is unknown.
+    pub fit: FitRange,
+    /// Where identification starts from when it is unknown.
+    pub start: Start,
+}
+
+/// The range identification searches for an unknown parameter: narrower than
+/// the accepted bounds, where the data can tell values apart.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FitRange {
+    /// The smallest value tried.
+    pub lower: f64,
+    /// The largest value tried.
+    pub upper: f64,
+    /// Whether the search runs on `ln(value)` (moduli, times, viscosities).
+    pub log: bool,
+}
+
+/// An unknown parameter's starting value, from the apparent modulus `E_app`
+/// [MPa] that identification reads off the measured peaks.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Start {
+    /// A fixed value.
+    Value(f64),
+    /// A share of `E_app` (moduli and stresses) [MPa], or, for a viscosity, of
+    /// `E_app` times one second [MPa s].
+    OfModulus(f64),
+    /// `first * 10^i` for the `i`-th part of its kind: relaxation times spread
+    /// by decades.
+    Decades(f64),
+}
+
+impl Start {
+    /// The starting value for the `index`-th part of its kind, given the
+    /// apparent modulus `e_app` [MPa].
+    pub fn value(self, e_app: f64, index: usize) -> f64 {
+        match self {
+            Start::Value(v) => v,
+            Start::OfModulus(k) => k * e_app,
+            Start::Decades(first) => first * 10f64.powi(index as i32),
+        }
+    }
 }
 
 impl ParameterSpec {
+    /// A parameter whose fit range is its accepted range (linear) and whose
+    /// start is its default or its lower bound: set [`Self::fit`] and
+    /// [`Self::start`] for a fitted parameter.
+    pub const fn new(
+        key: &'static str,
+        meaning: &'static str,
+        unit: &'static str,
+        (lower, lower_open): (f64, bool),
+        upper: f64,
+        default: Option<f64>,
+    ) -> Self {
+        let start = match default {
+            Some(d) => d,
+            None => upper,
+        };
+        Self {
+            key,
+            meaning,
+            unit,
+            lower,
+            lower_open,
+            upper,
+            default,
+            fit: FitRange { lower, upper, log: false },
+            start: Start::Value(start),
+        }
+    }
+
+    /// The same parameter searched in `[lower, upper]`, on a log scale when `log`.
+    pub const fn fit(self, lower: f64, upper: f64, log: bool) -> Self {
+        Self { fit: FitRange { lower, upper, log }, ..self }
+    }
+
+    /// The same parameter started at `start`.
+    pub const fn start(self, start: Start) -> Self {
+        Self { start, ..self }
+    }
+
     /// Whether `value` lies in the spec's bounds.
     pub fn accepts(&self, value: f64) -> bool {
         value.is_finite()
@@ -66,6 +146,9 @@ pub enum LawFailure {
     /// A stress or tangent entry came out NaN or infinite.
     #[error("non-finite stress")]
     NonFinite,
+    /// A part's return mapping did not converge.
+    #[error("the return mapping of the {law} part did not converge")]
+    ReturnMapping { law: &'static str },
 }
 
 /// What a law returns for one point and step.

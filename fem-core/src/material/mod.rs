@@ -136,7 +136,14 @@ impl Material {
     pub fn network(network: network::Network) -> Result<Self, MaterialError> {
         network.validate().map_err(MaterialError::Network)?;
         let modulus = law::PointLaw::small_strain_modulus(&network);
-        let e_mpa = if modulus > 0.0 { modulus } else { network.damper_mpa_s.unwrap_or(1.0) };
+        let viscosity: f64 = network.parts.iter().map(|p| p.viscosity_mpa_s()).sum();
+        let e_mpa = if modulus > 0.0 {
+            modulus
+        } else if viscosity > 0.0 {
+            viscosity
+        } else {
+            1.0
+        };
         Ok(Self {
             rheology: Rheology::Elastic { e_mpa },
             poisson: network.poisson,

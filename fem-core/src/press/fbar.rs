@@ -393,7 +393,7 @@ mod tests {
     use super::*;
     use crate::element::{cell_geometry_in, Formulation};
     use crate::material::law::PointLaw;
-    use crate::material::network::{Energy, Equilibrium, Network, ViscousNetwork};
+    use crate::material::network::{Damper, Energy, Equilibrium, Network, ViscousNetwork};
     use crate::mesh;
 
     use super::super::network::deformation_operator as operator;
@@ -456,17 +456,14 @@ mod tests {
     }
 
     fn material() -> Network {
-        Network {
-            poisson: 0.45,
-            equilibrium: Some(Equilibrium {
+        Network::new(0.45)
+            .with_equilibrium(Equilibrium {
                 e_mpa: 0.03,
                 energy: Energy::Exponential { stiffening: 0.8 },
                 mullins: None,
-            }),
-            viscous: vec![ViscousNetwork { e_mpa: 0.05, tau_s: 0.3 }],
-            plastic: None,
-            damper_mpa_s: Some(0.01),
-        }
+            })
+            .with(ViscousNetwork { e_mpa: 0.05, tau_s: 0.3 })
+            .with(Damper { c_mpa_s: 0.01 })
     }
 
     fn pseudo_random(i: usize) -> f64 {

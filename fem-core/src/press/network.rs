@@ -1239,17 +1239,11 @@ mod tests {
     /// r_k-1)` of the last step above the rounding floor must exceed 1.8.
     #[test]
     fn newtons_iteration_converges_quadratically() {
-        let net = Network {
-            poisson: 0.45,
-            equilibrium: Some(Equilibrium {
-                energy: Energy::Exponential { stiffening: 1.0 },
-                e_mpa: 0.03,
-                mullins: None,
-            }),
-            viscous: vec![],
-            plastic: None,
-            damper_mpa_s: None,
-        };
+        let net = Network::new(0.45).with_equilibrium(Equilibrium {
+            energy: Energy::Exponential { stiffening: 1.0 },
+            e_mpa: 0.03,
+            mullins: None,
+        });
         let protocol = Protocol {
             waypoints: vec![[0.0, 0.0], [1.0, 2.0]],
             release_s: 1.0,

@@ -10,7 +10,7 @@
 //! | `four-element`  | `E1_MPa, c1_MPa_s, E2_MPa, c3_MPa_s` (E2 the series spring) |
 //! | `five-element`  | `E1_MPa, E2_MPa, c1_MPa_s, c2_MPa_s, c3_MPa_s`     |
 //!
-//! | `network`       | `[equilibrium]`, `[[viscous]]`, `[plastic]`, `[damper]` (below) |
+//! | `network`       | `[equilibrium]` and the parts `[[viscous]]`, `[plastic]`, `[[flow]]`, `[damper]` (below) |
 //!
 //! Every parameter is optional when reading, so that identification can take a
 //! material that gives only its model and the parameters to hold fixed; a key
@@ -32,8 +32,12 @@
 //! ## `model = "network"`: the finite-strain network
 //!
 //! The parts of [`fem_core::material::network`], each an optional sub-table; at
-//! least one is given. Their keys, units and bounds come from the law's own
-//! parameter tables ([`fem_core::material::network::parameters`]):
+//! least one is given. The equilibrium network's keys come from its table
+//! ([`fem_core::material::network::parameters`]); every other sub-table is a
+//! registered part ([`fem_core::material::network::PARTS`]), read through its
+//! kind's table: its name, how many a material may hold (a single `[table]`,
+//! or `[[table]]` entries), its keys, units, bounds and defaults. A part added
+//! to the registry is read, written and fitted here with no change to this file.
 //!
 //! ```toml
 //! [materials.gel]
@@ -62,6 +66,10 @@
 //! E_MPa = 0.01                   # its Hencky spring
 //! yield_MPa = 0.002              # uniaxial yield stress (von Mises)
 //! hardening_MPa = 0.005          # linear isotropic hardening (default 0)
+//! [[materials.gel.flow]]         # a Maxwell network with power-law (Norton) flow of its shear
+//! E_MPa = 0.01
+//! stress_MPa = 0.004             # the equivalent stress flowing at a strain rate of 1/s
+//! exponent = 2.0                 # n >= 1 of the rate (1: Newtonian; default 1)
 //! [materials.gel.damper]         # a parallel Newtonian damper
 //! c_MPa_s = 0.005
 //! ```
@@ -76,7 +84,9 @@ use std::path::Path;
 use std::sync::Arc;
 
 use fem_core::material::law::ParameterSpec;
-use fem_core::material::network::{Energy, Equilibrium, Mullins, Network, PlasticNetwork, ViscousNetwork, OGDEN_TERMS};
+use fem_core::material::network::{
+    energy_keys, parameters, part, Energy, Equilibrium, Mullins, Network, PartKind, ENERGIES, OGDEN_TERMS, PARTS,
+};
 use fem_core::material::{Material, MaterialError, MullinsDamage, Rheology};
 use serde::{Deserialize, Serialize};
 
@@ -95,8 +105,8 @@ pub enum Model {
     FourElement,
     /// Two Voigt elements `(E1, c1)`, `(E2, c2)` and a dashpot `c3` in series.
     FiveElement,
-    /// The finite-strain network ([`fem_core::material::network`]): its parts in
-    /// the sub-tables `[equilibrium]`, `[[viscous]]`, `[plastic]` and `[damper]` (module docs).
+    /// The finite-strain network ([`fem_core::material::network`]): the
+    /// sub-table `[equilibrium]` and one per part (module docs).
     Network,
 }
 
@@ -126,48 +136,23 @@ impl Model {
     }
 }
 
-/// Ogden's keys in `[equilibrium]` (with `energy = "ogden"` only).
-const OGDEN_KEYS: [&str; 5] = ["alpha1", "alpha2", "share2", "alpha3", "share3"];
-
-/// The most viscous networks a network material's flat parameter keys reach
-/// ([`NETWORK_KEYS`]).
-pub const MAX_VISCOUS_NETWORKS: usize = 4;
-
 /// A network material's parameters as flat keys, the paths of their sub-table
 /// keys (`equilibrium.E_MPa`, `viscous[1].tau_s`): what identification names
-/// and frees. [`MaterialSpec::parameter_keys`] gives those of a material's parts.
-pub const NETWORK_KEYS: &[&str] = &[
-    "equilibrium.E_MPa",
-    "equilibrium.stiffening",
-    "equilibrium.alpha1",
-    "equilibrium.alpha2",
-    "equilibrium.share2",
-    "equilibrium.alpha3",
-    "equilibrium.share3",
-    "equilibrium.mullins.r",
-    "equilibrium.mullins.m_MPa",
-    "equilibrium.mullins.beta",
-    "viscous[0].E_MPa",
-    "viscous[0].tau_s",
-    "viscous[1].E_MPa",
-    "viscous[1].tau_s",
-    "viscous[2].E_MPa",
-    "viscous[2].tau_s",
-    "viscous[3].E_MPa",
-    "viscous[3].tau_s",
-    "plastic.E_MPa",
-    "plastic.yield_MPa",
-    "plastic.hardening_MPa",
-    "damper.c_MPa_s",
-];
+/// and frees ([`parameters::flat_keys`]). [`MaterialSpec::parameter_keys`]
+/// gives those of a material's parts.
+pub fn network_keys() -> &'static [&'static str] {
+    parameters::flat_keys()
+}
 
 /// One material as a bundle writes it. Parameters are optional (see the module docs).
 ///
 /// Equality compares the model and the values only, not where the table was read.
 /// Build one with [`MaterialSpec::new`] (or [`MaterialSpec::from_material`]) and
 /// set the fields: a hidden field remembers where a table was read, for messages.
+///
+/// Unknown keys are kept (in [`Self::parts`]) and refused by the reader with
+/// their line, naming the model's keys.
 #[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
 pub struct MaterialSpec {
     /// The rheological model.
     pub model: Model,
@@ -202,15 +187,12 @@ pub struct MaterialSpec {
     /// the sub-table `[mullins]`); absent: a fluid.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub equilibrium: Option<toml::Table>,
-    /// `network`: the viscous networks, one `[[viscous]]` table each (`E_MPa`, `tau_s`).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub viscous: Vec<toml::Table>,
-    /// `network`: the plastic network (`E_MPa`, `yield_MPa`, `hardening_MPa`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub plastic: Option<toml::Table>,
-    /// `network`: the parallel damper (`c_MPa_s`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub damper: Option<toml::Table>,
+    /// `network`: the parts, by sub-table name: a table (`[plastic]`) or an
+    /// array of tables (`[[viscous]]`), each of a registered kind
+    /// ([`fem_core::material::network::PARTS`]). Any other key of the table
+    /// lands here too, for the reader to refuse.
+    #[serde(flatten, default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub parts: BTreeMap<String, toml::Value>,
     /// Where the table was read: the file's map and the table's key path.
     #[serde(skip)]
     pub(crate) origin: Option<Origin>,
@@ -235,8 +217,7 @@ impl PartialEq for MaterialSpec {
             && self.poisson == other.poisson
             && self.parameters() == other.parameters()
             && (self.mullins_d_inf, self.mullins_strain_c) == (other.mullins_d_inf, other.mullins_strain_c)
-            && (&self.equilibrium, &self.viscous, &self.plastic, &self.damper)
-                == (&other.equilibrium, &other.viscous, &other.plastic, &other.damper)
+            && (&self.equilibrium, &self.parts) == (&other.equilibrium, &other.parts)
     }
 }
 
@@ -262,9 +243,7 @@ impl MaterialSpec {
             mullins_d_inf: None,
             mullins_strain_c: None,
             equilibrium: None,
-            viscous: Vec::new(),
-            plastic: None,
-            damper: None,
+            parts: BTreeMap::new(),
             origin: None,
         }
     }
@@ -288,8 +267,14 @@ impl MaterialSpec {
             mullins.insert("beta".into(), toml::Value::Float(0.0));
             eq.insert("mullins".into(), toml::Value::Table(mullins));
             s.equilibrium = Some(eq);
-            s.viscous = vec![toml::Table::new(), toml::Table::new()];
-            s.damper = Some(toml::Table::new());
+            s.parts.insert(
+                "viscous".into(),
+                toml::Value::Array(vec![
+                    toml::Value::Table(toml::Table::new()),
+                    toml::Value::Table(toml::Table::new()),
+                ]),
+            );
+            s.parts.insert("damper".into(), toml::Value::Table(toml::Table::new()));
         }
         s
     }
@@ -364,118 +349,118 @@ impl MaterialSpec {
             }
             t
         });
-        Self {
-            poisson: Some(net.poisson),
-            equilibrium,
-            viscous: net.viscous.iter().map(|v| table(&[("E_MPa", v.e_mpa), ("tau_s", v.tau_s)])).collect(),
-            plastic: net
-                .plastic
-                .map(|p| table(&[("E_MPa", p.e_mpa), ("yield_MPa", p.yield_mpa), ("hardening_MPa", p.hardening_mpa)])),
-            damper: net.damper_mpa_s.map(|c| table(&[("c_MPa_s", c)])),
-            ..Self::new(Model::Network)
+        let mut parts: BTreeMap<String, toml::Value> = BTreeMap::new();
+        for p in &net.parts {
+            let kind = p.kind();
+            let pairs: Vec<(&str, f64)> = kind.parameters.iter().map(|s| s.key).zip(p.values()).collect();
+            let t = toml::Value::Table(table(&pairs));
+            if kind.max_count == 1 {
+                parts.insert(kind.table.into(), t);
+            } else {
+                match parts.entry(kind.table.into()).or_insert_with(|| toml::Value::Array(Vec::new())) {
+                    toml::Value::Array(a) => a.push(t),
+                    _ => unreachable!("a kind of several parts is written as an array"),
+                }
+            }
         }
+        Self { poisson: Some(net.poisson), equilibrium, parts, ..Self::new(Model::Network) }
     }
 
     /// The network of a `network` material, read through the law's parameter
     /// tables: `Err((key path inside the material, cause))` for an unknown,
     /// missing, mistyped or out-of-bounds key. Needs `poisson`.
     pub fn to_network(&self) -> Result<Network, (String, String)> {
-        use fem_core::material::network::parameters::{DAMPER, EQUILIBRIUM, MATERIAL, MULLINS, PLASTIC, VISCOUS};
+        use parameters::{EQUILIBRIUM, MATERIAL, MULLINS};
         let poisson = self.poisson.ok_or_else(|| ("poisson".to_string(), "missing".to_string()))?;
         let mspec = MATERIAL[0];
         if !mspec.accepts(poisson) {
             return Err(("poisson".into(), format!("{poisson} is outside {} for a network", mspec.range())));
         }
-        let equilibrium = match &self.equilibrium {
-            None => None,
-            Some(t) => {
-                let energy = match t.get("energy") {
-                    None => {
-                        return Err(("equilibrium.energy".into(), "missing (neo-hookean, exponential or ogden)".into()))
-                    }
-                    Some(toml::Value::String(s)) if s == "neo-hookean" => "neo-hookean",
-                    Some(toml::Value::String(s)) if s == "exponential" => "exponential",
-                    Some(toml::Value::String(s)) if s == "ogden" => "ogden",
-                    Some(other) => {
-                        return Err((
-                            "equilibrium.energy".into(),
-                            format!("{other} is not an energy (neo-hookean, exponential or ogden)"),
-                        ))
-                    }
-                };
-                let mut allowed: Vec<&str> = vec!["energy", "E_MPa", "mullins"];
-                match energy {
-                    "exponential" => allowed.push("stiffening"),
-                    "ogden" => allowed.extend(OGDEN_KEYS),
-                    _ => {}
+        let mut net = Network::new(poisson);
+        if let Some(t) = &self.equilibrium {
+            let energies = ENERGIES.join(", ");
+            let energy = match t.get("energy") {
+                None => return Err(("equilibrium.energy".into(), format!("missing ({energies})"))),
+                Some(toml::Value::String(s)) if energy_keys(s).is_some() => s.as_str(),
+                Some(other) => {
+                    return Err(("equilibrium.energy".into(), format!("{other} is not an energy ({energies})")))
                 }
-                let values = read_table(t, EQUILIBRIUM, &allowed, "equilibrium")?;
-                let e_mpa = values["E_MPa"];
-                let energy = match energy {
-                    "exponential" => Energy::Exponential { stiffening: values["stiffening"] },
-                    "ogden" => {
-                        let (s2, s3) = (values["share2"], values["share3"]);
-                        if s2 + s3 >= 1.0 {
-                            return Err((
-                                "equilibrium.share2".into(),
-                                format!(
-                                    "share2 + share3 = {} must be under 1 (the first term takes the rest)",
-                                    s2 + s3
-                                ),
-                            ));
-                        }
-                        let alpha = [values["alpha1"], values["alpha2"], values["alpha3"]];
-                        let share = [1.0 - s2 - s3, s2, s3];
-                        let min = fem_core::material::network::parameters::OGDEN_ALPHA_MIN;
-                        if let Some(p) = (0..OGDEN_TERMS).find(|&p| share[p] > 0.0 && alpha[p].abs() < min) {
-                            return Err((
-                                format!("equilibrium.alpha{}", p + 1),
-                                format!("{} must be nonzero (|alpha| >= {min}) for a term with a share", alpha[p]),
-                            ));
-                        }
-                        Energy::Ogden { alpha, share }
+            };
+            let mut allowed: Vec<&str> = vec!["energy", "mullins"];
+            allowed.extend(energy_keys(energy).expect("a known energy"));
+            let values = read_table(t, EQUILIBRIUM, &allowed, "equilibrium")?;
+            let e_mpa = values["E_MPa"];
+            let energy = match energy {
+                "exponential" => Energy::Exponential { stiffening: values["stiffening"] },
+                "ogden" => {
+                    let (s2, s3) = (values["share2"], values["share3"]);
+                    if s2 + s3 >= 1.0 {
+                        return Err((
+                            "equilibrium.share2".into(),
+                            format!("share2 + share3 = {} must be under 1 (the first term takes the rest)", s2 + s3),
+                        ));
                     }
-                    _ => Energy::NeoHookean,
-                };
-                let mullins = match t.get("mullins") {
-                    None => None,
-                    Some(toml::Value::Table(m)) => {
-                        let keys: Vec<&str> = MULLINS.iter().map(|s| s.key).collect();
-                        let v = read_table(m, MULLINS, &keys, "equilibrium.mullins")?;
-                        Some(Mullins { r: v["r"], m_mpa: v["m_MPa"], beta: v["beta"] })
+                    let alpha = [values["alpha1"], values["alpha2"], values["alpha3"]];
+                    let share = [1.0 - s2 - s3, s2, s3];
+                    let min = parameters::OGDEN_ALPHA_MIN;
+                    if let Some(p) = (0..OGDEN_TERMS).find(|&p| share[p] > 0.0 && alpha[p].abs() < min) {
+                        return Err((
+                            format!("equilibrium.alpha{}", p + 1),
+                            format!("{} must be nonzero (|alpha| >= {min}) for a term with a share", alpha[p]),
+                        ));
                     }
-                    Some(_) => return Err(("equilibrium.mullins".into(), "must be a table".into())),
-                };
-                Some(Equilibrium { energy, e_mpa, mullins })
-            }
-        };
-        if self.viscous.len() > MAX_VISCOUS_NETWORKS {
-            return Err((
-                format!("viscous[{MAX_VISCOUS_NETWORKS}]"),
-                format!("at most {MAX_VISCOUS_NETWORKS} viscous networks"),
-            ));
+                    Energy::Ogden { alpha, share }
+                }
+                _ => Energy::NeoHookean,
+            };
+            let mullins = match t.get("mullins") {
+                None => None,
+                Some(toml::Value::Table(m)) => {
+                    let keys: Vec<&str> = MULLINS.iter().map(|s| s.key).collect();
+                    let v = read_table(m, MULLINS, &keys, "equilibrium.mullins")?;
+                    Some(Mullins { r: v["r"], m_mpa: v["m_MPa"], beta: v["beta"] })
+                }
+                Some(_) => return Err(("equilibrium.mullins".into(), "must be a table".into())),
+            };
+            net = net.with_equilibrium(Equilibrium { energy, e_mpa, mullins });
         }
-        let mut viscous = Vec::new();
-        for (i, t) in self.viscous.iter().enumerate() {
-            let keys: Vec<&str> = VISCOUS.iter().map(|s| s.key).collect();
-            let v = read_table(t, VISCOUS, &keys, &format!("viscous[{i}]"))?;
-            viscous.push(ViscousNetwork { e_mpa: v["E_MPa"], tau_s: v["tau_s"] });
-        }
-        let damper_mpa_s = match &self.damper {
-            None => None,
-            Some(t) => Some(read_table(t, DAMPER, &["c_MPa_s"], "damper")?["c_MPa_s"]),
-        };
-        let plastic = match &self.plastic {
-            None => None,
-            Some(t) => {
-                let keys: Vec<&str> = PLASTIC.iter().map(|s| s.key).collect();
-                let v = read_table(t, PLASTIC, &keys, "plastic")?;
-                Some(PlasticNetwork { e_mpa: v["E_MPa"], yield_mpa: v["yield_MPa"], hardening_mpa: v["hardening_MPa"] })
+        for name in self.parts.keys() {
+            if part::kind(name).is_none() {
+                return Err((name.clone(), format!("not a key of the network model (its parts: {})", part_list())));
             }
-        };
-        let net = Network { poisson, equilibrium, viscous, plastic, damper_mpa_s };
+        }
+        for kind in PARTS {
+            let tables = self.part_tables(kind.table).map_err(|cause| (kind.table.to_string(), cause))?;
+            if tables.len() > kind.max_count {
+                return Err((
+                    format!("{}[{}]", kind.table, kind.max_count),
+                    format!("at most {} {} parts", kind.max_count, kind.table),
+                ));
+            }
+            for (i, t) in tables.iter().enumerate() {
+                let keys: Vec<&str> = kind.parameters.iter().map(|s| s.key).collect();
+                let prefix = kind.flat_key(i, "");
+                let v = read_table(t, kind.parameters, &keys, prefix.trim_end_matches('.'))?;
+                let values: Vec<f64> = keys.iter().map(|k| v[k]).collect();
+                net.parts.push((kind.build)(&values));
+            }
+        }
         net.validate().map_err(|e| ("".to_string(), e.to_string()))?;
         Ok(net)
+    }
+
+    /// The tables of the part sub-table `name`: none, the one table, or the
+    /// array's; `Err(cause)` for any other value.
+    fn part_tables(&self, name: &str) -> Result<Vec<&toml::Table>, String> {
+        match self.parts.get(name) {
+            None => Ok(Vec::new()),
+            Some(toml::Value::Table(t)) => Ok(vec![t]),
+            Some(toml::Value::Array(a)) => a
+                .iter()
+                .map(|v| v.as_table().ok_or_else(|| format!("{v} is not a table")))
+                .collect::<Result<Vec<_>, _>>(),
+            Some(other) => Err(format!("{other} is not a table")),
+        }
     }
 
     /// Every parameter key with its value, whether or not it belongs to the model.
@@ -491,43 +476,48 @@ impl MaterialSpec {
     }
 
     /// The parameter keys of this material: its model's, or, for a network, the
-    /// [`NETWORK_KEYS`] of the parts it has (`poisson` not included).
+    /// [`network_keys`] of the parts it has (`poisson` not included).
     pub fn parameter_keys(&self) -> Vec<&'static str> {
         if self.model != Model::Network {
             return self.model.keys().to_vec();
         }
-        NETWORK_KEYS.iter().copied().filter(|k| self.network_slot(k).is_some()).collect()
+        network_keys().iter().copied().filter(|k| self.network_slot(k).is_some()).collect()
     }
 
     /// The sub-table and key of a network key whose part this material has:
-    /// `(table path, key)`; the exponential's `stiffening` only with that energy,
-    /// Mullins keys only with a `[mullins]` table.
+    /// `(table path, key)`; an energy's keys only with that energy, Mullins keys
+    /// only with a `[mullins]` table.
     fn network_slot<'k>(&self, key: &'k str) -> Option<(Vec<String>, &'k str)> {
         let (path, leaf) = key.rsplit_once('.')?;
+        parameters::spec_of(key)?;
         let parts: Vec<String> = path.split('.').map(str::to_string).collect();
         self.network_table(&parts)?;
-        let energy = |name: &str| matches!(self.equilibrium.as_ref().and_then(|t| t.get("energy")), Some(toml::Value::String(e)) if e == name);
-        if leaf == "stiffening" && !(path == "equilibrium" && energy("exponential")) {
-            return None;
-        }
-        if OGDEN_KEYS.contains(&leaf) && !(path == "equilibrium" && energy("ogden")) {
-            return None;
+        if path == "equilibrium" {
+            let energy = self.equilibrium.as_ref().and_then(|t| t.get("energy")).and_then(toml::Value::as_str);
+            if !energy.and_then(energy_keys).is_some_and(|keys| keys.contains(&leaf)) {
+                return None;
+            }
         }
         Some((parts, leaf))
     }
 
+    /// The part sub-table `name` or `name[i]`: its kind and index.
+    fn part_slot(first: &str) -> Option<(&'static PartKind, usize)> {
+        let (name, index) = match first.split_once('[') {
+            Some((name, rest)) => (name, rest.strip_suffix(']')?.parse::<usize>().ok()?),
+            None => (first, 0),
+        };
+        let kind = part::kind(name)?;
+        ((kind.max_count > 1) == first.contains('[')).then_some((kind, index))
+    }
+
     fn network_table(&self, parts: &[String]) -> Option<&toml::Table> {
         let first = parts.first()?;
-        let mut table = if let Some(i) = first.strip_prefix("viscous[").and_then(|r| r.strip_suffix(']')) {
-            self.viscous.get(i.parse::<usize>().ok()?)?
-        } else if first == "equilibrium" {
+        let mut table = if first == "equilibrium" {
             self.equilibrium.as_ref()?
-        } else if first == "damper" {
-            self.damper.as_ref()?
-        } else if first == "plastic" {
-            self.plastic.as_ref()?
         } else {
-            return None;
+            let (kind, index) = Self::part_slot(first)?;
+            *self.part_tables(kind.table).ok()?.get(index)?
         };
         for p in &parts[1..] {
             table = table.get(p)?.as_table()?;
@@ -539,15 +529,15 @@ impl MaterialSpec {
     pub fn set_network_parameter(&mut self, key: &str, value: f64) -> bool {
         let Some((parts, leaf)) = self.network_slot(key) else { return false };
         let first = &parts[0];
-        let mut table = if let Some(i) = first.strip_prefix("viscous[").and_then(|r| r.strip_suffix(']')) {
-            let Ok(i) = i.parse::<usize>() else { return false };
-            &mut self.viscous[i]
-        } else if first == "equilibrium" {
+        let mut table = if first == "equilibrium" {
             self.equilibrium.as_mut().expect("the slot exists")
-        } else if first == "plastic" {
-            self.plastic.as_mut().expect("the slot exists")
         } else {
-            self.damper.as_mut().expect("the slot exists")
+            let (kind, index) = Self::part_slot(first).expect("the slot exists");
+            match self.parts.get_mut(kind.table).expect("the slot exists") {
+                toml::Value::Table(t) => t,
+                toml::Value::Array(a) => a[index].as_table_mut().expect("the slot exists"),
+                _ => return false,
+            }
         };
         for p in &parts[1..] {
             table = table.get_mut(p).and_then(toml::Value::as_table_mut).expect("the slot exists");
@@ -661,15 +651,10 @@ impl MaterialSpec {
                 cause,
             },
         };
-        let network_tables =
-            self.equilibrium.is_some() || !self.viscous.is_empty() || self.plastic.is_some() || self.damper.is_some();
+        let network_tables = self.equilibrium.is_some() || !self.parts.is_empty();
         if self.model == Model::Network {
             if let Some((key, _)) = self.parameters().into_iter().find(|(_, v)| v.is_some()) {
-                return Err(err(
-                    key,
-                    "not a key of the network model (its parts: [equilibrium], [[viscous]], [plastic], [damper])"
-                        .into(),
-                ));
+                return Err(err(key, format!("not a key of the network model (its parts: {})", part_list())));
             }
             if self.mullins_d_inf.is_some() || self.mullins_strain_c.is_some() {
                 return Err(err("mullins_d_inf", "a network softens through [equilibrium.mullins]".into()));
@@ -696,14 +681,20 @@ impl MaterialSpec {
                 .map(|_| ())
                 .map_err(|(key, cause)| err(if key.is_empty() { "model" } else { &key }, cause));
         } else if network_tables {
-            let key = if self.equilibrium.is_some() {
-                "equilibrium"
-            } else if self.damper.is_some() {
-                "damper"
-            } else if self.plastic.is_some() {
-                "plastic"
-            } else {
-                "viscous"
+            let key = match self.parts.keys().next() {
+                _ if self.equilibrium.is_some() => "equilibrium",
+                Some(key) if part::kind(key).is_some() => key.as_str(),
+                Some(key) => {
+                    return Err(err(
+                        key,
+                        format!(
+                            "not a key of the {} model (its keys: {}, poisson)",
+                            self.model.as_str(),
+                            self.model.keys().join(", ")
+                        ),
+                    ))
+                }
+                None => unreachable!("a network table is present"),
             };
             return Err(err(
                 key,
@@ -748,29 +739,28 @@ impl MaterialSpec {
     }
 }
 
-/// The default of a network key ([`NETWORK_KEYS`]) from the law's tables, if it has one.
+/// The default of a network key ([`network_keys`]) from the law's tables, if it has one.
 fn network_default(key: &str) -> Option<f64> {
-    use fem_core::material::network::parameters::{DAMPER, EQUILIBRIUM, MULLINS, PLASTIC, VISCOUS};
-    let (path, leaf) = key.rsplit_once('.')?;
-    let table = match path {
-        "equilibrium" => EQUILIBRIUM,
-        "equilibrium.mullins" => MULLINS,
-        "damper" => DAMPER,
-        "plastic" => PLASTIC,
-        _ if path.starts_with("viscous[") => VISCOUS,
-        _ => return None,
-    };
-    table.iter().find(|s| s.key == leaf)?.default
+    parameters::spec_of(key)?.0.default
 }
 
 /// A value inside a network key's bounds, standing for an unknown while the
-/// rest of the material is checked.
+/// rest of the material is checked: the low end of its fit range.
 fn placeholder(key: &str) -> f64 {
-    if key.ends_with(".r") {
-        2.0
-    } else {
-        1.0
-    }
+    parameters::spec_of(key).map_or(1.0, |(s, _)| if s.accepts(s.fit.lower) { s.fit.lower } else { s.fit.upper })
+}
+
+/// The network's sub-tables as a message lists them.
+fn part_list() -> String {
+    let mut names = vec!["[equilibrium]".to_string()];
+    names.extend(PARTS.iter().map(|k| {
+        if k.max_count == 1 {
+            format!("[{}]", k.table)
+        } else {
+            format!("[[{}]]", k.table)
+        }
+    }));
+    names.join(", ")
 }
 
 /// Reads the keys of one sub-table through the law's parameter `table`: each

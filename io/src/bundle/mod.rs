@@ -255,9 +255,7 @@ mod write;
 pub use experiment::{
     Contact, DataSpec, Experiment, Layer, Plane, ProtocolSpec, Shape, Specimen, Tool, ToolKind, ToolSpec, FORMAT_V1,
 };
-pub use material_spec::{
-    read_materials_file, MaterialSpec, MissingParameter, Model, MAX_VISCOUS_NETWORKS, NETWORK_KEYS,
-};
+pub use material_spec::{network_keys, read_materials_file, MaterialSpec, MissingParameter, Model};
 pub use read::{read_bundle, read_bundle_from_str, read_bundle_with, Bundle, EXPERIMENT_FILE};
 pub use series::{markers_header, ForceSample, ForceSeries, MarkerSample, MarkerSeries, FORCE_HEADER};
 pub use surface_specimen::{SurfaceMeshing, BASE_BAND};

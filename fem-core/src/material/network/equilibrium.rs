@@ -45,6 +45,31 @@ pub enum Energy {
 /// The most terms of an Ogden energy.
 pub const OGDEN_TERMS: usize = 3;
 
+/// The energies as a bundle names them (`energy = "..."`).
+pub const ENERGIES: &[&str] = &["neo-hookean", "exponential", "ogden"];
+
+/// The `[equilibrium]` parameter keys of the energy named `energy`
+/// ([`super::parameters::EQUILIBRIUM`]), `None` for an unknown name.
+pub fn energy_keys(energy: &str) -> Option<&'static [&'static str]> {
+    match energy {
+        "neo-hookean" => Some(&["E_MPa"]),
+        "exponential" => Some(&["E_MPa", "stiffening"]),
+        "ogden" => Some(&["E_MPa", "alpha1", "alpha2", "share2", "alpha3", "share3"]),
+        _ => None,
+    }
+}
+
+impl Energy {
+    /// The energy's name in a bundle.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Energy::NeoHookean => "neo-hookean",
+            Energy::Exponential { .. } => "exponential",
+            Energy::Ogden { .. } => "ogden",
+        }
+    }
+}
+
 /// Ogden-Roxburgh softening (module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Mullins {

@@ -70,40 +70,50 @@
 //! as deviations from the identity, so that small strains keep their precision
 //! ([`hencky`]).
 
+mod damper;
 mod equilibrium;
+pub mod flow;
 mod hencky;
+pub mod part;
 pub mod plastic;
+mod viscous;
 
-pub use equilibrium::{Energy, Equilibrium, Mullins, OGDEN_TERMS};
+pub use damper::Damper;
+pub use equilibrium::{energy_keys, Energy, Equilibrium, Mullins, ENERGIES, OGDEN_TERMS};
+pub use flow::FlowNetwork;
+pub use part::{Kinematics, Part, PartKind, PARTS};
 pub use plastic::PlasticNetwork;
+pub use viscous::ViscousNetwork;
+
+use std::sync::Arc;
 
 use nalgebra::Matrix3;
 
 use crate::material::law::{LawFailure, ParameterSpec, PointLaw, PointResponse, Tangent};
-use crate::material::{phi1, Rheology};
-
-/// A viscous (Maxwell) network: a Hencky spring and Newtonian flow.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ViscousNetwork {
-    /// The spring's Young's modulus [MPa].
-    pub e_mpa: f64,
-    /// The relaxation time `tau` [s] (viscosity over modulus).
-    pub tau_s: f64,
-}
+use crate::material::Rheology;
 
 /// The finite-strain network material (module docs).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct Network {
     /// Poisson's ratio of every part, in (-1, 0.5).
     pub poisson: f64,
     /// The equilibrium network; `None`: a fluid.
     pub equilibrium: Option<Equilibrium>,
-    /// The viscous networks.
-    pub viscous: Vec<ViscousNetwork>,
-    /// The plastic network; `None`: no permanent set.
-    pub plastic: Option<PlasticNetwork>,
-    /// The damper's Young-type viscosity [MPa s]; `None`: no damper.
-    pub damper_mpa_s: Option<f64>,
+    /// The parts in parallel ([`part`]), in their order in the point's history.
+    pub parts: Vec<Arc<dyn Part>>,
+}
+
+impl PartialEq for Network {
+    fn eq(&self, other: &Self) -> bool {
+        self.poisson == other.poisson
+            && self.equilibrium == other.equilibrium
+            && self.parts.len() == other.parts.len()
+            && self
+                .parts
+                .iter()
+                .zip(&other.parts)
+                .all(|(a, b)| std::ptr::eq(a.kind(), b.kind()) && a.values() == b.values())
+    }
 }
 
 /// Why a network was refused.
@@ -112,74 +122,138 @@ pub enum NetworkError {
     /// A parameter outside its bounds.
     #[error("{key} = {value}: must lie in {range}")]
     OutOfBounds { key: String, value: f64, range: String },
+    /// More parts of a kind than it allows.
+    #[error("{count} {table} parts: at most {max}")]
+    TooMany { table: &'static str, count: usize, max: usize },
     /// Nothing carries stress.
     #[error("the network has no part: give an equilibrium network, a viscous network or a damper")]
     Empty,
 }
 
-/// The network's parameter tables: each part's keys, units and bounds, named once.
+/// The network's own parameter tables (the parts' are their kinds',
+/// [`PartKind::parameters`]): keys, units, bounds, fit ranges and starts, named once.
 pub mod parameters {
-    use super::ParameterSpec;
+    use std::sync::OnceLock;
 
-    const fn spec(
-        key: &'static str,
-        meaning: &'static str,
-        unit: &'static str,
-        lower: f64,
-        lower_open: bool,
-        upper: f64,
-        default: Option<f64>,
-    ) -> ParameterSpec {
-        ParameterSpec { key, meaning, unit, lower, lower_open, upper, default }
-    }
+    use super::{ParameterSpec, PARTS};
+    use crate::material::law::Start;
 
     /// The material's own keys (beside `model = "network"`).
     pub const MATERIAL: &[ParameterSpec] =
-        &[spec("poisson", "Poisson's ratio of every part", "1", -1.0, true, 0.4999, None)];
+        &[ParameterSpec::new("poisson", "Poisson's ratio of every part", "1", (-1.0, true), 0.4999, None)];
     /// `[equilibrium]`: `energy = "neo-hookean" | "exponential" | "ogden"` and
-    /// these (`stiffening` with the exponential energy only, the `alpha` and
-    /// `share` keys with Ogden's only; the first term's share is one less the
-    /// others').
+    /// these, each energy its own ([`super::energy_keys`]): `stiffening` the
+    /// exponential's, the `alpha` and `share` keys Ogden's (the first term's
+    /// share is one less the others'). Ogden's terms are fitted with their
+    /// signs kept (a term through `alpha = 0` vanishes): a stiffening first and
+    /// third, a softening second.
     pub const EQUILIBRIUM: &[ParameterSpec] = &[
-        spec("E_MPa", "Young's modulus at small strain", "MPa", 0.0, true, 1e4, None),
-        spec("stiffening", "b of the exponential energy", "1", 0.0, true, 100.0, None),
-        spec("alpha1", "exponent of Ogden's first term (nonzero)", "1", -30.0, false, 30.0, None),
-        spec("alpha2", "exponent of Ogden's second term (nonzero)", "1", -30.0, false, 30.0, Some(-2.0)),
-        spec("alpha3", "exponent of Ogden's third term (nonzero)", "1", -30.0, false, 30.0, Some(4.0)),
-        spec("share2", "Ogden's second term's share of the shear modulus", "1", 0.0, false, 1.0, Some(0.0)),
-        spec("share3", "Ogden's third term's share of the shear modulus", "1", 0.0, false, 1.0, Some(0.0)),
+        ParameterSpec::new("E_MPa", "Young's modulus at small strain", "MPa", (0.0, true), 1e4, None)
+            .fit(1e-5, 1e2, true)
+            .start(Start::OfModulus(0.5)),
+        ParameterSpec::new("stiffening", "b of the exponential energy", "1", (0.0, true), 100.0, None)
+            .fit(1e-3, 50.0, true)
+            .start(Start::Value(1.0)),
+        ParameterSpec::new("alpha1", "exponent of Ogden's first term (nonzero)", "1", (-30.0, false), 30.0, None)
+            .fit(0.5, 30.0, false)
+            .start(Start::Value(6.0)),
+        ParameterSpec::new(
+            "alpha2",
+            "exponent of Ogden's second term (nonzero)",
+            "1",
+            (-30.0, false),
+            30.0,
+            Some(-2.0),
+        )
+        .fit(-30.0, -0.5, false)
+        .start(Start::Value(-2.0)),
+        ParameterSpec::new(
+            "share2",
+            "Ogden's second term's share of the shear modulus",
+            "1",
+            (0.0, false),
+            1.0,
+            Some(0.0),
+        )
+        .fit(0.0, 0.45, false)
+        .start(Start::Value(0.1)),
+        ParameterSpec::new("alpha3", "exponent of Ogden's third term (nonzero)", "1", (-30.0, false), 30.0, Some(4.0))
+            .fit(0.5, 30.0, false)
+            .start(Start::Value(4.0)),
+        ParameterSpec::new(
+            "share3",
+            "Ogden's third term's share of the shear modulus",
+            "1",
+            (0.0, false),
+            1.0,
+            Some(0.0),
+        )
+        .fit(0.0, 0.45, false)
+        .start(Start::Value(0.1)),
     ];
     /// The smallest accepted `|alpha|` of an Ogden term.
     pub const OGDEN_ALPHA_MIN: f64 = 1e-2;
     /// `[equilibrium.mullins]`: Ogden-Roxburgh softening.
     pub const MULLINS: &[ParameterSpec] = &[
-        spec("r", "the softened stress is at least 1 - 1/r of the virgin", "1", 1.0, true, 1e3, None),
-        spec("m_MPa", "energy scale of the softening", "MPa", 0.0, true, 1e3, None),
-        spec("beta", "growth of the scale with W_max", "1", 0.0, false, 1e3, Some(0.0)),
+        ParameterSpec::new("r", "the softened stress is at least 1 - 1/r of the virgin", "1", (1.0, true), 1e3, None)
+            .fit(1.01, 50.0, true)
+            .start(Start::Value(3.0)),
+        ParameterSpec::new("m_MPa", "energy scale of the softening", "MPa", (0.0, true), 1e3, None)
+            .fit(1e-6, 1.0, true)
+            .start(Start::OfModulus(0.05)),
+        ParameterSpec::new("beta", "growth of the scale with W_max", "1", (0.0, false), 1e3, Some(0.0))
+            .fit(0.0, 5.0, false)
+            .start(Start::Value(0.1)),
     ];
-    /// `[[viscous]]`: one viscous network each.
-    pub const VISCOUS: &[ParameterSpec] = &[
-        spec("E_MPa", "the spring's Young's modulus", "MPa", 0.0, true, 1e4, None),
-        spec("tau_s", "relaxation time", "s", 0.0, true, 1e9, None),
-    ];
-    /// `[plastic]`: the plastic network.
-    pub const PLASTIC: &[ParameterSpec] = &[
-        spec("E_MPa", "the spring's Young's modulus", "MPa", 0.0, true, 1e4, None),
-        spec("yield_MPa", "uniaxial yield stress", "MPa", 0.0, true, 1e4, None),
-        spec("hardening_MPa", "linear isotropic hardening modulus", "MPa", 0.0, false, 1e4, Some(0.0)),
-    ];
-    /// `[damper]`.
-    pub const DAMPER: &[ParameterSpec] =
-        &[spec("c_MPa_s", "Young-type viscosity of the parallel damper", "MPa s", 0.0, true, 1e6, None)];
 
     /// The spec of `key` in `table`.
     pub fn find(table: &[ParameterSpec], key: &str) -> Option<ParameterSpec> {
         table.iter().find(|s| s.key == key).copied()
     }
+
+    /// Every parameter of a network material as a flat key, the path of its
+    /// sub-table key (`equilibrium.E_MPa`, `equilibrium.mullins.r`,
+    /// `viscous[1].tau_s`, `plastic.yield_MPa`): what identification names and
+    /// frees. Built once from the tables and the part registry.
+    pub fn flat_keys() -> &'static [&'static str] {
+        static KEYS: OnceLock<Vec<&'static str>> = OnceLock::new();
+        KEYS.get_or_init(|| {
+            let mut keys: Vec<String> = EQUILIBRIUM.iter().map(|s| format!("equilibrium.{}", s.key)).collect();
+            keys.extend(MULLINS.iter().map(|s| format!("equilibrium.mullins.{}", s.key)));
+            for kind in PARTS {
+                for i in 0..kind.max_count {
+                    keys.extend(kind.parameters.iter().map(|s| kind.flat_key(i, s.key)));
+                }
+            }
+            // Leaked once per process: a bounded set of names that lives as long
+            // as the program, like the tables it comes from.
+            keys.into_iter().map(|k| &*Box::leak(k.into_boxed_str())).collect()
+        })
+    }
+
+    /// The spec of a flat key ([`flat_keys`]) and the index of its part among
+    /// those of its kind (0 for the equilibrium network's).
+    pub fn spec_of(flat_key: &str) -> Option<(ParameterSpec, usize)> {
+        let (path, leaf) = flat_key.rsplit_once('.')?;
+        match path {
+            "equilibrium" => return find(EQUILIBRIUM, leaf).map(|s| (s, 0)),
+            "equilibrium.mullins" => return find(MULLINS, leaf).map(|s| (s, 0)),
+            _ => {}
+        }
+        let (table, index) = match path.split_once('[') {
+            Some((table, rest)) => (table, rest.strip_suffix(']')?.parse::<usize>().ok()?),
+            None => (path, 0),
+        };
+        let kind = super::part::kind(table)?;
+        if index >= kind.max_count || (kind.max_count > 1) != path.contains('[') {
+            return None;
+        }
+        find(kind.parameters, leaf).map(|s| (s, index))
+    }
 }
 
+/// The network's own history before the parts': `C_n^-1 - I` and `W_max`.
 const HISTORY_BASE: usize = 7;
-const HISTORY_PER_NETWORK: usize = 12;
 
 pub(crate) fn sym_to(m: &Matrix3<f64>, out: &mut [f64]) {
     out[..6].copy_from_slice(&[m[(0, 0)], m[(1, 1)], m[(2, 2)], m[(0, 1)], m[(0, 2)], m[(1, 2)]]);
@@ -190,42 +264,67 @@ pub(crate) fn sym_from(v: &[f64]) -> Matrix3<f64> {
 }
 
 impl Network {
+    /// A network of Poisson ratio `poisson` with no part yet.
+    pub fn new(poisson: f64) -> Self {
+        Self { poisson, equilibrium: None, parts: Vec::new() }
+    }
+
+    /// The same network with the equilibrium network `equilibrium`.
+    pub fn with_equilibrium(self, equilibrium: Equilibrium) -> Self {
+        Self { equilibrium: Some(equilibrium), ..self }
+    }
+
+    /// The same network with `part` added after the others.
+    pub fn with(mut self, part: impl Part + 'static) -> Self {
+        self.parts.push(Arc::new(part));
+        self
+    }
+
+    /// The parts of the kind whose sub-table is `table`, in order.
+    pub fn parts_of<'a>(&'a self, table: &'a str) -> impl Iterator<Item = &'a Arc<dyn Part>> + 'a {
+        self.parts.iter().filter(move |p| p.kind().table == table)
+    }
+
     /// The seed's chain `rheology` with Poisson ratio `poisson` as a network
     /// (module docs): equal to the chain at small strain.
     pub fn from_chain(rheology: &Rheology, poisson: f64) -> Self {
         let k = rheology.relaxation();
-        let viscous =
-            (0..k.num_terms).map(|i| ViscousNetwork { e_mpa: k.amplitudes[i], tau_s: 1.0 / k.rates[i] }).collect();
-        let equilibrium = (k.equilibrium > 0.0).then_some(Equilibrium {
-            energy: Energy::NeoHookean,
-            e_mpa: k.equilibrium,
-            mullins: None,
-        });
-        let damper_mpa_s = (k.viscous > 0.0).then_some(k.viscous);
-        Self { poisson, equilibrium, viscous, plastic: None, damper_mpa_s }
+        let mut net = Self::new(poisson);
+        if k.equilibrium > 0.0 {
+            net = net.with_equilibrium(Equilibrium { energy: Energy::NeoHookean, e_mpa: k.equilibrium, mullins: None });
+        }
+        for i in 0..k.num_terms {
+            net = net.with(ViscousNetwork { e_mpa: k.amplitudes[i], tau_s: 1.0 / k.rates[i] });
+        }
+        if k.viscous > 0.0 {
+            net = net.with(Damper { c_mpa_s: k.viscous });
+        }
+        net
     }
 
-    /// Checks every parameter against its table.
+    /// Checks every parameter against its table, and each kind's count.
     pub fn validate(&self) -> Result<(), NetworkError> {
         use parameters::*;
-        let check = |table: &[ParameterSpec], key: &str, value: f64, prefix: &str| {
-            let s = find(table, key).expect("the key is in its table");
+        let check = |s: ParameterSpec, value: f64, key: String| {
             if s.accepts(value) {
                 Ok(())
             } else {
-                Err(NetworkError::OutOfBounds { key: format!("{prefix}{key}"), value, range: s.range() })
+                Err(NetworkError::OutOfBounds { key, value, range: s.range() })
             }
         };
-        check(MATERIAL, "poisson", self.poisson, "")?;
+        let in_table = |table: &[ParameterSpec], key: &str, value: f64, prefix: &str| {
+            check(part::spec(table, key), value, format!("{prefix}{key}"))
+        };
+        in_table(MATERIAL, "poisson", self.poisson, "")?;
         if let Some(eq) = &self.equilibrium {
-            check(EQUILIBRIUM, "E_MPa", eq.e_mpa, "equilibrium.")?;
+            in_table(EQUILIBRIUM, "E_MPa", eq.e_mpa, "equilibrium.")?;
             if let Energy::Exponential { stiffening } = eq.energy {
-                check(EQUILIBRIUM, "stiffening", stiffening, "equilibrium.")?;
+                in_table(EQUILIBRIUM, "stiffening", stiffening, "equilibrium.")?;
             }
             if let Energy::Ogden { alpha, share } = eq.energy {
                 for p in 0..OGDEN_TERMS {
                     let key = format!("alpha{}", p + 1);
-                    check(EQUILIBRIUM, &key, alpha[p], "equilibrium.")?;
+                    in_table(EQUILIBRIUM, &key, alpha[p], "equilibrium.")?;
                     if share[p] > 0.0 && alpha[p].abs() < OGDEN_ALPHA_MIN {
                         return Err(NetworkError::OutOfBounds {
                             key: format!("equilibrium.{key}"),
@@ -235,7 +334,7 @@ impl Network {
                     }
                 }
                 for p in 1..OGDEN_TERMS {
-                    check(EQUILIBRIUM, &format!("share{}", p + 1), share[p], "equilibrium.")?;
+                    in_table(EQUILIBRIUM, &format!("share{}", p + 1), share[p], "equilibrium.")?;
                 }
                 if !(share[0] > 0.0 && (share.iter().sum::<f64>() - 1.0).abs() < 1e-12) {
                     return Err(NetworkError::OutOfBounds {
@@ -246,39 +345,26 @@ impl Network {
                 }
             }
             if let Some(m) = eq.mullins {
-                check(MULLINS, "r", m.r, "equilibrium.mullins.")?;
-                check(MULLINS, "m_MPa", m.m_mpa, "equilibrium.mullins.")?;
-                check(MULLINS, "beta", m.beta, "equilibrium.mullins.")?;
+                in_table(MULLINS, "r", m.r, "equilibrium.mullins.")?;
+                in_table(MULLINS, "m_MPa", m.m_mpa, "equilibrium.mullins.")?;
+                in_table(MULLINS, "beta", m.beta, "equilibrium.mullins.")?;
             }
         }
-        for (i, v) in self.viscous.iter().enumerate() {
-            let prefix = format!("viscous[{i}].");
-            check(VISCOUS, "E_MPa", v.e_mpa, &prefix)?;
-            check(VISCOUS, "tau_s", v.tau_s, &prefix)?;
+        for kind in PARTS {
+            let of_kind: Vec<&Arc<dyn Part>> = self.parts.iter().filter(|p| std::ptr::eq(p.kind(), *kind)).collect();
+            if of_kind.len() > kind.max_count {
+                return Err(NetworkError::TooMany { table: kind.table, count: of_kind.len(), max: kind.max_count });
+            }
+            for (i, p) in of_kind.iter().enumerate() {
+                for (s, v) in kind.parameters.iter().zip(p.values()) {
+                    check(*s, v, kind.flat_key(i, s.key))?;
+                }
+            }
         }
-        if let Some(pl) = &self.plastic {
-            check(PLASTIC, "E_MPa", pl.e_mpa, "plastic.")?;
-            check(PLASTIC, "yield_MPa", pl.yield_mpa, "plastic.")?;
-            check(PLASTIC, "hardening_MPa", pl.hardening_mpa, "plastic.")?;
-        }
-        if let Some(c) = self.damper_mpa_s {
-            check(DAMPER, "c_MPa_s", c, "damper.")?;
-        }
-        if self.equilibrium.is_none()
-            && self.viscous.is_empty()
-            && self.plastic.is_none()
-            && self.damper_mpa_s.is_none()
-        {
+        if self.equilibrium.is_none() && self.parts.is_empty() {
             return Err(NetworkError::Empty);
         }
         Ok(())
-    }
-}
-
-impl Network {
-    /// Where the plastic network's history starts.
-    fn plastic_offset(&self) -> usize {
-        HISTORY_BASE + HISTORY_PER_NETWORK * self.viscous.len()
     }
 }
 
@@ -288,7 +374,7 @@ impl PointLaw for Network {
     }
 
     fn history_len(&self) -> usize {
-        self.plastic_offset() + if self.plastic.is_some() { plastic::HISTORY } else { 0 }
+        HISTORY_BASE + self.parts.iter().map(|p| p.history_len()).sum::<usize>()
     }
 
     fn initial_history(&self, h: &mut [f64]) {
@@ -298,9 +384,7 @@ impl PointLaw for Network {
     }
 
     fn small_strain_modulus(&self) -> f64 {
-        self.equilibrium.map_or(0.0, |e| e.e_mpa)
-            + self.viscous.iter().map(|v| v.e_mpa).sum::<f64>()
-            + self.plastic.map_or(0.0, |p| p.e_mpa)
+        self.equilibrium.map_or(0.0, |e| e.e_mpa) + self.parts.iter().map(|p| p.small_strain_modulus()).sum::<f64>()
     }
 
     fn update(&self, h: &Matrix3<f64>, dt_s: f64, old: &[f64], new: &mut [f64]) -> Result<PointResponse, LawFailure> {
@@ -312,7 +396,6 @@ impl PointLaw for Network {
         }
         let f_inv = f.try_inverse().ok_or(LawFailure::Inverted { det: j })?;
         let f_inv_t = f_inv.transpose();
-        let lame = hencky::unit_lame(self.poisson);
         let mut p = Matrix3::zeros();
         let mut tangent = Tangent::zeros();
         new.copy_from_slice(old);
@@ -323,56 +406,15 @@ impl PointLaw for Network {
             tangent += te;
             new[6] = w_max;
         }
-        for (i, v) in self.viscous.iter().enumerate() {
-            let o = HISTORY_BASE + HISTORY_PER_NETWORK * i;
-            let a_dev = sym_from(&old[o..o + 6]);
-            let s_n = sym_from(&old[o + 6..o + 12]);
-            let x = dt_s / v.tau_s;
-            let (decay, phi) = ((-x).exp(), phi1(x));
-            let (ps, ts, _) = hencky::spring(h, &f_inv_t, &a_dev, v.e_mpa, lame);
-            // The old stress carried into the current frame: the mean of its push
-            // forward as a contravariant (F S_n F^T) and as a covariant
-            // (F^-T M_n F^-1, M_n = C_n S_n C_n) tensor, as Kirchhoff stresses.
-            let c_n = (Matrix3::identity() + sym_from(&old[0..6])).try_inverse().ok_or(LawFailure::NonFinite)?;
-            let m_n = c_n * s_n * c_n;
-            let c_inv = f_inv * f_inv_t;
-            let w = 0.5 * (decay - phi);
-            let pv = ps * phi + (f * s_n + f_inv_t * m_n * c_inv) * w;
-            tangent += ts * phi;
-            for k in 0..3 {
-                for l in 0..3 {
-                    let mut df = Matrix3::zeros();
-                    df[(k, l)] = 1.0;
-                    let d_finv_t = -f_inv_t * df.transpose() * f_inv_t;
-                    let d_c_inv = d_finv_t.transpose() * f_inv_t + f_inv * d_finv_t;
-                    let dp = (df * s_n + d_finv_t * m_n * c_inv + f_inv_t * m_n * d_c_inv) * w;
-                    for i in 0..3 {
-                        for jj in 0..3 {
-                            tangent[(3 * i + jj, 3 * k + l)] += dp[(i, jj)];
-                        }
-                    }
-                }
-            }
-            p += pv;
-            // The new state from the stress: A - I = F^-1 (b_e - I) F^-T + (C^-1 - I).
-            let tau = hencky::symmetrize(&(pv * f.transpose()));
-            let eps_e = hencky::hooke_inverse(v.e_mpa, lame, &tau);
-            let b_e_dev = hencky::sym_exp_m1(&(eps_e * 2.0));
-            let a_new = f_inv * b_e_dev * f_inv_t + hencky::inverse_right_deviation(h, &f_inv);
-            sym_to(&hencky::symmetrize(&a_new), &mut new[o..o + 6]);
-            sym_to(&hencky::symmetrize(&(f_inv * tau * f_inv_t)), &mut new[o + 6..o + 12]);
-        }
-        if let Some(pl) = &self.plastic {
-            let o = self.plastic_offset();
-            let (pp, tp) = plastic::respond(pl, h, &f_inv, self.poisson, &old[o..o + plastic::HISTORY], &mut new[o..]);
+        let kinematics =
+            Kinematics { h, f, f_inv, f_inv_t, c_n_inv_dev: sym_from(&old[0..6]), poisson: self.poisson, dt_s };
+        let mut o = HISTORY_BASE;
+        for part in &self.parts {
+            let n = part.history_len();
+            let (pp, tp) = part.respond(&kinematics, &old[o..o + n], &mut new[o..o + n])?;
             p += pp;
             tangent += tp;
-        }
-        if let Some(c) = self.damper_mpa_s {
-            let c_n_inv_dev = sym_from(&old[0..6]);
-            let (pd, td, _) = hencky::spring(h, &f_inv_t, &c_n_inv_dev, c / dt_s, lame);
-            p += pd;
-            tangent += td;
+            o += n;
         }
         sym_to(&hencky::inverse_right_deviation(h, &f_inv), &mut new[0..6]);
         if !(p.iter().all(|x| x.is_finite()) && tangent.iter().all(|x| x.is_finite())) {
@@ -388,17 +430,17 @@ mod tests {
     use crate::material::law::tangent_by_differences;
 
     fn full() -> Network {
-        Network {
-            poisson: 0.35,
-            equilibrium: Some(Equilibrium {
+        Network::new(0.35)
+            .with_equilibrium(Equilibrium {
                 energy: Energy::Exponential { stiffening: 1.5 },
                 e_mpa: 0.02,
                 mullins: Some(Mullins { r: 2.5, m_mpa: 2e-3, beta: 0.1 }),
-            }),
-            viscous: vec![ViscousNetwork { e_mpa: 0.015, tau_s: 2.0 }, ViscousNetwork { e_mpa: 0.01, tau_s: 40.0 }],
-            plastic: Some(PlasticNetwork { e_mpa: 0.04, yield_mpa: 1e-3, hardening_mpa: 5e-3 }),
-            damper_mpa_s: Some(5e-3),
-        }
+            })
+            .with(ViscousNetwork { e_mpa: 0.015, tau_s: 2.0 })
+            .with(ViscousNetwork { e_mpa: 0.01, tau_s: 40.0 })
+            .with(PlasticNetwork { e_mpa: 0.04, yield_mpa: 1e-3, hardening_mpa: 5e-3 })
+            .with(FlowNetwork { e_mpa: 0.01, stress_mpa: 3e-3, exponent: 2.5 })
+            .with(Damper { c_mpa_s: 5e-3 })
     }
 
     /// A history after a few steps along a non-proportional path, so that every
@@ -466,13 +508,7 @@ mod tests {
     /// `exp(-dt / tau)` exactly.
     #[test]
     fn a_hold_relaxes_each_network_exponentially() {
-        let net = Network {
-            poisson: 0.3,
-            equilibrium: None,
-            viscous: vec![ViscousNetwork { e_mpa: 0.02, tau_s: 3.0 }],
-            plastic: None,
-            damper_mpa_s: None,
-        };
+        let net = Network::new(0.3).with(ViscousNetwork { e_mpa: 0.02, tau_s: 3.0 });
         let f = Matrix3::new(1.1, 0.05, 0.0, 0.0, 0.6, 0.0, 0.0, 0.0, 1.2);
         let mut h = vec![0.0; net.history_len()];
         net.initial_history(&mut h);
@@ -487,9 +523,10 @@ mod tests {
     #[test]
     fn the_table_refuses_out_of_bounds_values() {
         let mut net = full();
-        net.viscous[1].tau_s = -1.0;
+        net.parts[1] = Arc::new(ViscousNetwork { e_mpa: 0.01, tau_s: -1.0 });
         assert_eq!(net.validate().unwrap_err().to_string(), "viscous[1].tau_s = -1: must lie in (0, 1000000000]");
-        let empty = Network { poisson: 0.3, equilibrium: None, viscous: vec![], plastic: None, damper_mpa_s: None };
-        assert_eq!(empty.validate(), Err(NetworkError::Empty));
+        assert_eq!(Network::new(0.3).validate(), Err(NetworkError::Empty));
+        let crowded = Network::new(0.3).with(Damper { c_mpa_s: 1.0 }).with(Damper { c_mpa_s: 2.0 });
+        assert_eq!(crowded.validate(), Err(NetworkError::TooMany { table: "damper", count: 2, max: 1 }));
     }
 }

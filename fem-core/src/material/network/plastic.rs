@@ -29,10 +29,13 @@
 //! History (7 values): `Cp^-1 - I` as `[xx, yy, zz, xy, xz, yz]`, then the
 //! equivalent plastic strain `alpha`.
 
+use std::sync::Arc;
+
 use nalgebra::Matrix3;
 
 use super::hencky::{self, eigen, symmetrize};
-use crate::material::law::Tangent;
+use super::part::{Kinematics, Part, PartKind};
+use crate::material::law::{LawFailure, ParameterSpec, Start, Tangent};
 
 /// The history length of a plastic network.
 pub(crate) const HISTORY: usize = 7;
@@ -49,6 +52,48 @@ pub struct PlasticNetwork {
     pub hardening_mpa: f64,
 }
 
+/// `[plastic]`: one plastic network.
+pub static KIND: PartKind = PartKind {
+    table: "plastic",
+    meaning: "a plastic network: the permanent set",
+    max_count: 1,
+    parameters: &[
+        ParameterSpec::new("E_MPa", "the spring's Young's modulus", "MPa", (0.0, true), 1e4, None)
+            .fit(1e-5, 1e2, true)
+            .start(Start::OfModulus(0.25)),
+        // Yielding at a tenth of the apparent stress at 20 % strain.
+        ParameterSpec::new("yield_MPa", "uniaxial yield stress", "MPa", (0.0, true), 1e4, None)
+            .fit(1e-6, 1e2, true)
+            .start(Start::OfModulus(0.02)),
+        ParameterSpec::new("hardening_MPa", "linear isotropic hardening modulus", "MPa", (0.0, false), 1e4, Some(0.0))
+            .fit(1e-6, 1e2, true)
+            .start(Start::OfModulus(0.1)),
+    ],
+    build: |v| Arc::new(PlasticNetwork { e_mpa: v[0], yield_mpa: v[1], hardening_mpa: v[2] }),
+};
+
+impl Part for PlasticNetwork {
+    fn kind(&self) -> &'static PartKind {
+        &KIND
+    }
+
+    fn values(&self) -> Vec<f64> {
+        vec![self.e_mpa, self.yield_mpa, self.hardening_mpa]
+    }
+
+    fn history_len(&self) -> usize {
+        HISTORY
+    }
+
+    fn small_strain_modulus(&self) -> f64 {
+        self.e_mpa
+    }
+
+    fn respond(&self, k: &Kinematics, old: &[f64], new: &mut [f64]) -> Result<(Matrix3<f64>, Tangent), LawFailure> {
+        Ok(respond(self, k.h, &k.f_inv, k.poisson, old, new))
+    }
+}
+
 /// The plastic network's response at `F = I + h`: the first Piola-Kirchhoff
 /// stress and its tangent; writes the new history into `new`.
 pub(crate) fn respond(
@@ -59,12 +104,40 @@ pub(crate) fn respond(
     old: &[f64],
     new: &mut [f64],
 ) -> (Matrix3<f64>, Tangent) {
+    let alpha_n = old[6];
+    let (p, tangent, dgamma) = radial_return(net.e_mpa, h, f_inv, poisson, old, new, |s_norm, mu| {
+        let radius = (2.0f64 / 3.0).sqrt() * (net.yield_mpa + net.hardening_mpa * alpha_n);
+        let yielding = s_norm - radius;
+        (yielding > 0.0).then(|| {
+            (yielding / (2.0 * mu + 2.0 / 3.0 * net.hardening_mpa), 1.0 / (1.0 + net.hardening_mpa / (3.0 * mu)))
+        })
+    });
+    new[6] = alpha_n + (2.0f64 / 3.0).sqrt() * dgamma;
+    (p, tangent)
+}
+
+/// The exponential map's radial return of a Hencky spring of modulus `e_mpa`
+/// on `F = Fe Fp`, `Cp_n^-1 - I` in `old[0..6]` (module docs), for any
+/// isochoric flow whose multiplier depends on the trial stress only:
+/// `rule(|s_tr|, mu)` gives `None` when the step is elastic, otherwise the
+/// multiplier `dgamma > 0` and the flow's stiffness share
+/// `1 / (1 + R'(dgamma) / (2 mu))`, `R` the return's radius `|s|` as a
+/// function of `dgamma` (`2/3 H` for linear hardening). Writes `Cp^-1 - I`
+/// into `new[0..6]`; returns `P`, its exact tangent and `dgamma`.
+pub(crate) fn radial_return(
+    e_mpa: f64,
+    h: &Matrix3<f64>,
+    f_inv: &Matrix3<f64>,
+    poisson: f64,
+    old: &[f64],
+    new: &mut [f64],
+    rule: impl Fn(f64, f64) -> Option<(f64, f64)>,
+) -> (Matrix3<f64>, Tangent, f64) {
     let f_inv_t = f_inv.transpose();
     let (lambda1, mu1) = hencky::unit_lame(poisson);
-    let mu = net.e_mpa * mu1;
-    let bulk = net.e_mpa * (lambda1 + 2.0 * mu1 / 3.0);
+    let mu = e_mpa * mu1;
+    let bulk = e_mpa * (lambda1 + 2.0 * mu1 / 3.0);
     let cp_inv_dev = super::sym_from(&old[0..6]);
-    let alpha_n = old[6];
     let f = Matrix3::identity() + h;
 
     // The trial elastic strain, in the principal frame of b_tr = F Cp_n^-1 F^T.
@@ -73,14 +146,13 @@ pub(crate) fn respond(
     let mean = (eps[0] + eps[1] + eps[2]) / 3.0;
     let dev = [eps[0] - mean, eps[1] - mean, eps[2] - mean];
     let s_norm = 2.0 * mu * (dev[0] * dev[0] + dev[1] * dev[1] + dev[2] * dev[2]).sqrt();
-    let radius = (2.0f64 / 3.0).sqrt() * (net.yield_mpa + net.hardening_mpa * alpha_n);
-    let yielding = s_norm - radius;
-    let (dgamma, n) = if yielding > 0.0 {
-        let dgamma = yielding / (2.0 * mu + 2.0 / 3.0 * net.hardening_mpa);
-        let n = [2.0 * mu * dev[0] / s_norm, 2.0 * mu * dev[1] / s_norm, 2.0 * mu * dev[2] / s_norm];
-        (dgamma, n)
-    } else {
-        (0.0, [0.0; 3])
+    let flow = if s_norm > 0.0 { rule(s_norm, mu) } else { None };
+    let (dgamma, share, n) = match flow {
+        Some((dgamma, share)) => {
+            let n = [2.0 * mu * dev[0] / s_norm, 2.0 * mu * dev[1] / s_norm, 2.0 * mu * dev[2] / s_norm];
+            (dgamma, share, n)
+        }
+        None => (0.0, 1.0, [0.0; 3]),
     };
     let eps_e = [eps[0] - dgamma * n[0], eps[1] - dgamma * n[1], eps[2] - dgamma * n[2]];
     let tr = 3.0 * mean;
@@ -92,7 +164,7 @@ pub(crate) fn respond(
     // The consistent modulus on the trial strain, as a map of symmetric tensors.
     let (theta, theta_bar) = if dgamma > 0.0 {
         let theta = 1.0 - 2.0 * mu * dgamma / s_norm;
-        (theta, 1.0 / (1.0 + net.hardening_mpa / (3.0 * mu)) - (1.0 - theta))
+        (theta, share - (1.0 - theta))
     } else {
         (1.0, 0.0)
     };
@@ -110,8 +182,7 @@ pub(crate) fn respond(
     let b_e_dev = q * Matrix3::from_diagonal(&eps_e.map(|e| (2.0 * e).exp_m1()).into()) * qt;
     let cp_inv_new = f_inv * b_e_dev * f_inv_t + hencky::inverse_right_deviation(h, f_inv);
     super::sym_to(&symmetrize(&cp_inv_new), &mut new[0..6]);
-    new[6] = alpha_n + (2.0f64 / 3.0).sqrt() * dgamma;
-    (p, tangent)
+    (p, tangent, dgamma)
 }
 
 #[cfg(test)]
