@@ -1,6 +1,6 @@
 //! The network model on the Newton path against closed forms and the chain.
 
-use fem_core::material::network::{Energy, Equilibrium, Network, PlasticNetwork, ViscousNetwork};
+use fem_core::material::network::{Energy, Equilibrium, FlowNetwork, Network, PlasticNetwork, ViscousNetwork};
 use fem_core::material::Material;
 use fem_core::mesh;
 use fem_core::press::{self, Attachment, PressResult, Protocol, Settings, SolidPress};
@@ -242,6 +242,92 @@ fn a_plastic_network_in_uniaxial_compression_and_reverse_yield_follows_the_1d_el
     assert!(worst < 1e-8, "worst {worst:.3e}");
     // The set: back at its height the block pulls on the plates (it would rest shorter).
     assert!(last.bottom_force_n.abs() > 0.1 * peak && p < -0.1);
+}
+
+/// A power-law flow network (Norton, n = 2) pushed to 50 % strain between
+/// frictionless plates and held, against the 1D law written here. Under
+/// uniaxial stress the Hencky spring is `tau = E (eps - p)` in the axial log
+/// strain and the isochoric flow is `dp/dt = sign(tau) (|tau| / sigma_0)^n`.
+/// Two checks: the engine's backward-Euler return equals the same 1D scheme
+/// along its step ends (to 1e-8 of the peak), and it converges to an RK4
+/// integration of the law at first order in the step (measured).
+#[test]
+fn a_flow_network_in_uniaxial_compression_follows_the_1d_law_at_first_order() {
+    let (e, nu, sigma0, n) = (0.03, 0.3, 4e-3, 2.0);
+    let net = Network::new(nu).with(FlowNetwork { e_mpa: e, stress_mpa: sigma0, exponent: n });
+    let h = 10.0;
+    let (depth, push_s, end_s) = (5.0, 4.0, 8.0);
+    let protocol = frictionless(depth, push_s, end_s);
+    let eps_at = |t: f64| (1.0 - protocol.displacement(t) / h).ln();
+    let rate = |tau: f64| tau.signum() * (tau.abs() / sigma0).powf(n);
+    let area = 36.0;
+    let nominal = |t: f64, tau: f64| -tau / (1.0 - protocol.displacement(t) / h) * area;
+    // RK4 on dp/dt with the strain's exact time course.
+    let reference = |t_end: f64| {
+        let steps = 400_000;
+        let dt = t_end / steps as f64;
+        let mut p = 0.0;
+        for i in 0..steps {
+            let t = i as f64 * dt;
+            let f = |t: f64, p: f64| rate(e * (eps_at(t) - p));
+            let k1 = f(t, p);
+            let k2 = f(t + dt / 2.0, p + dt / 2.0 * k1);
+            let k3 = f(t + dt / 2.0, p + dt / 2.0 * k2);
+            let k4 = f(t + dt, p + dt * k3);
+            p += dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+        }
+        nominal(t_end, e * (eps_at(t_end) - p))
+    };
+    let times = [push_s, end_s];
+    let want: Vec<f64> = times.iter().map(|&t| reference(t)).collect();
+    let mut errors = Vec::new();
+    for steps in [8usize, 16, 32] {
+        let problem = SolidPress::new_3d(
+            mesh::block([6.0, h, 6.0], 3.0, "m").unwrap(),
+            vec![Material::network(net.clone()).unwrap()],
+            protocol.clone(),
+        )
+        .unwrap();
+        let settings = Settings { fixed_dt_s: Some(push_s / steps as f64), ..Settings::default() };
+        let result = run(&problem, &settings);
+        // The same backward-Euler return in 1D along the engine's step ends:
+        // tau = E (eps - p_n) - E dp with dp = dt (|tau| / sigma0)^n sign(tau),
+        // solved by bisection on tau between 0 and the trial stress.
+        let (mut p, mut t_prev, mut worst_scheme) = (0.0f64, 0.0f64, 0.0f64);
+        for s in &result.steps {
+            let dt = s.t_s - t_prev;
+            t_prev = s.t_s;
+            let trial = e * (eps_at(s.t_s) - p);
+            let (mut lo, mut hi) = (0.0f64, trial.abs());
+            for _ in 0..200 {
+                let mid = 0.5 * (lo + hi);
+                if mid + e * dt * (mid / sigma0).powf(n) > trial.abs() {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+            let tau = trial.signum() * 0.5 * (lo + hi);
+            p += (trial - tau) / e;
+            worst_scheme = worst_scheme.max((s.bottom_force_n - nominal(s.t_s, tau)).abs() / want[0].abs());
+        }
+        assert!(worst_scheme < 1e-8, "{steps} steps: the 1D scheme differs by {worst_scheme:.3e} of the peak");
+        let err = times
+            .iter()
+            .zip(&want)
+            .map(|(&t, &w)| {
+                let s = result.steps.iter().find(|s| (s.t_s - t).abs() < 1e-9).expect("a step lands there");
+                (s.bottom_force_n - w).abs() / want[0].abs()
+            })
+            .fold(0.0, f64::max);
+        eprintln!("flow network, {steps} steps per push: error {err:.3e} of the peak, scheme {worst_scheme:.1e}");
+        errors.push(err);
+    }
+    let orders: Vec<f64> = errors.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
+    eprintln!("orders {orders:?}");
+    assert!(orders.iter().all(|&p| p > 0.85 && p < 1.2), "orders {orders:?}");
+    // The flow matters: the held stress relaxes well below the peak.
+    assert!(want[1].abs() < 0.7 * want[0].abs(), "{want:?}");
 }
 
 /// A double compression with a plate tool that leaves the specimen and touches

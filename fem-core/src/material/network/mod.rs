@@ -4,9 +4,14 @@
 //!
 //! ## Parts (all in parallel, each on the whole deformation)
 //!
-//! - an optional **equilibrium** network ([`Equilibrium`]): a neo-Hookean or
-//!   exponential isochoric energy with `U(J) = K/2 (J - 1)^2`, optionally with
-//!   Ogden-Roxburgh softening; absent, the material is a fluid like the chain;
+//! - an optional **equilibrium** network ([`Equilibrium`]): a neo-Hookean,
+//!   exponential or Ogden isochoric energy with `U(J) = K/2 (J - 1)^2`,
+//!   optionally with Ogden-Roxburgh softening; absent, the material is a fluid
+//!   like the chain;
+//!
+//! and the **parts** ([`part`]: each one file behind the [`Part`] trait, listed
+//! once in the registry [`PARTS`] that readers and fitters follow):
+//!
 //! - `N >= 0` **viscous networks** ([`ViscousNetwork`]): `F = Fe Fv`, a Hencky
 //!   spring of modulus `E_i` on `Fe` and Newtonian flow of relaxation time
 //!   `tau_i` (Reese-Govindjee with the viscosity proportional to the spring's
@@ -16,6 +21,9 @@
 //!   `F = Fe Fp` with von Mises yield and linear isotropic hardening, by the
 //!   exponential map's closed-form radial return ([`plastic`]); it holds the
 //!   permanent set against the other networks;
+//! - up to two **power-law flow** networks ([`FlowNetwork`]): a Hencky spring
+//!   whose shear flows by Norton's law, by the plastic network's radial return
+//!   with a rate-dependent radius ([`flow`]);
 //! - an optional parallel Newtonian **damper** of Young-type viscosity `c`
 //!   [MPa s], acting on the rate of the logarithmic strain.
 //!
@@ -64,9 +72,10 @@
 //!
 //! ## History layout (per point)
 //!
-//! `[C_n^-1 - I (6), W_max (1), per viscous network: A - I (6), S_n (6),
-//! then, with a plastic network, Cp^-1 - I (6), alpha (1)]`,
-//! symmetric tensors as `[xx, yy, zz, xy, xz, yz]`. The configurations are kept
+//! `[C_n^-1 - I (6), W_max (1)]`, then each part's own history in the order of
+//! [`Network::parts`] (a viscous network: `A - I (6), S_n (6)`; the plastic
+//! network: `Cp^-1 - I (6), alpha (1)`; a flow network: `Cv^-1 - I (6)`; the
+//! damper: none), symmetric tensors as `[xx, yy, zz, xy, xz, yz]`. The configurations are kept
 //! as deviations from the identity, so that small strains keep their precision
 //! ([`hencky`]).
 
