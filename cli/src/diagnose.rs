@@ -148,7 +148,9 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
     let calibration = read(&args.calibrate)?;
     let validation = read(&args.validate)?;
     let all: Vec<&wagashi_io::Bundle> = calibration.iter().chain(&validation).collect();
-    let output = crate::press::prepare_output(&all, &args.output, args.force)?;
+    let mut inputs: Vec<(&str, &std::path::Path)> = all.iter().map(|b| ("bundle", b.dir.as_path())).collect();
+    inputs.extend(args.materials.iter().map(|m| ("materials file", m.as_path())));
+    let output = crate::press::prepare_output(&inputs, &args.output, args.force)?;
     let options = DiagnosisOptions {
         starts: args.starts as usize,
         seed: args.seed,

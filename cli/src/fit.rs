@@ -127,7 +127,9 @@ pub fn run(args: &FitArgs) -> anyhow::Result<()> {
             bail!("{}: has no measured data ([data] force or markers): nothing to fit", b.experiment_file().display());
         }
     }
-    let output = crate::press::prepare_output(&bundles.iter().collect::<Vec<_>>(), &args.output, args.force)?;
+    let mut inputs: Vec<(&str, &std::path::Path)> = bundles.iter().map(|b| ("bundle", b.dir.as_path())).collect();
+    inputs.extend(args.materials.iter().map(|m| ("materials file", m.as_path())));
+    let output = crate::press::prepare_output(&inputs, &args.output, args.force)?;
     // A campaign whose every trial is homogeneous is solved exactly on one cell
     // through each specimen (`Bundle::homogeneous_size_mm`).
     let homogeneous: Option<Vec<f64>> = bundles.iter().map(|b| b.homogeneous_size_mm(args.axisymmetric)).collect();

@@ -332,11 +332,12 @@ fn prepare_output(input: &Path, target: &Path, replace: bool) -> anyhow::Result<
             input.display()
         );
     }
-    let previous = target.join(wagashi_io::atomic::OUTPUT_MARKER_FILE).is_file();
-    if previous && !replace {
+    if wagashi_io::atomic::is_previous_output(target) && !replace {
         bail!("{}: exists (a previous wagashi output); pass --force to replace it", target.display());
     }
-    Ok(AtomicDir::new(target)?)
+    let dir = AtomicDir::new(target)?;
+    crate::press::report_stale(&dir);
+    Ok(dir)
 }
 
 /// One line per imported file, for stderr.
