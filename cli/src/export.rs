@@ -88,8 +88,10 @@ pub struct ExportArgs {
 /// `wagashi export`.
 pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
     let dir = &args.output_dir;
-    let target = GltfTarget::check(&args.gltf, &[("press output", dir.as_path())], None)?;
+    // The source first (what is wrong with it is the first thing to tell), then
+    // the target, which may not lie inside it; both before anything is written.
     let run = PressOutput::read(dir)?;
+    let target = GltfTarget::check(&args.gltf, &[("press output", dir.as_path())], None)?;
     let scene = run.scene()?;
     let bytes = glb_bytes(&scene).with_context(|| format!("{}: building the glTF", dir.display()))?;
     target.write(&bytes, None)?;
