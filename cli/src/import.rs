@@ -159,7 +159,8 @@ pub struct CommonArgs {
     pub every: u32,
 
     /// Replace an OUT_DIR/STEM that holds a previous wagashi output (a folder
-    /// with summary.json); any other existing folder is never replaced.
+    /// whose wagashi-manifest.json lists every file in it; only those files are
+    /// removed); any other existing folder is never replaced.
     #[arg(long)]
     pub force: bool,
 }
