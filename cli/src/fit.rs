@@ -92,9 +92,15 @@ pub struct FitArgs {
     #[arg(long = "marker-sigma-mm", value_name = "MM", default_value_t = 0.05, value_parser = positive_number, allow_negative_numbers = true)]
     pub marker_sigma_mm: f64,
 
-    /// Replace OUT when it holds a previous wagashi output.
+    /// Replace OUT when it holds a previous wagashi output (a folder whose
+    /// wagashi-manifest.json lists every file in it; only those files are removed).
     #[arg(long)]
     pub force: bool,
+
+    /// Fit even when a trial's estimated memory (6 V / h^3 tetrahedra in 3D)
+    /// exceeds the memory the machine has available.
+    #[arg(long = "allow-large")]
+    pub allow_large: bool,
 
     /// F-bar patches for network materials near incompressibility (as
     /// `press --fbar`); refused without a network material.
@@ -134,6 +140,17 @@ pub fn run(args: &FitArgs) -> anyhow::Result<()> {
     // through each specimen (`Bundle::homogeneous_size_mm`).
     let homogeneous: Option<Vec<f64>> = bundles.iter().map(|b| b.homogeneous_size_mm(args.axisymmetric)).collect();
     let size_mm = args.size_mm.or_else(|| homogeneous.map(|sizes| sizes.into_iter().fold(0.0, f64::max)));
+    if !args.axisymmetric {
+        // Each 3D trial's mesh must fit in memory (a homogeneous campaign's one cell always does).
+        for b in bundles.iter().filter(|b| b.experiment.dimension == 3) {
+            let size = size_mm.or_else(|| b.default_size_mm());
+            if let (Some(volume), Some(h)) = (b.volume_mm3(), size) {
+                let flag = if args.size_mm.is_some() { "--size-mm" } else { "the default size" };
+                crate::outputs::check_memory(volume, h, flag, args.allow_large)
+                    .map_err(|e| anyhow!("{}: {e}", b.experiment_file().display()))?;
+            }
+        }
+    }
     let mut campaign = Campaign::new(&bundles, &start, size_mm, args.axisymmetric)?;
     campaign.marker_sigma_mm = args.marker_sigma_mm;
     if args.fbar {

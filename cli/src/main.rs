@@ -85,6 +85,11 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         // Output piped into a program that stopped reading (`| head`): not an error.
         Err(err) if is_broken_pipe(&err) => ExitCode::SUCCESS,
+        // The interrupt handler removed the output being written and ends the
+        // process itself (status 130): wait for it.
+        Err(_) if outputs::interrupted() => loop {
+            std::thread::park();
+        },
         Err(err) => {
             // One line, as ripgrep does: the context chain joined with ": ".
             eprintln!("error: {}", one_line(&chain_line(err.chain())));

@@ -156,12 +156,21 @@ fn refuse_if_too_large(volume_mm3: f64, size_mm: f64, size_flag: &str, available
 
 const GIB: f64 = 1024.0 * 1024.0 * 1024.0;
 
+static INTERRUPTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Whether an interrupt is being handled: the handler ends the process (status
+/// 130); an error the removal of the temporaries caused meanwhile is not reported.
+pub fn interrupted() -> bool {
+    INTERRUPTED.load(std::sync::atomic::Ordering::SeqCst)
+}
+
 /// Installs the Ctrl-C / SIGTERM handler: it waits for a folder being moved
 /// into place, removes the temporary files and folders of the outputs being
 /// written, prints one line and exits with status 130 (128 + SIGINT), so that an
 /// interrupted run leaves neither a partial output nor a hidden temporary.
 pub fn install_interrupt_handler() {
     let installed = ctrlc::set_handler(|| {
+        INTERRUPTED.store(true, std::sync::atomic::Ordering::SeqCst);
         let removed = wagashi_io::atomic::remove_pending_for_exit();
         let what = match removed.len() {
             0 => "nothing was written".to_string(),
