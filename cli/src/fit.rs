@@ -140,17 +140,9 @@ pub fn run(args: &FitArgs) -> anyhow::Result<()> {
     // through each specimen (`Bundle::homogeneous_size_mm`).
     let homogeneous: Option<Vec<f64>> = bundles.iter().map(|b| b.homogeneous_size_mm(args.axisymmetric)).collect();
     let size_mm = args.size_mm.or_else(|| homogeneous.map(|sizes| sizes.into_iter().fold(0.0, f64::max)));
-    if !args.axisymmetric {
-        // Each 3D trial's mesh must fit in memory (a homogeneous campaign's one cell always does).
-        for b in bundles.iter().filter(|b| b.experiment.dimension == 3) {
-            let size = size_mm.or_else(|| b.default_size_mm());
-            if let (Some(volume), Some(h)) = (b.volume_mm3(), size) {
-                let flag = if args.size_mm.is_some() { "--size-mm" } else { "the default size" };
-                crate::outputs::check_memory(volume, h, flag, args.allow_large)
-                    .map_err(|e| anyhow!("{}: {e}", b.experiment_file().display()))?;
-            }
-        }
-    }
+    // Each 3D trial's mesh must fit in memory (a homogeneous campaign's one cell always does).
+    let trials: Vec<&Bundle> = bundles.iter().collect();
+    crate::outputs::check_trials_memory(&trials, size_mm, args.size_mm.is_some(), args.axisymmetric, args.allow_large)?;
     let mut campaign = Campaign::new(&bundles, &start, size_mm, args.axisymmetric)?;
     campaign.marker_sigma_mm = args.marker_sigma_mm;
     if args.fbar {

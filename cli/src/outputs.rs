@@ -126,6 +126,30 @@ pub fn check_memory(volume_mm3: f64, size_mm: f64, size_flag: &str, allow_large:
     refuse_if_too_large(volume_mm3, size_mm, size_flag, available)
 }
 
+/// [`check_memory`] for each 3D trial of a campaign (`fit`, `diagnose`) at
+/// `size_mm`, else its default size; `size_given`: whether `--size-mm` was
+/// given (for the message). With `axisymmetric`, the trials are 2D sections and
+/// nothing is checked.
+pub fn check_trials_memory(
+    trials: &[&wagashi_io::Bundle],
+    size_mm: Option<f64>,
+    size_given: bool,
+    axisymmetric: bool,
+    allow_large: bool,
+) -> anyhow::Result<()> {
+    if axisymmetric {
+        return Ok(());
+    }
+    for b in trials.iter().filter(|b| b.experiment.dimension == 3) {
+        if let (Some(volume), Some(h)) = (b.volume_mm3(), size_mm.or_else(|| b.default_size_mm())) {
+            let flag = if size_given { "--size-mm" } else { "the default size" };
+            check_memory(volume, h, flag, allow_large)
+                .map_err(|e| anyhow::anyhow!("{}: {e}", b.experiment_file().display()))?;
+        }
+    }
+    Ok(())
+}
+
 fn refuse_if_too_large(volume_mm3: f64, size_mm: f64, size_flag: &str, available: f64) -> anyhow::Result<()> {
     let tets = estimated_tets(volume_mm3, size_mm);
     let needed = estimated_bytes(tets);

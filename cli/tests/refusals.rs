@@ -477,7 +477,7 @@ fn a_fixed_step_count_beyond_the_limit_is_refused_before_the_run() {
 
 /// The seed block at 0.3 mm (9.27M tetrahedra) is refused before meshing with
 /// one line naming the estimate, the available memory and the option, by
-/// `press` and by `fit`; where
+/// `press`, `fit` and `diagnose`; where
 /// the machine has the memory, the test says so and passes.
 #[test]
 fn a_mesh_beyond_the_available_memory_is_refused_before_meshing() {
@@ -508,6 +508,10 @@ fn a_mesh_beyond_the_available_memory_is_refused_before_meshing() {
     // fit checks each 3D trial the same way, naming it (the seed block with a measured force).
     let t = Trial::new();
     let args = ["fit", t.dir.to_str().unwrap(), "-o", "out", "--size-mm", "0.3"];
+    let line = assert_one_line_error(&wagashi_in(tmp.path(), args));
+    assert!(line.contains("experiment.toml: --size-mm 0.3") && line.contains("--allow-large"), "{line}");
+    assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0);
+    let args = ["diagnose", "--calibrate", t.dir.to_str().unwrap(), "-o", "out", "--size-mm", "0.3"];
     let line = assert_one_line_error(&wagashi_in(tmp.path(), args));
     assert!(line.contains("experiment.toml: --size-mm 0.3") && line.contains("--allow-large"), "{line}");
     assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0);
