@@ -20,7 +20,9 @@
 //! a surface entity with the physical group `boundary` (dimension 2, tag
 //! `number of regions + 1`); all nodes in one block on volume 1; tets in VTK
 //! order, which is Gmsh's (positive volume). Coordinates [mm], shortest
-//! round-trip form.
+//! round-trip form. A `$Comments` section (`written by wagashi`, which Gmsh and
+//! the reader above skip) marks the file as wagashi's, so that `wagashi mesh`
+//! replaces it without `--force`.
 
 use std::collections::{BTreeMap, HashMap};
 use std::fmt::Write as _;
