@@ -65,6 +65,8 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         output: args.output.clone(),
         replace: true,
         volumetric: fem_core::press::Volumetric::Standard,
+        allow_large: false,
+        other_inputs: Vec::new(),
     };
     let mut out = std::io::stdout().lock();
     writeln!(out, "The seed paper's material 1 trial (embedded {DEMO_BUNDLE_DIR}), 3D, x_force parameters")?;

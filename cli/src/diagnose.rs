@@ -105,9 +105,15 @@ pub struct DiagnoseArgs {
     #[arg(long = "marker-sigma-mm", value_name = "MM", default_value_t = 0.05, value_parser = positive_number, allow_negative_numbers = true)]
     pub marker_sigma_mm: f64,
 
-    /// Replace OUT when it holds a previous wagashi output.
+    /// Replace OUT when it holds a previous wagashi output (a folder whose
+    /// wagashi-manifest.json lists every file in it; only those files are removed).
     #[arg(long)]
     pub force: bool,
+
+    /// Run even when a trial's estimated memory (6 V / h^3 tetrahedra in 3D)
+    /// exceeds the memory the machine has available.
+    #[arg(long = "allow-large")]
+    pub allow_large: bool,
 }
 
 /// `--effects`: `all` or ids.
@@ -148,7 +154,16 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
     let calibration = read(&args.calibrate)?;
     let validation = read(&args.validate)?;
     let all: Vec<&wagashi_io::Bundle> = calibration.iter().chain(&validation).collect();
-    let output = crate::press::prepare_output(&all, &args.output, args.force)?;
+    let mut inputs: Vec<(&str, &std::path::Path)> = all.iter().map(|b| ("bundle", b.dir.as_path())).collect();
+    inputs.extend(args.materials.iter().map(|m| ("materials file", m.as_path())));
+    crate::outputs::check_trials_memory(
+        &all,
+        args.size_mm,
+        args.size_mm.is_some(),
+        args.axisymmetric,
+        args.allow_large,
+    )?;
+    let output = crate::press::prepare_output(&inputs, &args.output, args.force)?;
     let options = DiagnosisOptions {
         starts: args.starts as usize,
         seed: args.seed,

@@ -38,7 +38,7 @@ use wagashi_io::gltf::{
     glb_bytes, read_pvd, AnimatedTool, FrameSeries, GltfScene, SpecimenSurface, ToolKey, VtuShape, DEFAULT_SEGMENTS,
     MAX_FRAMES,
 };
-use wagashi_io::{read_bundle, write_atomic, Bundle};
+use wagashi_io::{read_bundle, write_atomic};
 
 /// Frames (intervals from 0 to `end_s`) of `press --gltf` without `--pvd`.
 pub const DEFAULT_FRAMES: u32 = 60;
@@ -88,8 +88,10 @@ pub struct ExportArgs {
 /// `wagashi export`.
 pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
     let dir = &args.output_dir;
-    let target = GltfTarget::check(&args.gltf, &[], None)?;
+    // The source first (what is wrong with it is the first thing to tell), then
+    // the target, which may not lie inside it; both before anything is written.
     let run = PressOutput::read(dir)?;
+    let target = GltfTarget::check(&args.gltf, &[("press output", dir.as_path())], None)?;
     let scene = run.scene()?;
     let bytes = glb_bytes(&scene).with_context(|| format!("{}: building the glTF", dir.display()))?;
     target.write(&bytes, None)?;
@@ -330,9 +332,11 @@ pub struct GltfTarget {
 }
 
 impl GltfTarget {
-    /// Refuses a name without `.glb`, a folder, an existing file that is not a
-    /// glTF binary, and a path inside one of the `inputs` (never modified).
-    pub fn check(path: &Path, inputs: &[&Bundle], output: Option<&Path>) -> anyhow::Result<Self> {
+    /// Refuses a name without `.glb`, a folder, a link, an existing file that is
+    /// not a glTF binary, and a path that is one of the `inputs` (`(what, path)`:
+    /// bundles, materials files, the folder `export` reads) or lies inside one
+    /// (inputs are never modified).
+    pub fn check(path: &Path, inputs: &[(&str, &Path)], output: Option<&Path>) -> anyhow::Result<Self> {
         let shown = path.display();
         if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb")) {
             bail!("{shown}: --gltf writes a binary glTF file, whose name must end in .glb");
@@ -340,6 +344,10 @@ impl GltfTarget {
         if path.is_dir() {
             bail!("{shown}: is a folder; --gltf needs a file name ending in .glb");
         }
+        if std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink()) {
+            bail!("{shown}: is a symbolic link; refusing to write through it");
+        }
+        crate::outputs::refuse_input_overlap("--gltf", path, inputs)?;
         if path.exists() {
             let mut magic = [0u8; 4];
             let is_glb = std::fs::File::open(path)
@@ -350,13 +358,6 @@ impl GltfTarget {
             }
         }
         let resolved = crate::press::resolve(path)?;
-        for bundle in inputs {
-            if let Ok(input) = bundle.dir.canonicalize() {
-                if resolved.starts_with(&input) {
-                    bail!("{shown}: lies inside the input bundle {} (inputs are never modified)", bundle.dir.display());
-                }
-            }
-        }
         let inside_output = match output {
             Some(out) => resolved.strip_prefix(crate::press::resolve(out)?).ok().map(Path::to_path_buf),
             None => None,

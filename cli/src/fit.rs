@@ -92,9 +92,15 @@ pub struct FitArgs {
     #[arg(long = "marker-sigma-mm", value_name = "MM", default_value_t = 0.05, value_parser = positive_number, allow_negative_numbers = true)]
     pub marker_sigma_mm: f64,
 
-    /// Replace OUT when it holds a previous wagashi output.
+    /// Replace OUT when it holds a previous wagashi output (a folder whose
+    /// wagashi-manifest.json lists every file in it; only those files are removed).
     #[arg(long)]
     pub force: bool,
+
+    /// Fit even when a trial's estimated memory (6 V / h^3 tetrahedra in 3D)
+    /// exceeds the memory the machine has available.
+    #[arg(long = "allow-large")]
+    pub allow_large: bool,
 
     /// F-bar patches for network materials near incompressibility (as
     /// `press --fbar`); refused without a network material.
@@ -127,11 +133,16 @@ pub fn run(args: &FitArgs) -> anyhow::Result<()> {
             bail!("{}: has no measured data ([data] force or markers): nothing to fit", b.experiment_file().display());
         }
     }
-    let output = crate::press::prepare_output(&bundles.iter().collect::<Vec<_>>(), &args.output, args.force)?;
+    let mut inputs: Vec<(&str, &std::path::Path)> = bundles.iter().map(|b| ("bundle", b.dir.as_path())).collect();
+    inputs.extend(args.materials.iter().map(|m| ("materials file", m.as_path())));
+    let output = crate::press::prepare_output(&inputs, &args.output, args.force)?;
     // A campaign whose every trial is homogeneous is solved exactly on one cell
     // through each specimen (`Bundle::homogeneous_size_mm`).
     let homogeneous: Option<Vec<f64>> = bundles.iter().map(|b| b.homogeneous_size_mm(args.axisymmetric)).collect();
     let size_mm = args.size_mm.or_else(|| homogeneous.map(|sizes| sizes.into_iter().fold(0.0, f64::max)));
+    // Each 3D trial's mesh must fit in memory (a homogeneous campaign's one cell always does).
+    let trials: Vec<&Bundle> = bundles.iter().collect();
+    crate::outputs::check_trials_memory(&trials, size_mm, args.size_mm.is_some(), args.axisymmetric, args.allow_large)?;
     let mut campaign = Campaign::new(&bundles, &start, size_mm, args.axisymmetric)?;
     campaign.marker_sigma_mm = args.marker_sigma_mm;
     if args.fbar {

@@ -159,7 +159,8 @@ pub struct CommonArgs {
     pub every: u32,
 
     /// Replace an OUT_DIR/STEM that holds a previous wagashi output (a folder
-    /// with summary.json); any other existing folder is never replaced.
+    /// whose wagashi-manifest.json lists every file in it; only those files are
+    /// removed); any other existing folder is never replaced.
     #[arg(long)]
     pub force: bool,
 }
@@ -332,11 +333,12 @@ fn prepare_output(input: &Path, target: &Path, replace: bool) -> anyhow::Result<
             input.display()
         );
     }
-    let previous = target.join(wagashi_io::atomic::OUTPUT_MARKER_FILE).is_file();
-    if previous && !replace {
+    if wagashi_io::atomic::is_previous_output(target) && !replace {
         bail!("{}: exists (a previous wagashi output); pass --force to replace it", target.display());
     }
-    Ok(AtomicDir::new(target)?)
+    let dir = AtomicDir::new(target)?;
+    crate::press::report_stale(&dir);
+    Ok(dir)
 }
 
 /// One line per imported file, for stderr.

@@ -22,7 +22,9 @@
 //!   STL or glTF surface (envelope mode), with a quality report.
 //!
 //! Errors: `main` prints one line, `error: CAUSE` (the causes joined with `: `),
-//! and exits with status 1; argument errors are clap's (status 2).
+//! and exits with status 1; argument errors are clap's (status 2). Ctrl-C or
+//! SIGTERM removes the unfinished outputs and exits with status 130 after one
+//! line ([`outputs`]).
 
 mod demo;
 mod diagnose;
@@ -30,6 +32,7 @@ mod export;
 mod fit;
 mod import;
 mod mesh;
+mod outputs;
 mod plot;
 mod press;
 mod progress;
@@ -77,10 +80,16 @@ fn run(cli: Cli) -> anyhow::Result<()> {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    outputs::install_interrupt_handler();
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         // Output piped into a program that stopped reading (`| head`): not an error.
         Err(err) if is_broken_pipe(&err) => ExitCode::SUCCESS,
+        // The interrupt handler removed the output being written and ends the
+        // process itself (status 130): wait for it.
+        Err(_) if outputs::interrupted() => loop {
+            std::thread::park();
+        },
         Err(err) => {
             // One line, as ripgrep does: the context chain joined with ": ".
             eprintln!("error: {}", one_line(&chain_line(err.chain())));

@@ -123,6 +123,12 @@ pub struct MeshArgs {
     /// A factor applied to the coordinates after the unit conversion.
     #[arg(long, value_name = "FACTOR", default_value_t = 1.0, value_parser = positive_number, allow_negative_numbers = true)]
     pub scale: f64,
+
+    /// Replace existing output files that wagashi did not write (OUT, with .node
+    /// also the .ele and .face beside it, and the report); files a wagashi
+    /// writer made are replaced without it.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// What the input was and what repair changed.
@@ -186,6 +192,7 @@ pub fn run(args: &MeshArgs) -> anyhow::Result<()> {
     if let Some(r) = &args.report {
         check_folder(r)?;
     }
+    check_outputs(args, format)?;
     let units = match &args.units {
         Some(u) => Some(u.parse::<LengthUnit>().context("--units")?),
         None => None,
@@ -276,6 +283,37 @@ pub fn run(args: &MeshArgs) -> anyhow::Result<()> {
         let text = serde_json::to_string_pretty(&json).context("formatting the report")?;
         write_atomic(path, (text + "\n").as_bytes())?;
         writeln!(out, "report: {}", path.display())?;
+    }
+    Ok(())
+}
+
+/// The files `-o OUT` writes: OUT, or for TetGen the three files of its stem.
+fn mesh_files(output: &Path, format: TetMeshFormat) -> Vec<PathBuf> {
+    match format {
+        TetMeshFormat::TetGen => ["node", "ele", "face"].iter().map(|e| output.with_extension(e)).collect(),
+        _ => vec![output.to_path_buf()],
+    }
+}
+
+/// Every output must stay off the input surface, and an existing file is
+/// replaced only when wagashi wrote it or with `--force`; the report may not
+/// be one of the mesh files.
+fn check_outputs(args: &MeshArgs, format: TetMeshFormat) -> anyhow::Result<()> {
+    let inputs = [("surface", args.surface.as_path())];
+    let meshes = mesh_files(&args.output, format);
+    for file in &meshes {
+        crate::outputs::refuse_input_overlap("-o", file, &inputs)?;
+        crate::outputs::refuse_foreign_file("-o", file, args.force)?;
+    }
+    if let Some(report) = &args.report {
+        crate::outputs::refuse_input_overlap("--report", report, &inputs)?;
+        crate::outputs::refuse_foreign_file("--report", report, args.force)?;
+        let resolved = crate::press::resolve(report)?;
+        for file in &meshes {
+            if crate::press::resolve(file)? == resolved {
+                bail!("{}: --report would overwrite the mesh written by -o; give it another name", report.display());
+            }
+        }
     }
     Ok(())
 }

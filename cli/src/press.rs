@@ -81,6 +81,10 @@ use crate::summary::{number, steps_csv, ForceComparison, Summary};
 /// The most force samples `--output-dt` may ask for.
 const MAX_OUTPUT_SAMPLES: f64 = 1e7;
 
+/// The most steps `--dt` may ask for: each takes at least one solve and keeps a
+/// step record, so more is hours of work and gigabytes of records.
+const MAX_FIXED_STEPS: f64 = 1e6;
+
 const PRESS_AFTER_HELP: &str = "\
 Examples:
   # The seed paper's material 1 trial, default element size (a quarter of the smallest side):
@@ -165,10 +169,16 @@ pub struct PressArgs {
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=10_000))]
     pub pvd: Option<u32>,
 
-    /// Replace OUT when it holds a previous wagashi output (a folder with
-    /// summary.json); any other existing folder is never replaced.
+    /// Replace OUT when it holds a previous wagashi output (a folder whose
+    /// wagashi-manifest.json lists every file in it; only those files are
+    /// removed); any other existing folder is never replaced.
     #[arg(long)]
     pub force: bool,
+
+    /// Run even when the estimated memory of the mesh (6 V / h^3 tetrahedra in
+    /// 3D) exceeds the memory the machine has available.
+    #[arg(long = "allow-large")]
+    pub allow_large: bool,
 
     /// Also write the run as an animated glTF 2.0 binary (name ending in .glb):
     /// the specimen's surface deforming (frames at the --pvd times, else 60
@@ -288,6 +298,11 @@ pub struct PressOptions {
     pub replace: bool,
     /// The Newton path's volumetric treatment (`--fbar`).
     pub volumetric: Volumetric,
+    /// Run a mesh whose estimated memory exceeds the available memory (`--allow-large`).
+    pub allow_large: bool,
+    /// Input files besides the bundle (`("materials file", path)`), which no
+    /// output may touch.
+    pub other_inputs: Vec<(&'static str, PathBuf)>,
 }
 
 /// `wagashi press`.
@@ -309,6 +324,8 @@ pub fn run(args: &PressArgs) -> anyhow::Result<()> {
         output: args.output.clone(),
         replace: args.force,
         volumetric: if args.fbar { Volumetric::FBar } else { Volumetric::Standard },
+        allow_large: args.allow_large,
+        other_inputs: args.materials.iter().map(|m| ("materials file", m.clone())).collect(),
     };
     let mut out = std::io::stdout().lock();
     let how = How { axisymmetric: args.axisymmetric, surface_mesh: args.mesh_mode.mode() };
@@ -368,14 +385,22 @@ fn press_bundle_as(
     let keep_time_s = protocol.release_s.min(end_s);
 
     // Refuse a bad output folder before the (possibly long) simulation.
-    let output = prepare_output(&[bundle], &options.output, options.replace)?;
+    let mut inputs: Vec<(&str, &Path)> = vec![("bundle", bundle.dir.as_path())];
+    inputs.extend(options.other_inputs.iter().map(|(what, p)| (*what, p.as_path())));
+    let output = prepare_output(&inputs, &options.output, options.replace)?;
     let gltf = match gltf {
         Some(path) => {
             crate::export::check_frame_count(options.pvd)?;
-            Some(crate::export::GltfTarget::check(path, &[bundle], Some(&options.output))?)
+            Some(crate::export::GltfTarget::check(path, &inputs, Some(&options.output))?)
         }
         None => None,
     };
+    if let Some(dt_s) = options.dt_s {
+        let steps = end_s / dt_s;
+        if steps > MAX_FIXED_STEPS {
+            bail!("--dt {dt_s} s gives {steps:.3e} steps over {end_s} s; at most {MAX_FIXED_STEPS:.0e} fixed steps are taken");
+        }
+    }
 
     let (size_mm, size_origin) = match (options.size_mm, bundle.default_size_mm()) {
         (Some(h), _) => (h, options.size_origin),
@@ -385,6 +410,11 @@ fn press_bundle_as(
         (None, None) => (1.0, "default"),
     };
     let surface_mesh_mode = bundle.surface_path().map(|_| how.surface_mesh.as_str());
+    if bundle.experiment.dimension == 3 && !how.axisymmetric {
+        if let Some(volume) = bundle.volume_mm3() {
+            crate::outputs::check_memory(volume, size_mm, options.size_origin, options.allow_large)?;
+        }
+    }
     let mut problem = if how.axisymmetric {
         bundle.to_press_axisymmetric(size_mm)?
     } else {
@@ -558,28 +588,27 @@ pub fn print_results(s: &Summary, out: &mut dyn Write) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Checks `target` and starts building it. Refused: a target that is the bundle,
-/// lies inside it or holds it; an existing previous output unless `replace`; and
-/// (by [`AtomicDir`]) any other existing, non-empty folder or file.
-pub(crate) fn prepare_output(inputs: &[&Bundle], target: &Path, replace: bool) -> anyhow::Result<AtomicDir> {
-    for bundle in inputs {
-        // An embedded bundle's folder does not exist and cannot overlap.
-        if let Ok(input) = bundle.dir.canonicalize() {
-            let output = resolve(target)?;
-            if output.starts_with(&input) || input.starts_with(&output) {
-                bail!(
-                    "{}: the output folder may not be, contain or lie inside the input bundle {} (inputs are never modified)",
-                    target.display(),
-                    bundle.dir.display()
-                );
-            }
-        }
-    }
-    let previous = target.join(wagashi_io::atomic::OUTPUT_MARKER_FILE).is_file();
-    if previous && !replace {
+/// Checks `target` and starts building it. Refused: a target that is one of
+/// the `inputs` (`(what, path)`: bundles, materials files), lies inside one or
+/// holds one; an existing previous output unless `replace`; and (by
+/// [`AtomicDir`]) any other existing, non-empty folder or file, and a previous
+/// output holding a file its manifest does not list. Says on stderr which
+/// temporary folders of interrupted runs it removed.
+pub(crate) fn prepare_output(inputs: &[(&str, &Path)], target: &Path, replace: bool) -> anyhow::Result<AtomicDir> {
+    crate::outputs::refuse_input_overlap("the output folder", target, inputs)?;
+    if wagashi_io::atomic::is_previous_output(target) && !replace {
         bail!("{}: exists (a previous wagashi output); pass --force to replace it", target.display());
     }
-    Ok(AtomicDir::new(target)?)
+    let dir = AtomicDir::new(target)?;
+    report_stale(&dir);
+    Ok(dir)
+}
+
+/// Tells on stderr which temporary folders of interrupted runs `dir` removed.
+pub(crate) fn report_stale(dir: &AtomicDir) {
+    for stale in dir.stale_removed() {
+        eprintln!("note: removed {}, left by an interrupted run", stale.display());
+    }
 }
 
 /// `path` made absolute with symbolic links resolved as far as it exists.

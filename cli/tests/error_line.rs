@@ -48,3 +48,27 @@ plate_friction = 0.3
     assert_eq!(line.matches("extends a frictionless plate").count(), 1, "{line}");
     assert!(!cwd.join("out").exists(), "no output on error");
 }
+
+/// A glTF buffer URI whose percent-escapes decode to bytes that are not UTF-8
+/// (`%FF%FE.bin`) is one line naming the file and the cause, status 1: the
+/// gltf crate, which panics on it, never sees the URI.
+#[test]
+fn a_gltf_uri_that_is_not_utf8_is_one_line() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cwd = tmp.path();
+    std::fs::write(
+        cwd.join("tri.gltf"),
+        r#"{"asset": {"version": "2.0"},
+ "buffers": [{"uri": "%FF%FE.bin", "byteLength": 36}],
+ "bufferViews": [{"buffer": 0, "byteLength": 36}],
+ "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                "min": [0, 0, 0], "max": [1, 1, 0]}],
+ "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+ "nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}], "scene": 0}
+"#,
+    )
+    .unwrap();
+    let line = assert_one_line_error(&wagashi_in(cwd, ["mesh", "tri.gltf", "-o", "t.vtu", "--size-mm", "0.5"]));
+    assert!(line.contains("tri.gltf") && line.contains("do not decode to UTF-8"), "{line}");
+    assert!(!cwd.join("t.vtu").exists(), "no output on error");
+}

@@ -5,7 +5,7 @@
 
 mod common;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use common::*;
 
@@ -336,4 +336,239 @@ fn a_missing_specimen_surface_names_its_key() {
         "surface = ",
         "specimen.surface",
     );
+}
+
+// ---- outputs never touch inputs or files wagashi did not write -------------
+
+/// `press EXAMPLE -o OUT --size-mm 20` plus `extra`, in `cwd`.
+fn press_example(cwd: &Path, name: &str, out: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args: Vec<std::ffi::OsString> =
+        vec!["press".into(), example(name).into(), "-o".into(), out.into(), "--size-mm".into(), "20".into()];
+    args.extend(extra.iter().map(Into::into));
+    wagashi_in(cwd, args)
+}
+
+/// A closed cube of side 4 mm, outward triangles, as OBJ text.
+const CUBE_OBJ: &str = "v 0 0 0\nv 4 0 0\nv 4 4 0\nv 0 4 0\nv 0 0 4\nv 4 0 4\nv 4 4 4\nv 0 4 4\n\
+f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\nf 4 5 8\n";
+
+/// `mesh IN.obj --report IN.obj` would replace the input with the report, and
+/// `--report` onto the mesh would replace the mesh: both refused, nothing written.
+#[test]
+fn mesh_outputs_may_not_be_the_input() {
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::write(tmp.path().join("cube.obj"), CUBE_OBJ).unwrap();
+    let cases: [(&[&str], &str); 2] = [
+        (&["mesh", "cube.obj", "-o", "x.vtu", "--size-mm", "1", "--report", "cube.obj"], "--report may not be"),
+        (&["mesh", "cube.obj", "-o", "x.vtu", "--size-mm", "1", "--report", "x.vtu"], "--report would overwrite"),
+    ];
+    for (args, want) in cases {
+        let line = assert_one_line_error(&wagashi_in(tmp.path(), args));
+        assert!(line.contains(want), "{args:?}: {line}");
+        assert_eq!(std::fs::read_to_string(tmp.path().join("cube.obj")).unwrap(), CUBE_OBJ);
+        assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 1, "{args:?}: something was written");
+    }
+}
+
+/// `-o x.node` writes x.node, x.ele and x.face: an existing one that wagashi
+/// did not write is replaced only with --force; wagashi's own are replaced.
+#[test]
+fn mesh_replaces_a_foreign_tetgen_file_only_with_force() {
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::write(tmp.path().join("cube.obj"), CUBE_OBJ).unwrap();
+    std::fs::write(tmp.path().join("x.ele"), "# my own mesh\n0 4 0\n").unwrap();
+    let run = |force: bool| {
+        let mut args = vec!["mesh", "cube.obj", "-o", "x.node", "--size-mm", "1"];
+        if force {
+            args.push("--force");
+        }
+        wagashi_in(tmp.path(), args)
+    };
+    let line = assert_one_line_error(&run(false));
+    assert!(line.contains("x.ele") && line.contains("--force"), "{line}");
+    assert_eq!(std::fs::read_to_string(tmp.path().join("x.ele")).unwrap(), "# my own mesh\n0 4 0\n");
+    assert!(!tmp.path().join("x.node").exists() && !tmp.path().join("x.face").exists());
+    assert_success(&run(true));
+    assert!(std::fs::read_to_string(tmp.path().join("x.ele")).unwrap().starts_with("# written by wagashi"));
+    // Now all three are wagashi's: a second run replaces them without --force.
+    assert_success(&run(false));
+}
+
+/// A materials file inside the output folder is an input: `--force` may not
+/// delete it, even when the folder's manifest lists it (as `fit`'s does).
+#[test]
+fn press_never_replaces_its_own_materials_file() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    assert_success(&press_example(tmp.path(), "paper/mat1-2d", &out, &[]));
+    std::fs::copy(example("paper/x-shape.toml"), out.join("materials.toml")).unwrap();
+    let manifest_path = out.join("wagashi-manifest.json");
+    let mut manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&manifest_path).unwrap()).unwrap();
+    manifest["files"].as_array_mut().unwrap().push("materials.toml".into());
+    std::fs::write(&manifest_path, manifest.to_string()).unwrap();
+    let before = contents(&out);
+    let materials = out.join("materials.toml");
+    let o = press_example(tmp.path(), "paper/mat1-2d", &out, &["--materials", materials.to_str().unwrap(), "--force"]);
+    let line = assert_one_line_error(&o);
+    assert!(line.contains("input materials file"), "{line}");
+    assert_eq!(contents(&out), before);
+}
+
+/// `export OUT --gltf OUT/x.glb` would write into the folder it reads.
+#[test]
+fn export_may_not_write_into_its_source() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    assert_success(&press_example(tmp.path(), "paper/mat1-2d", &out, &[]));
+    let before = contents(&out);
+    let glb = out.join("x.glb");
+    let o = wagashi_in(tmp.path(), ["export".as_ref(), out.as_os_str(), "--gltf".as_ref(), glb.as_os_str()]);
+    let line = assert_one_line_error(&o);
+    assert!(line.contains("input press output"), "{line}");
+    assert_eq!(contents(&out), before);
+}
+
+/// `--force` replaces only a folder whose wagashi manifest lists every file in
+/// it: a folder that merely holds a summary.json (a file or a link), or a
+/// previous output the user added a file to, is refused untouched.
+#[test]
+fn force_trusts_only_a_wagashi_manifest() {
+    let tmp = tempfile::tempdir().unwrap();
+    let fake = tmp.path().join("fake");
+    std::fs::create_dir(&fake).unwrap();
+    std::fs::write(fake.join("summary.json"), "{}").unwrap();
+    std::fs::write(fake.join("data.csv"), "mine").unwrap();
+    let before = contents(&fake);
+    let line = assert_one_line_error(&press_example(tmp.path(), "paper/mat1-2d", &fake, &["--force"]));
+    assert!(line.contains("refusing to overwrite") && line.contains("manifest"), "{line}");
+    assert_eq!(contents(&fake), before);
+
+    let linked = tmp.path().join("linked");
+    std::fs::create_dir(&linked).unwrap();
+    std::fs::write(linked.join("data.csv"), "mine").unwrap();
+    std::os::unix::fs::symlink(fake.join("summary.json"), linked.join("summary.json")).unwrap();
+    assert_one_line_error(&press_example(tmp.path(), "paper/mat1-2d", &linked, &["--force"]));
+    assert_eq!(std::fs::read_to_string(linked.join("data.csv")).unwrap(), "mine");
+
+    let out = tmp.path().join("out");
+    assert_success(&press_example(tmp.path(), "paper/mat1-2d", &out, &[]));
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    let before = contents(&out);
+    let line = assert_one_line_error(&press_example(tmp.path(), "paper/mat1-2d", &out, &["--force"]));
+    assert!(line.contains("notes.txt is not a file wagashi wrote"), "{line}");
+    assert_eq!(contents(&out), before);
+}
+
+// ---- bounded runs ------------------------------------------------------------
+
+/// `--dt 1e-9` over the 400 s trial asks for 4e11 steps: refused before the
+/// run, as `--output-dt`'s sample count is.
+#[test]
+fn a_fixed_step_count_beyond_the_limit_is_refused_before_the_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let clock = std::time::Instant::now();
+    let line = assert_one_line_error(&press_example(tmp.path(), "paper/mat1-2d", &out, &["--dt", "1e-9"]));
+    assert!(line.contains("--dt 0.000000001 s gives 4.000e11 steps") && line.contains("at most"), "{line}");
+    assert!(clock.elapsed().as_secs_f64() < 5.0);
+    assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0);
+}
+
+/// The seed block at 0.3 mm (9.27M tetrahedra) is refused before meshing with
+/// one line naming the estimate, the available memory and the option, by
+/// `press`, `fit` and `diagnose`; where
+/// the machine has the memory, the test says so and passes.
+#[test]
+fn a_mesh_beyond_the_available_memory_is_refused_before_meshing() {
+    let available_gib = std::fs::read_to_string("/proc/meminfo").ok().and_then(|m| {
+        let line = m.lines().find(|l| l.starts_with("MemAvailable:"))?.to_string();
+        Some(line.split_whitespace().nth(1)?.parse::<f64>().ok()? / 1024.0 / 1024.0)
+    });
+    // The estimate for this mesh is about 106 GiB.
+    match available_gib {
+        Some(gib) if gib < 100.0 => {}
+        other => {
+            println!("skipped: the machine's available memory ({other:?} GiB) is not below the estimate");
+            return;
+        }
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let bundle = example("paper/mat1");
+    let args = ["press", bundle.to_str().unwrap(), "-o", "out", "--size-mm", "0.3"];
+    let clock = std::time::Instant::now();
+    let line = assert_one_line_error(&wagashi_in(tmp.path(), args));
+    for want in ["--size-mm 0.3", "9.203M tetrahedra", "GiB available", "MemAvailable", "--allow-large"] {
+        assert!(line.contains(want), "{want}: {line}");
+    }
+    assert!(clock.elapsed().as_secs_f64() < 5.0);
+    assert!(!out.exists());
+    assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0);
+    // fit checks each 3D trial the same way, naming it (the seed block with a measured force).
+    let t = Trial::new();
+    let args = ["fit", t.dir.to_str().unwrap(), "-o", "out", "--size-mm", "0.3"];
+    let line = assert_one_line_error(&wagashi_in(tmp.path(), args));
+    assert!(line.contains("experiment.toml: --size-mm 0.3") && line.contains("--allow-large"), "{line}");
+    assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0);
+    let args = ["diagnose", "--calibrate", t.dir.to_str().unwrap(), "-o", "out", "--size-mm", "0.3"];
+    let line = assert_one_line_error(&wagashi_in(tmp.path(), args));
+    assert!(line.contains("experiment.toml: --size-mm 0.3") && line.contains("--allow-large"), "{line}");
+    assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0);
+}
+
+// ---- interrupts ----------------------------------------------------------------
+
+/// SIGTERM and SIGINT during a run: exit status 130, one line, and neither the
+/// output nor its hidden temporary folder is left.
+#[test]
+fn an_interrupted_run_leaves_nothing_behind() {
+    for signal in ["TERM", "INT"] {
+        let tmp = tempfile::tempdir().unwrap();
+        let child = std::process::Command::new(env!("CARGO_BIN_EXE_wagashi"))
+            .args(["press", example("paper/mat1").to_str().unwrap(), "-o", "out", "--size-mm", "1.5"])
+            .current_dir(tmp.path())
+            .stdin(std::process::Stdio::null())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        // Wait for the temporary output folder, then a little into the run.
+        let clock = std::time::Instant::now();
+        while std::fs::read_dir(tmp.path()).unwrap().count() == 0 {
+            assert!(clock.elapsed().as_secs() < 30, "no temporary folder appeared");
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(300));
+        let kill = std::process::Command::new("kill").args([format!("-{signal}"), child.id().to_string()]).status();
+        assert!(kill.unwrap().success());
+        let o = child.wait_with_output().unwrap();
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(130), "SIG{signal}: {err}");
+        assert_eq!(err.lines().count(), 1, "SIG{signal}: {err}");
+        assert!(err.starts_with("error: interrupted: ") && err.contains("removed"), "SIG{signal}: {err}");
+        let left: Vec<_> = std::fs::read_dir(tmp.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert!(left.is_empty(), "SIG{signal}: left behind: {left:?}");
+    }
+}
+
+/// A run killed outright (SIGKILL: no handler runs) leaves `.out.tmp-PID-*`;
+/// the next run on the same output removes it and says so.
+#[test]
+fn the_next_run_removes_a_killed_runs_temporary_folder() {
+    let tmp = tempfile::tempdir().unwrap();
+    // Above Linux's largest process id (2^22): no running process has it.
+    let stale = tmp.path().join(".out.tmp-4999999-Ab12Cd");
+    std::fs::create_dir(&stale).unwrap();
+    std::fs::write(stale.join("force.csv"), "t_s,force_N\n0,0\n").unwrap();
+    let o = press_example(tmp.path(), "paper/mat1-2d", &tmp.path().join("out"), &[]);
+    assert_success(&o);
+    assert!(
+        stderr(&o).contains(&format!("note: removed {}, left by an interrupted run", stale.display())),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!stale.exists());
+    let left: Vec<_> = std::fs::read_dir(tmp.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(left, vec![std::ffi::OsString::from("out")]);
 }

@@ -109,10 +109,19 @@ pub enum WriteError {
         source: std::io::Error,
     },
     /// An output folder would replace a folder that is not a previous wagashi output.
-    #[error("refusing to overwrite {}: it exists and is not a wagashi output", dir.display())]
+    #[error("refusing to overwrite {}: it exists and is not a wagashi output (no wagashi manifest)", dir.display())]
     RefuseOverwrite {
         /// The existing folder.
         dir: PathBuf,
+    },
+    /// A previous wagashi output would be replaced, but it holds an entry its
+    /// manifest does not list (a file wagashi did not write).
+    #[error("refusing to replace {}: {entry} is not a file wagashi wrote there (its manifest does not list it); move it away first", dir.display())]
+    RefuseUnlisted {
+        /// The existing folder.
+        dir: PathBuf,
+        /// The unlisted entry, relative to `dir`.
+        entry: String,
     },
     /// Data that does not fit what is being written (e.g. a field of the wrong length).
     #[error("{}: {cause}", path.display())]

@@ -4,12 +4,26 @@
 //!   flushed to disk, then renamed over the target (a rename within one file
 //!   system is atomic).
 //! - [`AtomicDir`]: an output folder is built as a hidden sibling temporary folder
-//!   and renamed into place by [`AtomicDir::commit`]; dropped without a commit, the
-//!   temporary folder is removed. An existing target is replaced only when it is
-//!   empty or holds a `summary.json` (a previous wagashi output).
+//!   `.NAME.tmp-PID-*` and put in place by [`AtomicDir::commit`], which writes its
+//!   manifest ([`MANIFEST_FILE`]: the files wagashi wrote); dropped without a
+//!   commit, the temporary folder is removed, and one a killed run left is
+//!   removed by the next run on the same target. An existing target is replaced
+//!   only when it is empty or is a previous wagashi output holding only the files
+//!   its manifest lists ([`is_previous_output`]); only those files are removed, and
+//!   links are never followed.
+//! - [`written_by_wagashi`]: whether an existing file carries a wagashi writer's
+//!   mark, and so may be replaced without the user's `--force`.
+//! - [`remove_pending_for_exit`]: what an interrupt handler calls to remove the
+//!   temporaries of this process before it exits.
 
 mod atomic_dir;
+mod manifest;
+mod pending;
 mod write_atomic;
+mod written_by;
 
-pub use atomic_dir::{AtomicDir, OUTPUT_MARKER_FILE};
+pub use atomic_dir::{is_previous_output, AtomicDir, OUTPUT_MARKER_FILE};
+pub use manifest::{Manifest, MANIFEST_FILE, MANIFEST_FORMAT};
+pub use pending::remove_pending_for_exit;
 pub use write_atomic::write_atomic;
+pub use written_by::written_by_wagashi;

@@ -23,11 +23,21 @@ pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<(), WriteErr
         use std::os::unix::fs::PermissionsExt;
         builder.permissions(std::fs::Permissions::from_mode(0o666));
     }
-    let mut tmp = builder.tempfile_in(parent).map_err(io)?;
-    tmp.write_all(bytes).map_err(io)?;
-    tmp.as_file().sync_all().map_err(io)?;
-    tmp.persist(path).map_err(|e| io(e.error))?;
-    Ok(())
+    let mut tmp = {
+        let mut registry = super::pending::lock();
+        let tmp = builder.tempfile_in(parent).map_err(io)?;
+        registry.push(tmp.path().to_path_buf());
+        tmp
+    };
+    let temp_path = tmp.path().to_path_buf();
+    let written = (|| {
+        tmp.write_all(bytes).map_err(io)?;
+        tmp.as_file().sync_all().map_err(io)?;
+        tmp.persist(path).map_err(|e| io(e.error))?;
+        Ok(())
+    })();
+    super::pending::lock().retain(|p| p != &temp_path);
+    written
 }
 
 #[cfg(test)]

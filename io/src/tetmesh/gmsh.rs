@@ -20,7 +20,9 @@
 //! a surface entity with the physical group `boundary` (dimension 2, tag
 //! `number of regions + 1`); all nodes in one block on volume 1; tets in VTK
 //! order, which is Gmsh's (positive volume). Coordinates [mm], shortest
-//! round-trip form.
+//! round-trip form. A `$Comments` section (`written by wagashi`, which Gmsh and
+//! the reader above skip) marks the file as wagashi's, so that `wagashi mesh`
+//! replaces it without `--force`.
 
 use std::collections::{BTreeMap, HashMap};
 use std::fmt::Write as _;
@@ -327,6 +329,9 @@ pub fn gmsh_string(mesh: &TetMesh) -> String {
     let (lo, hi) = if mesh.nodes.is_empty() { ([0.0; 3], [0.0; 3]) } else { mesh.bounding_box() };
     let mut s = String::with_capacity(64 * mesh.nodes.len() + 40 * mesh.cells.len());
     s.push_str("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n");
+    // Readers skip unknown sections (Gmsh too); the line marks the file as wagashi's,
+    // which `wagashi mesh` may then replace without --force.
+    s.push_str("$Comments\nwritten by wagashi\n$EndComments\n");
     let _ = writeln!(s, "$PhysicalNames\n{}", nreg + 1);
     let boundary_tag = nreg + 1;
     let _ = writeln!(s, "2 {boundary_tag} \"boundary\"");

@@ -125,11 +125,20 @@ pub(crate) fn check_time_order(
     Ok(())
 }
 
-/// Reads `file` as text: UTF-8, a leading byte-order mark dropped. Invalid UTF-8
-/// is refused with its line.
+/// Reads `file` as text: UTF-8, a leading byte-order mark dropped; a file that
+/// is not UTF-8 but plain Latin-1 text (as instruments on Windows write it, e.g.
+/// `µm` as the byte 0xB5) is read as Latin-1. Anything else (control bytes) is
+/// refused with the line of the first byte that is not UTF-8.
 pub(crate) fn read_text(file: &Path) -> Result<String, ImportError> {
     let bytes = crate::input::read(file).map_err(|reason| ImportError::Read { file: file.to_path_buf(), reason })?;
     decode(file, bytes)
+}
+
+/// Whether `bytes` read as Latin-1 are printable text: no control byte other
+/// than tab, line feed and carriage return (and none of 0x7F-0x9F, which
+/// Latin-1 leaves to controls).
+fn is_latin1_text(bytes: &[u8]) -> bool {
+    bytes.iter().all(|&b| matches!(b, b'\t' | b'\n' | b'\r' | 0x20..=0x7E | 0xA0..=0xFF))
 }
 
 pub(crate) fn decode(file: &Path, bytes: Vec<u8>) -> Result<String, ImportError> {
@@ -140,6 +149,7 @@ pub(crate) fn decode(file: &Path, bytes: Vec<u8>) -> Result<String, ImportError>
             }
             Ok(text)
         }
+        Err(e) if is_latin1_text(e.as_bytes()) => Ok(e.into_bytes().iter().map(|&b| char::from(b)).collect()),
         Err(e) => {
             let valid = e.utf8_error().valid_up_to();
             let line = 1 + e.as_bytes()[..valid].iter().filter(|&&b| b == b'\n').count();
@@ -205,8 +215,11 @@ mod tests {
 
     #[test]
     fn invalid_utf8_names_its_line() {
-        let err = decode(Path::new("x.txt"), b"ok\nok\n\xff\n".to_vec()).unwrap_err();
+        // Not UTF-8 and not Latin-1 text either (a control byte).
+        let err = decode(Path::new("x.txt"), b"ok\nok\n\x01\xff\n".to_vec()).unwrap_err();
         assert_eq!(err.to_string(), "x.txt:3: row: not valid UTF-8 text");
+        // Latin-1 text: read as such.
+        assert_eq!(decode(Path::new("x.txt"), b"Gap (\xb5m)\n".to_vec()).unwrap(), "Gap (\u{b5}m)\n");
         assert_eq!(decode(Path::new("x"), "\u{feff}a".as_bytes().to_vec()).unwrap(), "a");
     }
 

@@ -149,6 +149,24 @@ mod tests {
         assert_eq!((s.t_s, s.force_n, s.tool_mm), (1.5, 0.5, 9.0));
     }
 
+    /// A TA rheometer export saved as Latin-1: `µm` is the single byte 0xB5.
+    #[test]
+    fn a_latin1_header_is_read() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("r.txt");
+        let mut bytes = b"Gap (".to_vec();
+        bytes.push(0xB5);
+        bytes.extend_from_slice(b"m)\tNormal Force (N)\tTime (s)\r\n9000\t0.5\t1.5\r\n");
+        std::fs::write(&path, &bytes).unwrap();
+        let raw = read_rheometer(&path).unwrap();
+        assert_eq!(raw.samples.len(), 1);
+        assert_eq!(raw.samples[0].tool_mm, 9.0);
+        // A file with control bytes is still refused, with its line.
+        std::fs::write(&path, b"Gap (um)\tNormal Force (N)\tTime (s)\n\x01\xB5\n").unwrap();
+        let e = read_rheometer(&path).unwrap_err().to_string();
+        assert!(e.contains("r.txt:2: row: not valid UTF-8"), "{e}");
+    }
+
     #[test]
     fn refuses_a_wrong_header() {
         assert!(refusal("").starts_with("r.txt:1: header: the file is empty"));
