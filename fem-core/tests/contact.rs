@@ -605,10 +605,10 @@ fn sphere_lifts_off_an_elastic_sweet() {
 
 /// The contact area is the area of the boundary facets on the tool: a Coulomb
 /// (mu = 0.3) plate pressing a cylinder (R = 10 mm, H = 10 mm, 1.5 mm tets, glued
-/// to the floor) 1 % reports the top face, pi R^2, within 2 % (the top is a
-/// 42-gon, 0.4 % under the circle), not the top plus the side wall's first row
-/// of facets that only meet the plate along the rim. Frictionless, the top
-/// spreads by about nu times the strain (0.45 %), still within 2 %.
+/// to the floor) 1 % reports the top face, pi R^2, within 2 % (the area is the
+/// undeformed one, and the top is a 42-gon, 0.4 % under the circle), not the
+/// top plus the side wall's first row of facets that only meet the plate along
+/// the rim; frictionless too.
 #[test]
 fn plate_contact_area_is_the_top_face() {
     let (radius, height) = (10.0, 10.0);
@@ -632,8 +632,8 @@ fn plate_contact_area_is_the_top_face() {
 /// frictionless, 0.1 mm elements within 4 mm growing by 10 % beyond). The radius
 /// of the reported area, `sqrt(A / pi)`, is within 3 % of Hertz's from d = 0.05
 /// mm on (a >= 1.6 mm, 16 elements): the contact's edge is resolved to about
-/// half an element (0.05 mm, 3 % of the smallest radius compared), and the area
-/// includes the curved surface's slope, `1 + a^2/(4 R^2)`, under 0.1 %.
+/// half an element (0.05 mm, 3 % of the smallest radius compared); the area is
+/// the undeformed top's, the flat circle Hertz's `a` bounds.
 #[test]
 fn sphere_contact_radius_follows_hertz() {
     let (radius, depth) = (50.0, 0.1);

@@ -241,15 +241,15 @@ pub struct ToolSample {
     /// Magnitude of the summed tangential forces [N].
     pub tangential_n: f64,
     /// Area in contact [mm^2]: the area of the specimen's boundary facets that
-    /// lie on the tool, in the deformed configuration (full circle for an
-    /// axisymmetric problem; length times thickness in plane problems). A node in
-    /// contact (or, with adhesion, held by the cohesive traction) adds `1/D` of
-    /// each facet around it (`D` nodes per facet) times the cosine between the
-    /// facet's outward normal and the tool's inward normal at the node (zero when
-    /// the facet does not face the tool), so a facet whose nodes all touch counts
-    /// in full, one at the rim of the contact counts for the share of its nodes
-    /// that touch, and a facet that only meets the tool along an edge (a side wall
-    /// under a plate) counts for nothing.
+    /// lie on the tool, measured on the undeformed specimen (the nominal contact
+    /// area, which force over area turns into a nominal stress; full circle for
+    /// an axisymmetric problem, length times thickness in plane problems). A node
+    /// in contact (or, with adhesion, held by the cohesive traction) adds `1/D` of
+    /// each facet around it (`D` nodes per facet) that faces the tool (outward
+    /// normal against the tool's at the node), so a facet whose nodes all touch
+    /// counts in full, one at the rim of the contact for the share of its nodes
+    /// that touch, and one that meets the tool along an edge only (a side wall
+    /// perpendicular to a plate) not at all.
     pub area_mm2: f64,
     /// Nodes in contact or held by adhesion (only at snapshot times; empty otherwise).
     pub nodes: Vec<u32>,
@@ -293,6 +293,11 @@ impl ToolTrack {
     }
 }
 
+/// A boundary facet faces a tool when the cosine between its outward normal and
+/// the tool's inward normal exceeds this: zero up to the rounding of the normals,
+/// so that a side wall perpendicular to a plate (cosine 0) does not count.
+const FACING_COSINE: f64 = 1e-9;
+
 /// The tools and the boundary nodes they may touch.
 pub(crate) struct ContactModel<'t> {
     /// Tools in canonical order (sorted by name, then listing), so that results do
@@ -302,14 +307,10 @@ pub(crate) struct ContactModel<'t> {
     pub order: Vec<usize>,
     /// Boundary nodes with at least one free dof.
     pub nodes: Vec<u32>,
-    /// The boundary facets (vertices, padded with `u32::MAX` in 2D) and, last, the
-    /// vertex of their cell opposite them (it tells the outward side).
-    boundary: Vec<[u32; 4]>,
-    /// The boundary facets around each candidate node (indices into `boundary`).
-    node_boundary: Vec<Vec<u32>>,
-    /// The weight of a 2D facet's length: the thickness [mm], or `None` for an
-    /// axisymmetric section (`2 pi r`); unused in 3D.
-    thickness: Option<f64>,
+    /// Per candidate node, its boundary facets' outward unit normals and the
+    /// node's share of each facet's area, `1/D` of it [mm^2], on the undeformed
+    /// mesh: what [`ToolSample::area_mm2`] adds up.
+    area_facets: Vec<Vec<([f64; 3], f64)>>,
     /// Local element size at each candidate node [mm].
     pub size: Vec<f64>,
     pub planar: bool,
@@ -480,6 +481,7 @@ impl<'t> ContactModel<'t> {
         let mut node_facets: Vec<Vec<([f64; 3], f64)>> =
             if adhesion.is_some() { vec![Vec::new(); mesh.num_nodes()] } else { Vec::new() };
         let nn = mesh.num_nodes();
+        let mut area_facets: Vec<Vec<([f64; 3], f64)>> = vec![Vec::new(); nn];
         let mut size = vec![0.0f64; nn];
         let mut on_boundary = vec![false; nn];
         for (f, opposite) in &facets {
@@ -508,21 +510,22 @@ impl<'t> ContactModel<'t> {
                 };
                 (l * weight, l)
             };
+            // The outward unit normal (away from the cell's opposite vertex).
+            let q = mesh.nodes[*opposite as usize];
+            let o = sub(p[0], [q[0], q[1], if D == 3 { q[2] } else { 0.0 }]);
+            let (u, v) = (sub(p[1], p[0]), if D == 3 { sub(p[2], p[0]) } else { [0.0, 0.0, 1.0] });
+            let c = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
+            let l = len(c);
+            let sign = if c[0] * o[0] + c[1] * o[1] + c[2] * o[2] < 0.0 { -1.0 } else { 1.0 };
+            let normal = if l > 0.0 { c.map(|x| sign * x / l) } else { [0.0; 3] };
             for &v in f {
                 size[v as usize] = size[v as usize].max(edge);
                 on_boundary[v as usize] = true;
+                area_facets[v as usize].push((normal, measure / D as f64));
             }
             if adhesion.is_some() {
-                // The outward unit normal (away from the cell's opposite vertex) and
-                // each node's share `int N_a dA` of the facet (axisymmetric: the
+                // Each node's share `int N_a dA` of the facet (axisymmetric: the
                 // weight 2 pi r is linear along the edge, so the shares differ).
-                let q = mesh.nodes[*opposite as usize];
-                let o = sub(p[0], [q[0], q[1], if D == 3 { q[2] } else { 0.0 }]);
-                let (u, v) = (sub(p[1], p[0]), if D == 3 { sub(p[2], p[0]) } else { [0.0, 0.0, 1.0] });
-                let c = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
-                let l = len(c);
-                let sign = if c[0] * o[0] + c[1] * o[1] + c[2] * o[2] < 0.0 { -1.0 } else { 1.0 };
-                let normal = c.map(|x| sign * x / l);
                 for (a, &vtx) in f.iter().enumerate() {
                     let share = if problem.formulation == Formulation::Axisymmetric {
                         let (ra, rb) = (p[a][0], p[1 - a][0]);
@@ -536,32 +539,6 @@ impl<'t> ContactModel<'t> {
         }
         let nodes: Vec<u32> =
             (0..nn as u32).filter(|&i| on_boundary[i as usize] && (0..D).any(|k| !held[i as usize * D + k])).collect();
-        let boundary: Vec<[u32; 4]> = facets
-            .iter()
-            .map(|(f, opposite)| {
-                std::array::from_fn(|k| {
-                    if k < D {
-                        f[k]
-                    } else if k == 3 {
-                        *opposite
-                    } else {
-                        u32::MAX
-                    }
-                })
-            })
-            .collect();
-        let mut local = vec![u32::MAX; nn];
-        for (j, &i) in nodes.iter().enumerate() {
-            local[i as usize] = j as u32;
-        }
-        let mut node_boundary = vec![Vec::new(); nodes.len()];
-        for (b, (f, _)) in facets.iter().enumerate() {
-            for &v in f {
-                if local[v as usize] != u32::MAX {
-                    node_boundary[local[v as usize] as usize].push(b as u32);
-                }
-            }
-        }
         let block = nodes
             .iter()
             .map(|&i| {
@@ -587,11 +564,6 @@ impl<'t> ContactModel<'t> {
             Vec::new()
         };
         let crosshead = tools.iter().map(|t| on_crosshead(t.tool)).collect();
-        let thickness = match problem.formulation {
-            Formulation::PlaneStress { thickness_mm } | Formulation::PlaneStrain { thickness_mm } => Some(thickness_mm),
-            Formulation::Axisymmetric => None,
-            Formulation::Solid => Some(1.0),
-        };
         Ok(Self {
             crosshead,
             low_rank: true,
@@ -601,9 +573,7 @@ impl<'t> ContactModel<'t> {
             held,
             tools,
             order,
-            boundary,
-            node_boundary,
-            thickness,
+            area_facets: nodes.iter().map(|&i| std::mem::take(&mut area_facets[i as usize])).collect(),
             size: nodes.iter().map(|&i| size[i as usize]).collect(),
             nodes,
             planar: D == 2,
@@ -1334,45 +1304,20 @@ impl<'t> ContactModel<'t> {
 
     /// Candidate `j`'s share of the area in contact with a tool whose outward
     /// normal at it is `tool_normal` [mm^2] (see [`ToolSample::area_mm2`]): `1/D`
-    /// of each deformed boundary facet around it, times the cosine between the
-    /// facet's outward normal and `-tool_normal` where positive.
+    /// of each boundary facet around it that faces the tool (its outward normal
+    /// makes a cosine above [`FACING_COSINE`] with `-tool_normal`).
     ///
-    /// The share of the facets that touch, not the node's whole tributary area:
-    /// a node on a plate's rim also carries side-wall facets that meet the plate
-    /// along an edge only, and counting them would overstate a 10 mm cylinder's
-    /// contact under a plate by 14 % on a 1.5 mm mesh. Counting only facets whose
-    /// nodes all touch would miss the rim of a curved contact by half an element
-    /// and report no area while a single node touches; the cosine-weighted share
-    /// does neither. It is a report only: no force depends on it.
-    fn contact_area(&self, input: &StepInput<'_>, u: &[f64], j: usize, tool_normal: [f64; 3]) -> f64 {
-        let d = self.dim;
-        let mut area = 0.0;
-        for &b in &self.node_boundary[j] {
-            let f = &self.boundary[b as usize];
-            let p: Vec<[f64; 3]> = f[..d].iter().map(|&v| self.position(input, u, v)).collect();
-            let o = self.position(input, u, f[3]);
-            let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-            let e1 = sub(p[1], p[0]);
-            let e2 = if d == 3 { sub(p[2], p[0]) } else { [0.0, 0.0, 1.0] };
-            let c = [e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]];
-            let l = norm(c);
-            if l == 0.0 {
-                continue;
-            }
-            // Outward: away from the cell's opposite vertex.
-            let sign = if dot(c, sub(p[0], o)) < 0.0 { -1.0 } else { 1.0 };
-            let facing = (-sign * dot(c, tool_normal) / l).max(0.0);
-            let measure = if d == 3 {
-                0.5 * l
-            } else {
-                match self.thickness {
-                    Some(t) => l * t,
-                    None => l * std::f64::consts::PI * (p[0][0] + p[1][0]),
-                }
-            };
-            area += measure * facing / d as f64;
-        }
-        area
+    /// The share of the facets that face the tool, not the node's whole tributary
+    /// area: a node on a plate's rim also carries side-wall facets that meet the
+    /// plate along an edge only, and counting them would overstate a 10 mm
+    /// cylinder's contact under a plate by 14 % on a 1.5 mm mesh. Counting only
+    /// facets whose nodes all touch would miss the rim of a curved contact by
+    /// half an element and report no area while a single node touches. A facet
+    /// that faces the tool counts in full, not weighted by the angle, so that the
+    /// area changes only when nodes come or go (a node sliding along a sphere
+    /// does not move it). It is a report only: no force depends on it.
+    fn contact_area(&self, j: usize, tool_normal: [f64; 3]) -> f64 {
+        self.area_facets[j].iter().filter(|(n, _)| -dot(*n, tool_normal) > FACING_COSINE).map(|(_, share)| share).sum()
     }
 
     fn position(&self, input: &StepInput<'_>, u: &[f64], i: u32) -> [f64; 3] {
@@ -1545,7 +1490,7 @@ impl<'t> ContactModel<'t> {
                     }
                 }
                 sample.normal_n += f_n;
-                sample.area_mm2 += self.contact_area(input, &u, j, prox.normal);
+                sample.area_mm2 += self.contact_area(j, prox.normal);
                 sample.nodes.push(i);
                 // A slipping pair's anchor moves along with it: to where the
                 // traction is the penalty times the elastic slip.
