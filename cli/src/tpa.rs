@@ -40,10 +40,10 @@ CSV file.
 
 Definitions, on the tared force F(t) [N] through its samples:
   contact       F above --threshold-N (0.1 N)
-  strokes       split at the middle of the longest stretch at or below the threshold between the \
-first and last contact (the probe is up between the compressions); each stroke must reach twice \
-the threshold
-  touch, peak   where F first rises through the threshold; the sample of the largest force
+  compression   a contact reaching twice the threshold (shorter excursions are noise)
+  strokes       split at the middle of the longest time between two compressions (the probe is \
+up between the strokes)
+  touch, peak   where F rises through the threshold into a stroke; the sample of the largest force
   A1, A2        positive force-time areas [N s] from touch to peak, and from peak to where F last \
 falls through the threshold, in stroke 1; A3, A4 the same in stroke 2
   hardness      peak force of stroke 1 [N]
