@@ -197,6 +197,37 @@ fn tpa_of_a_simulated_double_compression() {
     assert!((t1 - 10.0).abs() < 0.5 && (t2 - 27.5).abs() < 0.5, "peaks at {t1} and {t2} s");
     let (cohesiveness, springiness, resilience) =
         (get(tpa, "cohesiveness"), get(tpa, "springiness"), get(tpa, "resilience"));
+    // The areas by a trapezoid rule of their own on force.csv (the force is
+    // positive from touch to end, so F+ = F), linear between the rows.
+    let interpolate = |t: f64| {
+        let i = force.partition_point(|r| r.0 < t).clamp(1, force.len() - 1);
+        let (a, b) = (force[i - 1], force[i]);
+        a.1 + (t - a.0) / (b.0 - a.0) * (b.1 - a.1)
+    };
+    let integral = |from: f64, to: f64| {
+        let mut points = vec![(from, interpolate(from))];
+        points.extend(force.iter().copied().filter(|r| r.0 > from && r.0 < to));
+        points.push((to, interpolate(to)));
+        points.windows(2).map(|w| 0.5 * (w[0].1 + w[1].1) * (w[1].0 - w[0].0)).sum::<f64>()
+    };
+    let mut areas = Vec::new();
+    for k in 0..2 {
+        let stroke = &tpa["strokes"][k];
+        let (touch, peak, end) = (get(stroke, "touch_s"), get(stroke, "peak_s"), get(stroke, "end_s"));
+        assert!(
+            (interpolate(touch) - 0.1).abs() <= 1e-9,
+            "stroke {k}: touch at {touch} s, force {}",
+            interpolate(touch)
+        );
+        assert!((interpolate(end) - 0.1).abs() <= 1e-9, "stroke {k}: end at {end} s, force {}", interpolate(end));
+        for (from, to, key) in [(touch, peak, "area_to_peak_N_s"), (peak, end, "area_after_peak_N_s")] {
+            let (mine, theirs) = (integral(from, to), get(stroke, key));
+            assert!((mine - theirs).abs() <= 1e-9 * theirs, "stroke {k} {key}: {mine} vs {theirs}");
+            areas.push(mine);
+        }
+    }
+    assert!((cohesiveness - (areas[2] + areas[3]) / (areas[0] + areas[1])).abs() <= 1e-9, "{areas:?}");
+    assert!((resilience - areas[1] / areas[0]).abs() <= 1e-9, "{areas:?}");
     // The residual deformation shortens stroke 2: less area and a later touch.
     assert!(cohesiveness > 0.3 && cohesiveness < 1.0, "cohesiveness {cohesiveness}");
     assert!(springiness > 0.3 && springiness < 1.0, "springiness {springiness}");
