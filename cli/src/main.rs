@@ -20,6 +20,8 @@
 //!   animated glTF 2.0 binary (also `wagashi press ... --gltf FILE.glb`).
 //! - `wagashi mesh SURFACE -o OUT --size-mm H` ([`mesh`]): tetrahedralize an OBJ,
 //!   STL or glTF surface (envelope mode), with a quality report.
+//! - `wagashi tpa INPUT...` ([`tpa`]): texture-profile analysis (hardness,
+//!   cohesiveness, springiness, ...) of measured or simulated double compressions.
 //!
 //! Errors: `main` prints one line, `error: CAUSE` (the causes joined with `: `),
 //! and exits with status 1; argument errors are clap's (status 2). Ctrl-C or
@@ -37,6 +39,7 @@ mod plot;
 mod press;
 mod progress;
 mod summary;
+mod tpa;
 
 use std::process::ExitCode;
 
@@ -64,6 +67,7 @@ enum Command {
     Diagnose(diagnose::DiagnoseArgs),
     Export(export::ExportArgs),
     Mesh(mesh::MeshArgs),
+    Tpa(tpa::TpaArgs),
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
@@ -75,6 +79,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Diagnose(args) => diagnose::run(&args),
         Command::Export(args) => export::run(&args),
         Command::Mesh(args) => mesh::run(&args),
+        Command::Tpa(args) => tpa::run(&args),
     }
 }
 

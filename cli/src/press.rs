@@ -14,6 +14,7 @@
 //! | `keep.vtu`         | the keep shape (at `release_s`): displacement, region, stress     |
 //! | `final.vtu`        | the final shape (at `end_s`)                                      |
 //! | `force.svg`        | simulated (and measured) force against time                       |
+//! | `tpa.json`         | with two loading strokes in the protocol: the simulated force's texture profile ([`crate::tpa`]) |
 //! | `shapes.pvd`, `shapes/` | with `--pvd N`: N + 1 shapes evenly spaced in time           |
 //! | `frames.bin`       | with `--gltf`: the glTF's frames, for `wagashi export` ([`crate::export`]) |
 //! | `tools.csv`        | with contact tools: each tool's contact force, normal and tangential parts and contact area at every step |
@@ -502,6 +503,17 @@ fn press_bundle_as(
     write_shape(&dir.join("final.vtu"), &problem, last)?;
     write_atomic(dir.join("force.svg"), force_svg(&bundle.experiment.name, &force, measured)?.as_bytes())?;
     let mut files: Vec<String> = ["experiment.toml", "force.csv"].map(String::from).to_vec();
+    if crate::tpa::is_double_compression(&protocol.waypoints) {
+        // The texture profile of the simulated force.csv (what `wagashi tpa OUT` reports).
+        match crate::tpa::simulated_tpa(&options.output.join("force.csv"), &force) {
+            Ok(tpa) => {
+                let json = crate::tpa::tpa_json(&options.output.display().to_string(), &tpa);
+                write_atomic(dir.join("tpa.json"), format!("{}\n", serde_json::to_string_pretty(&json)?).as_bytes())?;
+                files.push("tpa.json".into());
+            }
+            Err(why) => writeln!(out, "note: no texture profile (tpa.json): {why}")?,
+        }
+    }
     if !markers.is_empty() {
         files.push("markers.csv".into());
     }

@@ -602,3 +602,49 @@ fn sphere_lifts_off_an_elastic_sweet() {
         assert!(shape <= 1e-9, "{name}: the elastic sweet keeps {shape:.3e} mm");
     }
 }
+
+/// The contact area is the area of the boundary facets on the tool: a Coulomb
+/// (mu = 0.3) plate pressing a cylinder (R = 10 mm, H = 10 mm, 1.5 mm tets, glued
+/// to the floor) 1 % reports the top face, pi R^2, within 2 % (the area is the
+/// undeformed one, and the top is a 42-gon, 0.4 % under the circle), not the
+/// top plus the side wall's first row of facets that only meet the plate along
+/// the rim; frictionless too.
+#[test]
+fn plate_contact_area_is_the_top_face() {
+    let (radius, height) = (10.0, 10.0);
+    let mesh = mesh::cylinder(radius, height, 1.5, "sweet").unwrap();
+    let protocol = ramp(0.01 * height, 1.0);
+    let top = std::f64::consts::PI * radius * radius;
+    for contact in [ToolContact::Friction(0.3), ToolContact::Frictionless] {
+        let p = SolidPress::new_3d(mesh.clone(), vec![elastic(0.05, 0.45)], protocol.clone()).unwrap();
+        let problem = with_plate_tool(&AnyPress::Solid(p), contact);
+        let settings = Settings { fixed_dt_s: Some(0.5), ..Settings::default() };
+        let r = press::simulate_any(&problem, &settings, &mut |_| {}).unwrap();
+        let last = r.tools[0].samples.last().unwrap();
+        eprintln!("{contact:?}: area {:.2} mm^2 against pi R^2 = {top:.2} mm^2", last.area_mm2);
+        assert!(last.force_n[1] > 0.0, "{contact:?}: no force");
+        assert!((last.area_mm2 / top - 1.0).abs() <= 0.02, "{contact:?}: area {} vs {top}", last.area_mm2);
+    }
+}
+
+/// Hertz's contact radius `a = sqrt(R d)`: a rigid sphere (R = 50 mm) pressed
+/// 0.1 mm into the elastic cylinder of the force test above (axisymmetric,
+/// frictionless, 0.1 mm elements within 4 mm growing by 10 % beyond). The radius
+/// of the reported area, `sqrt(A / pi)`, is within 3 % of Hertz's from d = 0.05
+/// mm on (a >= 1.6 mm, 16 elements): the contact's edge is resolved to about
+/// half an element (0.05 mm, 3 % of the smallest radius compared); the area is
+/// the undeformed top's, the flat circle Hertz's `a` bounds.
+#[test]
+fn sphere_contact_radius_follows_hertz() {
+    let (radius, depth) = (50.0, 0.1);
+    let result = sphere_indentation(elastic(0.05, 0.3), radius, 200.0, depth, 1.0, 0.1, 1.1);
+    let mut compared = 0;
+    for s in result.tools[0].samples.iter().filter(|s| s.t_s >= 0.5 - 1e-9) {
+        let hertz = (radius * depth * s.t_s).sqrt();
+        let a = (s.area_mm2 / std::f64::consts::PI).sqrt();
+        eprintln!("d = {:.3} mm: a = {a:.4} mm, Hertz {hertz:.4} mm", depth * s.t_s);
+        assert!((a / hertz - 1.0).abs() <= 0.03, "d = {}: a = {a} vs Hertz {hertz}", depth * s.t_s);
+        compared += 1;
+    }
+    assert!(compared >= 2, "{compared} samples compared");
+}

@@ -257,6 +257,7 @@ pub use experiment::{
 };
 pub use material_spec::{network_keys, read_materials_file, MaterialSpec, MissingParameter, Model};
 pub use read::{read_bundle, read_bundle_from_str, read_bundle_with, Bundle, EXPERIMENT_FILE};
+pub(crate) use series::read_force;
 pub use series::{markers_header, ForceSample, ForceSeries, MarkerSample, MarkerSeries, FORCE_HEADER};
 pub use surface_specimen::{SurfaceMeshing, BASE_BAND};
 pub use to_press::G_CM3_IN_T_MM3;

@@ -85,6 +85,13 @@
 //!    height's source, the speed read from the displacement (least squares over
 //!    10-90 % of the first stroke's travel), the separation, the window.
 //!
+//! # Texture-profile analysis
+//!
+//! [`tpa`] reduces a double compression (a raw export, a bundle's or a press
+//! output's `force.csv`) to hardness, cohesiveness, springiness, resilience,
+//! gumminess, chewiness and adhesiveness ([`analyse`], [`read_tpa_record`]); its
+//! module docs give the definitions (`wagashi tpa`).
+//!
 //! # Example
 //!
 //! ```
@@ -119,6 +126,7 @@ pub mod rheometer;
 pub mod simplify;
 pub mod stroke;
 pub mod touch;
+pub mod tpa;
 
 pub use error::ImportError;
 pub use exponent::{parse_exponent, read_exponent, GRAM_FORCE_N};
@@ -131,3 +139,4 @@ pub use rheometer::{parse_rheometer, read_rheometer};
 pub use simplify::simplify;
 pub use stroke::{find_stroke, Stroke, StrokeEnd};
 pub use touch::{detect_touch, NoTouch, TouchDetection};
+pub use tpa::{analyse, read_tpa_record, Tpa, TpaError, TpaOptions, TpaRecord, TpaStroke};
