@@ -102,6 +102,9 @@ Examples:
   # A specimen given as a closed surface (shape = \"surface\"), meshed on the fly (conforming mode):
   wagashi press bunny-trial -o out/bunny --size-mm 1.5
 
+  # A specimen given as a tetrahedral mesh (shape = \"mesh\", mesh = \"bunny.msh\"), pressed as it is:
+  wagashi mesh bunny.obj -o mesh-trial/bunny.msh --size-mm 1.5 && wagashi press mesh-trial -o out/mesh
+
   # Run again into the same folder (replaces the previous output):
   wagashi press examples/paper/mat1 -o out/mat1 --force
 
@@ -137,7 +140,8 @@ pub struct PressArgs {
 
     /// Target element size [mm]; default: a quarter of the specimen's smallest
     /// dimension (min(W, H, T) / 4 for a block, min(R, H) / 4 for a cylinder, the
-    /// smallest side of the bounding box / 4 for a surface).
+    /// smallest side of the bounding box / 4 for a surface); a mesh specimen
+    /// (shape = "mesh") is pressed with its file's cells, whatever the size.
     #[arg(long = "size-mm", value_name = "H", value_parser = positive_number, allow_negative_numbers = true)]
     pub size_mm: Option<f64>,
 
