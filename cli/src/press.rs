@@ -51,7 +51,7 @@
 //! printed with the mesh and recorded as `surface_mesh_mode` in `summary.json`.
 //! Such a specimen stands on the floor at its lowest y and always runs with
 //! contact tools (`wagashi_io::Bundle::mesh_specimen_surface`). A `shape = "mesh"`
-//! specimen (a Gmsh `.msh` or TetGen `.node`/`.ele` mesh, e.g. from `wagashi mesh`)
+//! specimen (a Gmsh `.msh`, TetGen `.node`/`.ele` or `.vtu` mesh, e.g. from `wagashi mesh`)
 //! is pressed with the cells of its file, `--size-mm` not applying, likewise on
 //! the floor and with contact tools (`wagashi_io::Bundle::specimen_mesh`).
 //!

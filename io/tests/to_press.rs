@@ -259,7 +259,7 @@ fn two_layer_block() -> fem_core::mesh::TetMesh {
     fem_core::mesh::layered_block(4.0, 2.0, &layers, 1.0).unwrap()
 }
 
-/// A mesh written by the io writer (Gmsh and TetGen) is read back through
+/// A mesh written by the io writer (Gmsh, TetGen, VTK) is read back through
 /// `shape = "mesh"`: its nodes, cells and regions as written, each region with
 /// the material `[specimen.regions]` gives it, the floor and top found on the
 /// boundary, and contact tools. A node no cell uses is left out.
@@ -269,7 +269,7 @@ fn a_mesh_specimen_is_read_from_its_file_with_regions_mapped_to_materials() {
     let mesh = two_layer_block();
     let mut written = mesh.clone();
     written.nodes.push([40.0, 40.0, 40.0]); // a construction point no cell uses
-    for file in ["specimen.msh", "specimen.node"] {
+    for file in ["specimen.msh", "specimen.node", "specimen.vtu"] {
         let toml = mesh_experiment(file, MESH_REGIONS);
         let b = bundle(&[("experiment.toml", &toml)]);
         wagashi_io::tetmesh::write_tetmesh(b.file(file), &written).unwrap();

@@ -51,7 +51,7 @@ pub enum Shape {
     Cylinder,
     /// A closed surface (OBJ, glTF or GLB) named by `surface`, meshed on the fly.
     Surface,
-    /// A tetrahedral mesh (Gmsh `.msh` 4.1, TetGen `.node`/`.ele`) named by `mesh`,
+    /// A tetrahedral mesh (Gmsh `.msh` 4.1, TetGen `.node`/`.ele`, `.vtu`) named by `mesh`,
     /// pressed as it is; 3D only.
     Mesh,
 }

@@ -2,8 +2,9 @@
 //! it is.
 //!
 //! - The mesh file (`specimen.mesh`, relative to the bundle folder and confined
-//!   to it like every file a bundle names) is a Gmsh MSH 4.1 ASCII file (`.msh`)
-//!   or a TetGen mesh (`.node` or `.ele`, with its siblings), read by
+//!   to it like every file a bundle names) is a Gmsh MSH 4.1 ASCII file (`.msh`),
+//!   a TetGen mesh (`.node` or `.ele`, with its siblings) or a VTK `.vtu` with
+//!   ASCII data arrays, read by
 //!   [`crate::tetmesh::read_tetmesh`]. These files carry no unit: coordinates are
 //!   taken in mm, as that reader and `wagashi mesh` (which writes them) do. The
 //!   specimen's frame is the file's: y up, the floor at the lowest y.
@@ -25,7 +26,8 @@
 //!   against each other, named by their sizes.
 //! - Regions: each mesh region (a Gmsh volume physical group, named by
 //!   `$PhysicalNames`, else `physical<tag>`, or `volume<tag>` without a group; a
-//!   TetGen region attribute `region<value>`) takes the material that
+//!   TetGen region attribute `region<value>`; a `.vtu`'s cell data `region`,
+//!   `gmsh:physical` or `CellEntityIds`, see [`crate::tetmesh::vtu`]) takes the material that
 //!   `[specimen.regions]` maps it to, or `material` for all, exactly as the
 //!   regions of a surface ([`Bundle::surface_region_materials`]).
 //! - Support, top and tools: as for a surface specimen (`surface_specimen.rs`):

@@ -60,7 +60,7 @@
 //! shape = "surface"
 //! surface = "daifuku.obj"   # OBJ, STL (mm) or glTF/GLB (m), meshed on the fly
 //! # shape = "mesh"
-//! # mesh = "daifuku.msh"    # Gmsh .msh 4.1 ASCII or TetGen .node/.ele [mm], pressed as it is
+//! # mesh = "daifuku.msh"    # Gmsh .msh 4.1, TetGen .node/.ele or ASCII .vtu [mm], pressed as it is
 //!
 //! [specimen.regions]        # or `material = "gel"` for the whole specimen
 //! skin = "mochi"            # OBJ object/group, glTF mesh; Gmsh volume physical group, TetGen region
@@ -74,7 +74,7 @@
 //!   files carry no unit; coordinates are mm, as [`crate::tetmesh`] reads them.
 //!   The element size does not apply. Region names are Gmsh's volume physical
 //!   group names (`physical<tag>` if unnamed, `volume<tag>` without a group) or
-//!   TetGen's `region<value>`. Nodes no tetrahedron uses are left out. Refused,
+//!   TetGen's `region<value>` (a `.vtu`: [`crate::tetmesh::vtu`]). Nodes no tetrahedron uses are left out. Refused,
 //!   naming `specimen.mesh` on its line and then the mesh file (with its line
 //!   where the defect has one): a missing or unreadable file, another extension,
 //!   a file without tetrahedra, a flat tetrahedron or another volume element, a

@@ -123,14 +123,11 @@ fn validate_specimen(e: &Experiment, map: &SourceMap) -> Result<(), BundleError>
                     map.invalid("dimension", "shape = \"mesh\" is a tetrahedral (3D) mesh: it needs dimension = 3")
                 );
             }
-            match TetMeshFormat::of_path(Path::new(file)) {
-                Ok(TetMeshFormat::Gmsh | TetMeshFormat::TetGen) => {}
-                Ok(TetMeshFormat::Vtu) | Err(_) => {
-                    return Err(map.invalid(
-                        "specimen.mesh",
-                        format!("\"{file}\": expected a Gmsh .msh (4.1 ASCII) or a TetGen .node/.ele mesh"),
-                    ))
-                }
+            if TetMeshFormat::of_path(Path::new(file)).is_err() {
+                return Err(map.invalid(
+                    "specimen.mesh",
+                    format!("\"{file}\": expected a Gmsh .msh (4.1 ASCII), a TetGen .node/.ele or a .vtu mesh"),
+                ));
             }
             refuse_key(map, "specimen.size_mm", s.size_mm.is_some(), not_for("size_mm", "a block"))?;
             refuse_key(map, "specimen.radius_mm", s.radius_mm.is_some(), not_for("radius_mm", "a cylinder"))?;
