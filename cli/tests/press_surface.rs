@@ -199,7 +199,7 @@ fn the_bunny_becomes_a_press_problem_at_a_coarse_size() {
 /// into a Gmsh `.msh` and pressed through `shape = "mesh"`: the same mesh as the
 /// surface meshed on the fly at the same size, so the same plate force (to the
 /// solver's tolerance), within the bounds above; the output names its own copy
-/// of the mesh. A TetGen mesh of the same cube gives the same force.
+/// of the mesh. A TetGen or `.vtu` mesh of the same cube gives the same force.
 #[test]
 fn a_mesh_made_by_wagashi_mesh_is_pressed_through_shape_mesh() {
     let tmp = tempfile::tempdir().unwrap();
@@ -208,7 +208,7 @@ fn a_mesh_made_by_wagashi_mesh_is_pressed_through_shape_mesh() {
     let o = wagashi_in(tmp.path(), ["press", "bundle", "-o", "surface-out", "--size-mm", "5", "--dt", "1"]);
     assert_success(&o);
     let by_surface = *plate_forces(&tmp.path().join("surface-out")).last().unwrap();
-    for (file, out) in [("cube.msh", "mesh-out"), ("cube.node", "tetgen-out")] {
+    for (file, out) in [("cube.msh", "mesh-out"), ("cube.node", "tetgen-out"), ("cube.vtu", "vtu-out")] {
         let target = format!("bundle/{file}");
         let o = wagashi_in(
             tmp.path(),
