@@ -129,7 +129,7 @@ pub fn check_memory(volume_mm3: f64, size_mm: f64, size_flag: &str, allow_large:
 /// [`check_memory`] for each 3D trial of a campaign (`fit`, `diagnose`) at
 /// `size_mm`, else its default size; `size_given`: whether `--size-mm` was
 /// given (for the message). With `axisymmetric`, the trials are 2D sections and
-/// nothing is checked.
+/// nothing is checked; nor is a trial whose specimen is a mesh file.
 pub fn check_trials_memory(
     trials: &[&wagashi_io::Bundle],
     size_mm: Option<f64>,
@@ -140,7 +140,8 @@ pub fn check_trials_memory(
     if axisymmetric {
         return Ok(());
     }
-    for b in trials.iter().filter(|b| b.experiment.dimension == 3) {
+    // A `shape = "mesh"` trial has the cells of its file, whatever the size.
+    for b in trials.iter().filter(|b| b.experiment.dimension == 3 && b.mesh_path().is_none()) {
         if let (Some(volume), Some(h)) = (b.volume_mm3(), size_mm.or_else(|| b.default_size_mm())) {
             let flag = if size_given { "--size-mm" } else { "the default size" };
             check_memory(volume, h, flag, allow_large)

@@ -19,7 +19,7 @@
 //! | `frames.bin`       | with `--gltf`: the glTF's frames, for `wagashi export` ([`crate::export`]) |
 //! | `tools.csv`        | with contact tools: each tool's contact force, normal and tangential parts and contact area at every step |
 //! | `contact_nodes.json` | with contact tools: the nodes touching each tool at the kept times |
-//! | `specimen/FILE`    | with `shape = "surface"`: a copy of the specimen's surface file, which the output's `experiment.toml` names |
+//! | `specimen/FILE`    | with `shape = "surface"` or `"mesh"`: a copy of the specimen's surface or mesh file(s), which the output's `experiment.toml` names |
 //! | `tools/NAME.EXT`   | with surface tools: a copy of each tool's surface file, which the output's `experiment.toml` names |
 //!
 //! Trials other than the seed's press (a sphere, a punch, a surface tool,
@@ -51,7 +51,10 @@
 //! defect, with envelope mode suggested) or `--mesh-mode envelope`; the mode is
 //! printed with the mesh and recorded as `surface_mesh_mode` in `summary.json`.
 //! Such a specimen stands on the floor at its lowest y and always runs with
-//! contact tools (`wagashi_io::Bundle::mesh_specimen_surface`).
+//! contact tools (`wagashi_io::Bundle::mesh_specimen_surface`). A `shape = "mesh"`
+//! specimen (a Gmsh `.msh`, TetGen `.node`/`.ele` or `.vtu` mesh, e.g. from `wagashi mesh`)
+//! is pressed with the cells of its file, `--size-mm` not applying, likewise on
+//! the floor and with contact tools (`wagashi_io::Bundle::specimen_mesh`).
 //!
 //! `--axisymmetric` simulates a cylinder bundle by its axisymmetric `r-y` section
 //! (`Bundle::to_press_axisymmetric`): the same full-circle force, shapes written
@@ -100,6 +103,9 @@ Examples:
   # A specimen given as a closed surface (shape = \"surface\"), meshed on the fly (conforming mode):
   wagashi press bunny-trial -o out/bunny --size-mm 1.5
 
+  # A specimen given as a tetrahedral mesh (shape = \"mesh\", mesh = \"bunny.msh\"), pressed as it is:
+  wagashi mesh bunny.obj -o mesh-trial/bunny.msh --size-mm 1.5 && wagashi press mesh-trial -o out/mesh
+
   # Run again into the same folder (replaces the previous output):
   wagashi press examples/paper/mat1 -o out/mat1 --force
 
@@ -135,7 +141,8 @@ pub struct PressArgs {
 
     /// Target element size [mm]; default: a quarter of the specimen's smallest
     /// dimension (min(W, H, T) / 4 for a block, min(R, H) / 4 for a cylinder, the
-    /// smallest side of the bounding box / 4 for a surface).
+    /// smallest side of the bounding box / 4 for a surface); a mesh specimen
+    /// (shape = "mesh") is pressed with its file's cells, whatever the size.
     #[arg(long = "size-mm", value_name = "H", value_parser = positive_number, allow_negative_numbers = true)]
     pub size_mm: Option<f64>,
 
@@ -411,7 +418,9 @@ fn press_bundle_as(
         (None, None) => (1.0, "default"),
     };
     let surface_mesh_mode = bundle.surface_path().map(|_| how.surface_mesh.as_str());
-    if bundle.experiment.dimension == 3 && !how.axisymmetric {
+    // A `shape = "mesh"` specimen has the cells of its file, whatever the size.
+    let mesh_file = bundle.mesh_path();
+    if bundle.experiment.dimension == 3 && !how.axisymmetric && mesh_file.is_none() {
         if let Some(volume) = bundle.volume_mm3() {
             crate::outputs::check_memory(volume, size_mm, options.size_origin, options.allow_large)?;
         }
@@ -445,9 +454,13 @@ fn press_bundle_as(
         (_, Some(mode)) => format!("{}D, surface meshed in {mode} mode", mesh.dimension),
         _ => format!("{}D", mesh.dimension),
     };
+    let elements = match &mesh_file {
+        Some(path) => format!("the elements of {}", path.display()),
+        None => format!("{size_mm} mm elements ({size_origin})"),
+    };
     writeln!(
         out,
-        "{}: {model}, {size_mm} mm elements ({size_origin}), {} {}, {} nodes",
+        "{}: {model}, {elements}, {} {}, {} nodes",
         bundle.experiment.name, mesh.num_cells, mesh.cell_kind, mesh.num_nodes
     )?;
 
@@ -738,8 +751,8 @@ fn contact_nodes_json(result: &PressResult) -> anyhow::Result<String> {
     Ok(serde_json::to_string_pretty(&serde_json::json!({ "tools": tools }))? + "\n")
 }
 
-/// Copies the specimen's surface file (`shape = "surface"`) into
-/// `dir/specimen/FILE` and the surface file of each surface tool into `dir/tools/NAME.EXT` (NAME:
+/// Copies the specimen's surface or mesh file (`shape = "surface"` or `"mesh"`)
+/// into `dir/specimen/FILE` and the surface file of each surface tool into `dir/tools/NAME.EXT` (NAME:
 /// the tool's, unique) and points `experiment` at the copies, so that the output
 /// reads back as a bundle (`press OUT`, `export OUT`). Returns the files written,
 /// relative to `dir`.
@@ -749,17 +762,32 @@ fn copy_tool_surfaces(
     dir: &Path,
 ) -> anyhow::Result<Vec<String>> {
     let mut written = Vec::new();
-    // The specimen's own surface, likewise (`specimen/NAME.EXT`).
-    if let Some(file) = experiment.specimen.surface.as_mut() {
-        let from = bundle.dir.join(file.as_str());
-        let name = Path::new(file.as_str()).file_name().map(|n| n.to_string_lossy().into_owned());
-        let relative = format!("{SPECIMEN_SURFACE_DIR}/{}", name.unwrap_or_else(|| "surface.obj".into()));
-        let bytes = wagashi_io::input::read(&from).with_context(|| format!("{}: cannot read", from.display()))?;
+    // The specimen's own surface or mesh, likewise (`specimen/NAME.EXT`; a TetGen
+    // mesh with its `.node`, `.ele` and, when there is one, `.face` file).
+    let specimen = &mut experiment.specimen;
+    if let Some(file) = specimen.surface.as_mut().or(specimen.mesh.as_mut()) {
+        let name = Path::new(file.as_str()).file_name().map_or_else(|| "surface.obj".into(), |n| n.to_string_lossy());
+        let relative = format!("{SPECIMEN_SURFACE_DIR}/{name}");
+        let tetgen = matches!(Path::new(&relative).extension().and_then(|e| e.to_str()), Some("node" | "ele"));
+        let copies: Vec<(String, String, bool)> = if tetgen {
+            let stem = |f: &str| Path::new(f).with_extension("").to_string_lossy().into_owned();
+            let (from, to) = (stem(file), stem(&relative));
+            ["node", "ele", "face"].map(|ext| (format!("{from}.{ext}"), format!("{to}.{ext}"), ext != "face")).into()
+        } else {
+            vec![(file.clone(), relative.clone(), true)]
+        };
         std::fs::create_dir_all(dir.join(SPECIMEN_SURFACE_DIR))
             .with_context(|| format!("{}: cannot create", dir.join(SPECIMEN_SURFACE_DIR).display()))?;
-        write_atomic(dir.join(&relative), &bytes)?;
-        *file = relative.clone();
-        written.push(relative);
+        for (from, to, required) in copies {
+            let from = bundle.dir.join(from);
+            if !required && !from.is_file() {
+                continue;
+            }
+            let bytes = wagashi_io::input::read(&from).with_context(|| format!("{}: cannot read", from.display()))?;
+            write_atomic(dir.join(&to), &bytes)?;
+            written.push(to);
+        }
+        *file = relative;
     }
     let mut copy = |tool: &str, file: &mut String| -> anyhow::Result<()> {
         let from = bundle.dir.join(file.as_str());

@@ -194,3 +194,56 @@ fn the_bunny_becomes_a_press_problem_at_a_coarse_size() {
     assert_eq!(p.tools.len(), 1);
     assert_eq!(p.tools[0].name, "plate");
 }
+
+/// The 10 mm cube of the test above, meshed by `wagashi mesh --mode conforming`
+/// into a Gmsh `.msh` and pressed through `shape = "mesh"`: the same mesh as the
+/// surface meshed on the fly at the same size, so the same plate force (to the
+/// solver's tolerance), within the bounds above; the output names its own copy
+/// of the mesh. A TetGen or `.vtu` mesh of the same cube gives the same force.
+#[test]
+fn a_mesh_made_by_wagashi_mesh_is_pressed_through_shape_mesh() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cube = box_obj([10.0; 3], false);
+    let surface_dir = bundle(tmp.path(), "cube.obj", cube.as_bytes(), &experiment("cube.obj", 0.5));
+    let o = wagashi_in(tmp.path(), ["press", "bundle", "-o", "surface-out", "--size-mm", "5", "--dt", "1"]);
+    assert_success(&o);
+    let by_surface = *plate_forces(&tmp.path().join("surface-out")).last().unwrap();
+    for (file, out) in [("cube.msh", "mesh-out"), ("cube.node", "tetgen-out"), ("cube.vtu", "vtu-out")] {
+        let target = format!("bundle/{file}");
+        let o = wagashi_in(
+            tmp.path(),
+            ["mesh", "bundle/cube.obj", "-o", &target, "--size-mm", "5", "--mode", "conforming"],
+        );
+        assert_success(&o);
+        let toml = experiment("cube.obj", 0.5)
+            .replace("shape = \"surface\"\nsurface = \"cube.obj\"", &format!("shape = \"mesh\"\nmesh = \"{file}\""));
+        std::fs::write(surface_dir.join("experiment.toml"), &toml).unwrap();
+        let before = std::fs::read(surface_dir.join(file)).unwrap();
+        // --size-mm does not apply to a mesh: the file's cells are pressed.
+        let o = wagashi_in(tmp.path(), ["press", "bundle", "-o", out, "--size-mm", "1", "--dt", "1"]);
+        assert_success(&o);
+        let said = stdout(&o);
+        assert!(said.contains("the elements of ") && said.contains(file), "{said}");
+        let out = tmp.path().join(out);
+        let s = summary(&out);
+        let AnyPress::Solid(p) = wagashi_io::read_bundle(&surface_dir).unwrap().to_press(1.0).unwrap() else {
+            panic!("a mesh specimen is solid")
+        };
+        assert_eq!(s["cells"].as_u64(), Some(p.mesh.cells.len() as u64));
+        assert_eq!(s["nodes"].as_u64(), Some(p.mesh.nodes.len() as u64));
+        assert!((p.mesh.measure() - 1000.0).abs() <= 1e-9 * 1000.0);
+        let end = *plate_forces(&out).last().unwrap();
+        let (e, nu, area, strain) = (0.05, 0.3, 100.0, 0.05);
+        let uniaxial = e * area * strain;
+        let confined = e * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu)) * area * strain;
+        assert!(end >= uniaxial && end <= confined, "{file}: {end} N not in [{uniaxial}, {confined}]");
+        assert!(
+            (end - by_surface).abs() <= 1e-6 * by_surface,
+            "{file}: {end} N by the mesh, {by_surface} N by the surface"
+        );
+        let written = std::fs::read_to_string(out.join("experiment.toml")).unwrap();
+        assert!(written.contains(&format!("mesh = \"specimen/{file}\"")), "{written}");
+        assert_eq!(std::fs::read(out.join("specimen").join(file)).unwrap(), before);
+        assert_eq!(std::fs::read(surface_dir.join(file)).unwrap(), before, "the input was modified");
+    }
+}

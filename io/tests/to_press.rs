@@ -238,3 +238,141 @@ fn edits_after_reading_are_checked_again() {
         "specimen.size_mm",
     );
 }
+
+/// A two-layer block (filling below crust, 4 x 3 x 2 mm) as a `shape = "mesh"`
+/// bundle pressed by frictionless plates, with `mesh` naming `file`.
+fn mesh_experiment(file: &str, regions: &str) -> String {
+    format!(
+        "format = \"wagashi-experiment/1\"\nname = \"layered\"\ndimension = 3\n\n[specimen]\nshape = \"mesh\"\n\
+         mesh = \"{file}\"\n\n[specimen.regions]\n{regions}\n[materials.gel]\nmodel = \"elastic\"\npoisson = 0.45\n\
+         E_MPa = 0.05\n\n[materials.soft]\nmodel = \"elastic\"\npoisson = 0.3\nE_MPa = 0.02\n\n[protocol]\n\
+         tool = \"plate\"\ntool_contact = \"frictionless\"\nsupport = \"frictionless\"\n\
+         waypoints = [[0.0, 0.0], [2.0, 0.3]]\nrelease_s = 2.0\nend_s = 4.0\n"
+    )
+}
+
+const MESH_REGIONS: &str = "crust = \"gel\"\nfilling = \"soft\"\n";
+
+fn two_layer_block() -> fem_core::mesh::TetMesh {
+    let layers = [("filling", 2.0), ("crust", 1.0)]
+        .map(|(region, thickness_mm)| fem_core::mesh::Layer { region: region.into(), thickness_mm });
+    fem_core::mesh::layered_block(4.0, 2.0, &layers, 1.0).unwrap()
+}
+
+/// A mesh written by the io writer (Gmsh, TetGen, VTK) is read back through
+/// `shape = "mesh"`: its nodes, cells and regions as written, each region with
+/// the material `[specimen.regions]` gives it, the floor and top found on the
+/// boundary, and contact tools. A node no cell uses is left out.
+#[test]
+fn a_mesh_specimen_is_read_from_its_file_with_regions_mapped_to_materials() {
+    use fem_core::material::Rheology;
+    let mesh = two_layer_block();
+    let mut written = mesh.clone();
+    written.nodes.push([40.0, 40.0, 40.0]); // a construction point no cell uses
+    for file in ["specimen.msh", "specimen.node", "specimen.vtu"] {
+        let toml = mesh_experiment(file, MESH_REGIONS);
+        let b = bundle(&[("experiment.toml", &toml)]);
+        wagashi_io::tetmesh::write_tetmesh(b.file(file), &written).unwrap();
+        let bundle = read_bundle(&b.dir).unwrap();
+        assert!(bundle.has_contact_tools());
+        assert_eq!(bundle.volume_mm3().map(|v| (v - 24.0).abs() < 1e-9), Some(true), "{file}");
+        // The element size does not apply to a mesh specimen.
+        let p = solid(bundle.to_press(0.25).unwrap());
+        assert_eq!((p.mesh.nodes.len(), p.mesh.cells.len()), (mesh.nodes.len(), mesh.cells.len()), "{file}");
+        assert_eq!(p.mesh.region_names, vec!["filling".to_string(), "crust".to_string()], "{file}");
+        let e: Vec<Rheology> = p.materials.iter().map(|m| m.rheology).collect();
+        assert_eq!(e, vec![Rheology::Elastic { e_mpa: 0.02 }, Rheology::Elastic { e_mpa: 0.05 }], "{file}");
+        let crust = p.mesh.cell_regions.iter().filter(|&&r| r == 1).count();
+        assert_eq!(crust, mesh.cell_regions.iter().filter(|&&r| r == 1).count(), "{file}");
+        let (bottom, top) = (p.mesh.node_set("bottom").unwrap(), p.mesh.node_set("top").unwrap());
+        assert_eq!((bottom.len(), top.len()), (5 * 3, 5 * 3), "{file}");
+        assert!(bottom.iter().all(|&i| p.mesh.nodes[i as usize][1] == 0.0));
+        assert!(top.iter().all(|&i| p.mesh.nodes[i as usize][1] == 3.0));
+        assert_eq!(p.tools.iter().map(|t| t.name.as_str()).collect::<Vec<_>>(), vec!["plate"]);
+        // `material` alone gives every region the same material.
+        let toml = edit(&toml, "[specimen.regions]\ncrust = \"gel\"\nfilling = \"soft\"\n", "material = \"gel\"\n");
+        std::fs::write(b.file("experiment.toml"), &toml).unwrap();
+        let p = solid(read_bundle(&b.dir).unwrap().to_press(1.0).unwrap());
+        assert!(p.materials.iter().all(|m| m.rheology == Rheology::Elastic { e_mpa: 0.05 }), "{file}");
+    }
+}
+
+/// A bad mesh specimen is refused in one line naming `experiment.toml`, the
+/// line of the key at fault and the key; a defect inside the mesh file names
+/// that file too (and its line, where it has one).
+#[test]
+fn a_mesh_specimen_refuses_bad_input_naming_file_line_and_key() {
+    let head = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n";
+    let four_nodes =
+        |z: f64| format!("$Nodes\n1 4 1 4\n3 1 0 4\n1\n2\n3\n4\n0 0 0\n1 0 0\n0 1 0\n0 0 {z}\n$EndNodes\n");
+    let flat = format!("{head}{}$Elements\n1 1 1 1\n3 1 4 1\n1 1 2 3 4\n$EndElements\n", four_nodes(0.0));
+    let triangles_only = format!("{head}{}$Elements\n1 1 1 1\n2 1 2 1\n1 1 2 3\n$EndElements\n", four_nodes(1.0));
+    let mut apart = two_layer_block();
+    let shift = apart.nodes.len() as u32;
+    let copy = two_layer_block();
+    apart.nodes.extend(copy.nodes.iter().map(|p| [p[0] + 10.0, p[1], p[2]]));
+    apart.cells.extend(copy.cells.iter().map(|c| c.map(|v| v + shift)));
+    apart.cell_regions.extend(copy.cell_regions.iter().copied());
+    let apart = wagashi_io::tetmesh::gmsh_string(&apart);
+    let good = wagashi_io::tetmesh::gmsh_string(&two_layer_block());
+    let regions = MESH_REGIONS;
+    // (mesh file content, experiment.toml edit, key, line needle, cause)
+    let cases: Vec<(&str, String, &str, &str, &str)> = vec![
+        ("", mesh_experiment("absent.msh", regions), "specimen.mesh", "mesh =", "absent.msh: cannot read"),
+        (&flat, mesh_experiment("m.msh", regions), "specimen.mesh", "mesh =", "m.msh:19: element: flat tetrahedron"),
+        (&triangles_only, mesh_experiment("m.msh", regions), "specimen.mesh", "mesh =", "no tetrahedra"),
+        (&apart, mesh_experiment("m.msh", regions), "specimen.mesh", "mesh =", "form 2 pieces that share no face"),
+        (
+            &good,
+            mesh_experiment("m.msh", "crust = \"gel\"\ncream = \"soft\"\n"),
+            "specimen.regions",
+            "[specimen.regions]",
+            "\"cream\" is not a region of m.msh (its regions: \"filling\", \"crust\")",
+        ),
+        (
+            &good,
+            mesh_experiment("m.msh", "crust = \"gel\"\n"),
+            "specimen.regions",
+            "[specimen.regions]",
+            "region \"filling\" of m.msh has no material",
+        ),
+        (
+            &good,
+            edit(&mesh_experiment("m.msh", regions), "dimension = 3", "dimension = 2"),
+            "dimension",
+            "dimension =",
+            "needs dimension = 3",
+        ),
+        (&good, mesh_experiment("m.obj", regions), "specimen.mesh", "mesh =", "expected a Gmsh .msh"),
+        (&good, mesh_experiment("../m.msh", regions), "specimen.mesh", "mesh =", "path leaves the bundle folder"),
+        (
+            &good,
+            edit(&mesh_experiment("m.msh", regions), "mesh = \"m.msh\"\n", ""),
+            "specimen.mesh",
+            "[specimen]",
+            "missing required key",
+        ),
+        (
+            &good,
+            edit(
+                &mesh_experiment("m.msh", regions),
+                "mesh = \"m.msh\"\n",
+                "mesh = \"m.msh\"\nsize_mm = [1.0, 1.0, 1.0]\n",
+            ),
+            "specimen.size_mm",
+            "size_mm",
+            "size_mm belongs to a block",
+        ),
+    ];
+    for (content, toml, key, needle, cause) in cases {
+        let mut files = vec![("experiment.toml", toml.as_str())];
+        if !content.is_empty() {
+            files.push(("m.msh", content));
+        }
+        let b = bundle(&files);
+        let result = read_bundle(&b.dir).and_then(|bundle| bundle.to_press(1.0));
+        let msg = assert_invalid(result, &b.file("experiment.toml"), line_of(&toml, needle), key);
+        assert!(msg.contains(cause), "wanted `{cause}` in `{msg}`");
+        assert_eq!(msg.lines().count(), 1, "{msg}");
+    }
+}

@@ -403,7 +403,7 @@ pub fn peak_stress_mpa(bundles: &[Bundle]) -> Option<f64> {
                     w * t
                 }
                 Shape::Cylinder => std::f64::consts::PI * specimen.radius_mm?.powi(2),
-                Shape::Surface => return None,
+                Shape::Surface | Shape::Mesh => return None,
             };
             let peak = b.force.as_ref()?.samples.iter().map(|s| s.force_n).fold(f64::NEG_INFINITY, f64::max);
             let stress = peak / area;

@@ -1,7 +1,7 @@
 //! The files a bundle names stay inside its folder.
 //!
 //! Every file `experiment.toml` names (`data.force`, `data.markers`,
-//! `specimen.surface`, `protocol.tool_surface`, `protocol.tools[i].surface`) is
+//! `specimen.surface`, `specimen.mesh`, `protocol.tool_surface`, `protocol.tools[i].surface`) is
 //! taken relative to the bundle folder and must lie inside it: a bundle from
 //! elsewhere cannot make wagashi read a file outside its folder, or copy one
 //! into an output. A name is refused, as
@@ -33,6 +33,7 @@ pub(crate) fn confine_paths(e: &Experiment, dir: &Path, map: &SourceMap) -> Resu
         named.extend(data.markers.as_deref().map(|f| ("data.markers".to_string(), f)));
     }
     named.extend(e.specimen.surface.as_deref().map(|f| ("specimen.surface".to_string(), f)));
+    named.extend(e.specimen.mesh.as_deref().map(|f| ("specimen.mesh".to_string(), f)));
     named.extend(e.protocol.tool_surface.as_deref().map(|f| ("protocol.tool_surface".to_string(), f)));
     for (i, t) in e.protocol.tools.iter().enumerate() {
         named.extend(t.surface.as_deref().map(|f| (format!("protocol.tools[{i}].surface"), f)));

@@ -49,8 +49,11 @@ pub enum Shape {
     Block,
     /// A cylinder of `radius_mm` around the y axis (x = z = 0), `height_mm` tall; 3D only.
     Cylinder,
-    /// A closed surface (OBJ, glTF or GLB) named by `surface`.
+    /// A closed surface (OBJ, glTF or GLB) named by `surface`, meshed on the fly.
     Surface,
+    /// A tetrahedral mesh (Gmsh `.msh` 4.1, TetGen `.node`/`.ele`, `.vtu`) named by `mesh`,
+    /// pressed as it is; 3D only.
+    Mesh,
 }
 
 impl Shape {
@@ -60,6 +63,7 @@ impl Shape {
             Shape::Block => "block",
             Shape::Cylinder => "cylinder",
             Shape::Surface => "surface",
+            Shape::Mesh => "mesh",
         }
     }
 }
@@ -68,7 +72,7 @@ impl Shape {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Specimen {
-    /// Block, cylinder or surface.
+    /// Block, cylinder, surface or mesh.
     pub shape: Shape,
     /// Block only: `[W, H, T]` [mm], each > 0.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -90,7 +94,7 @@ pub struct Specimen {
     /// seed's choice; the default) or `"strain"` (plane strain, forces per T).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub plane: Option<Plane>,
-    /// The one material of an unlayered block or cylinder (or of a whole surface).
+    /// The one material of an unlayered block or cylinder (or of a whole surface or mesh).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub material: Option<String>,
     /// Block only: layers stacked along y, bottom first; thicknesses sum to H.
@@ -99,7 +103,11 @@ pub struct Specimen {
     /// Surface only: the closed surface file, relative to the bundle folder.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub surface: Option<String>,
-    /// Surface only: surface region (OBJ object/group, glTF mesh) -> material name.
+    /// Mesh only: the tetrahedral mesh file, relative to the bundle folder.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mesh: Option<String>,
+    /// Surface or mesh only: region (OBJ object/group, glTF mesh; Gmsh volume
+    /// physical group, TetGen region) -> material name.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub regions: BTreeMap<String, String>,
 }

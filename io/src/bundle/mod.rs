@@ -19,9 +19,10 @@
 //! - `[specimen] plane = "stress" | "strain"` (optional, `dimension = 2` only;
 //!   default `"stress"`, the seed's plane stress with thickness T).
 //! - Required keys: `format`, `name`, `dimension`, `[specimen] shape`, the shape's
-//!   size keys (`size_mm`; `radius_mm` and `height_mm`; `surface`), a block's
-//!   `material` or `[[specimen.layers]]` (not both), a cylinder's `material`, a
-//!   surface's `[specimen.regions]` (or `material`), and `[protocol] tool`,
+//!   size keys (`size_mm`; `radius_mm` and `height_mm`; `surface`; `mesh`), a
+//!   block's `material` or `[[specimen.layers]]` (not both), a cylinder's
+//!   `material`, a surface's or mesh's `[specimen.regions]` (or `material`), and
+//!   `[protocol] tool`,
 //!   `tool_contact`, `support`, `waypoints`, `release_s`, `end_s`;
 //!   `tool_radius_mm` for a sphere or punch, `tool_surface` for a surface tool,
 //!   `friction` when a contact is `"friction"`. A key that belongs to another
@@ -31,18 +32,55 @@
 //! - "The specimen's smallest size" of the marker check is min(W, H, T) for a
 //!   block (in 2D too) and min(2R, H) for a cylinder; in 3D the distance is to the
 //!   surface of the box or cylinder, in 2D to the rectangle `[0, W] x [0, H]`.
-//! - Markers of a `surface` specimen are not checked against the surface when the
-//!   bundle is read (the surface is read when it is meshed, by `to_press`; a
-//!   marker off the mesh is then refused by the engine, naming `data.markers`).
+//! - Markers of a `surface` or `mesh` specimen are not checked against its
+//!   shape when the bundle is read (the file is read by `to_press`; a marker off
+//!   the mesh is then refused by the engine, naming `data.markers`).
 //! - A material in a `--materials` file replaces the bundle's table of the same name.
 //! - Every file the bundle names (`data.force`, `data.markers`,
-//!   `specimen.surface`, `protocol.tool_surface`, `protocol.tools[i].surface`)
-//!   lies inside the bundle folder, symlinks followed: an absolute path, a `..`
+//!   `specimen.surface`, `specimen.mesh`, `protocol.tool_surface`,
+//!   `protocol.tools[i].surface`) lies inside the bundle folder, symlinks followed: an absolute path, a `..`
 //!   that climbs out of the folder or a symlink that points out of it is refused,
 //!   `FILE:LINE: KEY: path leaves the bundle folder`.
 //! - `[protocol] tool_surface_units` (optional, `tool = "surface"` only): see below.
 //! - `[[protocol.tools]]` (optional): more rigid tools, see below.
 //! - `[effects]` (optional): candidate effects of the gap diagnosis, see below.
+//!
+//! ## Specimens given by a file: `shape = "surface"` and `shape = "mesh"`
+//!
+//! Both are 3D only and always run with rigid contact tools placed against the
+//! shape's bounding box; the specimen stands on the floor at its lowest y, and
+//! the node sets `bottom` and `top` are its boundary nodes at the lowest and
+//! highest y (the bottom must span a triangle). Each region of the file takes
+//! the material `[specimen.regions]` maps it to, or `material` for all; a key
+//! that names no region of the file, or a region left without a material, is
+//! refused naming `specimen.regions` and listing the file's regions.
+//!
+//! ```toml
+//! [specimen]
+//! shape = "surface"
+//! surface = "daifuku.obj"   # OBJ, STL (mm) or glTF/GLB (m), meshed on the fly
+//! # shape = "mesh"
+//! # mesh = "daifuku.msh"    # Gmsh .msh 4.1, TetGen .node/.ele or ASCII .vtu [mm], pressed as it is
+//!
+//! [specimen.regions]        # or `material = "gel"` for the whole specimen
+//! skin = "mochi"            # OBJ object/group, glTF mesh; Gmsh volume physical group, TetGen region
+//! filling = "anko"
+//! ```
+//!
+//! - `surface`: a closed surface in its format's unit (mm for OBJ and STL, m for
+//!   glTF/GLB), meshed at the element size of [`Bundle::to_press`] (see
+//!   [`SurfaceMeshing`]).
+//! - `mesh`: a tetrahedral mesh made by `wagashi mesh`, Gmsh or TetGen. The
+//!   files carry no unit; coordinates are mm, as [`crate::tetmesh`] reads them.
+//!   The element size does not apply. Region names are Gmsh's volume physical
+//!   group names (`physical<tag>` if unnamed, `volume<tag>` without a group) or
+//!   TetGen's `region<value>` (a `.vtu`: [`crate::tetmesh::vtu`]). Nodes no tetrahedron uses are left out. Refused,
+//!   naming `specimen.mesh` on its line and then the mesh file (with its line
+//!   where the defect has one): a missing or unreadable file, another extension,
+//!   a file without tetrahedra, a flat tetrahedron or another volume element, a
+//!   face shared by more than two tetrahedra or two tetrahedra on the same side
+//!   of their shared face (a fold), and cells in several pieces that share no
+//!   face. A mesh in `dimension = 2` is refused naming `dimension`.
 //!
 //! ## Markers: their frame
 //!
@@ -244,6 +282,7 @@
 mod confine;
 mod experiment;
 mod material_spec;
+mod mesh_specimen;
 mod read;
 mod series;
 mod surface_specimen;

@@ -119,15 +119,16 @@ impl Bundle {
         Ok(mesh)
     }
 
-    /// The material of each region of `mesh` (a mesh of the specimen's surface),
-    /// in region order (module docs).
+    /// The material of each region of `mesh` (a mesh of the specimen's surface,
+    /// or the mesh of a `shape = "mesh"` specimen), in region order (module docs).
     pub fn surface_region_materials(&self, mesh: &TetMesh) -> Result<Vec<String>, BundleError> {
         let s = &self.experiment.specimen;
         let listed = || mesh.region_names.iter().map(|r| format!("\"{r}\"")).collect::<Vec<_>>().join(", ");
-        let file = s.surface.as_deref().unwrap_or("");
+        let file = s.surface.as_deref().or(s.mesh.as_deref()).unwrap_or("");
         if s.regions.is_empty() {
             let material = s.material.clone().ok_or_else(|| {
-                self.map.invalid("specimen.regions", "missing required key for shape = \"surface\"".to_string())
+                self.map
+                    .invalid("specimen.regions", format!("missing required key for shape = \"{}\"", s.shape.as_str()))
             })?;
             return Ok(vec![material; mesh.region_names.len()]);
         }
@@ -150,8 +151,11 @@ impl Bundle {
             .collect()
     }
 
-    /// Adds the node sets `bottom` and `top` (module docs) to a surface mesh.
-    fn add_support_sets(&self, mesh: &mut TetMesh) -> Result<(), BundleError> {
+    /// Adds the node sets `bottom` and `top` (module docs) to a mesh with the node
+    /// set `boundary` (a meshed surface, or a `shape = "mesh"` specimen's mesh);
+    /// a refusal names `specimen.surface` or `specimen.mesh`.
+    pub(super) fn add_support_sets(&self, mesh: &mut TetMesh) -> Result<(), BundleError> {
+        let field = if self.experiment.specimen.shape == Shape::Mesh { "specimen.mesh" } else { "specimen.surface" };
         let boundary: Vec<u32> = mesh.node_sets.get("boundary").cloned().unwrap_or_default();
         let ys = boundary.iter().map(|&i| mesh.nodes[i as usize][1]);
         let (lo, hi) = ys.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), y| (a.min(y), b.max(y)));
@@ -160,7 +164,7 @@ impl Bundle {
         let top: Vec<u32> = boundary.iter().copied().filter(|&i| mesh.nodes[i as usize][1] >= hi - band).collect();
         if !spans_a_triangle(&bottom.iter().map(|&i| mesh.nodes[i as usize]).collect::<Vec<_>>()) {
             return Err(self.map.invalid(
-                "specimen.surface",
+                field,
                 format!(
                     "the specimen must stand on the floor: the mesh has {} boundary node(s) within {band:.3e} mm of its \
                      lowest y = {lo} mm, which do not span a triangle (give the shape a base)",

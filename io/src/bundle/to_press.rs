@@ -15,7 +15,9 @@
 //!   `Attachment::Free` with a floor tool. A `shape = "surface"` specimen is
 //!   meshed on the fly (conforming mode unless told otherwise,
 //!   [`Bundle::to_press_meshed`]) and always runs with contact tools: see
-//!   `surface_specimen.rs`.
+//!   `surface_specimen.rs`. A `shape = "mesh"` specimen is read from its file and
+//!   pressed with its own cells (the element size does not apply), with contact
+//!   tools: see `mesh_specimen.rs`.
 //! - Markers: one request per marker at its initial position, reported at every
 //!   time the marker was measured (`t_s = 0` included). No extra snapshots.
 //!
@@ -97,13 +99,15 @@ impl Bundle {
         BundleError::Engine { file, line, field, source: Box::new(source) }
     }
 
-    /// The specimen's volume [mm^3] from its nominal size (W H T; pi R^2 H), when known.
+    /// The specimen's volume [mm^3] from its nominal size (W H T; pi R^2 H; the
+    /// volume a surface encloses, or a mesh's cells fill), when known.
     pub fn volume_mm3(&self) -> Option<f64> {
         let s = &self.experiment.specimen;
         match s.shape {
             Shape::Block => s.block_size().map(|[w, h, t]| w * h * t),
             Shape::Cylinder => Some(std::f64::consts::PI * s.radius_mm?.powi(2) * s.height_mm?),
             Shape::Surface => self.specimen_surface().ok().map(|s| s.signed_volume(None).abs()),
+            Shape::Mesh => self.specimen_mesh().ok().map(|m| m.measure()),
         }
     }
 
@@ -210,8 +214,9 @@ impl Bundle {
 
     /// The default element size [mm]: a quarter of the specimen's smallest dimension
     /// (min(W, H, T) for a block, min(R, H) for a cylinder, the smallest side of
-    /// the bounding box for a surface); `None` for a surface that cannot be read.
-    /// `wagashi press` and `wagashi fit` use it.
+    /// the bounding box for a surface or mesh); `None` for a surface or mesh that
+    /// cannot be read. `wagashi press` and `wagashi fit` use it; a `shape = "mesh"`
+    /// specimen is pressed with its own cells whatever the size.
     pub fn default_size_mm(&self) -> Option<f64> {
         let s = &self.experiment.specimen;
         let smallest = match s.shape {
@@ -219,6 +224,10 @@ impl Bundle {
             Shape::Cylinder => Some(s.radius_mm?.min(s.height_mm?)),
             Shape::Surface => {
                 let (lo, hi) = self.specimen_surface().ok()?.bounding_box();
+                Some((0..3).map(|k| hi[k] - lo[k]).fold(f64::INFINITY, f64::min))
+            }
+            Shape::Mesh => {
+                let (lo, hi) = self.specimen_mesh().ok()?.bounding_box();
                 Some((0..3).map(|k| hi[k] - lo[k]).fold(f64::INFINITY, f64::min))
             }
         };
@@ -415,8 +424,11 @@ impl Bundle {
                     self.unsupported("dimension", "shape = \"surface\" is a 3D shape: it needs dimension = 3".into())
                 )
             }
-            (Shape::Surface, _) => {
-                let mesh = self.mesh_specimen_surface(size_mm, mode)?;
+            (Shape::Surface | Shape::Mesh, _) => {
+                let mesh = match s.shape {
+                    Shape::Mesh => self.specimen_mesh()?,
+                    _ => self.mesh_specimen_surface(size_mm, mode)?,
+                };
                 let materials = self.materials_for(&self.surface_region_materials(&mesh)?)?;
                 AnyPress::Solid(SolidPress {
                     mesh,

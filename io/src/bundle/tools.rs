@@ -18,8 +18,8 @@ impl Bundle {
     /// as they always were). One exception keeps the format's meaning: a
     /// frictionless plate whose waypoints push again after rising, before
     /// `release_s` (a double compression), must be free to leave the specimen
-    /// and touch it again, so it runs as a contact tool. A `shape = "surface"`
-    /// specimen always runs with contact tools (its top is not a flat face).
+    /// and touch it again, so it runs as a contact tool. A `shape = "surface"` or
+    /// `"mesh"` specimen always runs with contact tools (its top need not be a flat face).
     pub fn has_contact_tools(&self) -> bool {
         let p = &self.experiment.protocol;
         let held = |c: Contact| matches!(c, Contact::Glued | Contact::Frictionless);
@@ -28,7 +28,7 @@ impl Bundle {
             Contact::Frictionless => !self.pushes_again(),
             Contact::Friction => false,
         };
-        self.experiment.specimen.shape == Shape::Surface
+        matches!(self.experiment.specimen.shape, Shape::Surface | Shape::Mesh)
             || !(p.tool == Tool::Plate && plate_held && held(p.support) && p.tools.is_empty())
     }
 
@@ -136,7 +136,8 @@ impl Bundle {
 
     /// The specimen's nominal bounding box [mm] as the tools see it: a block
     /// `[0, W] x [0, H] x [0, T]` (2D: `z = 0`), a cylinder `[-R, R] x [0, H] x [-R, R]`
-    /// (its axisymmetric section is the slice `z = 0`).
+    /// (its axisymmetric section is the slice `z = 0`), a surface's or mesh's
+    /// bounding box.
     fn tool_bounds(&self) -> Result<([f64; 3], [f64; 3]), BundleError> {
         let s = &self.experiment.specimen;
         let missing = |field: &str| self.map.invalid(field, "missing required key");
@@ -152,6 +153,7 @@ impl Bundle {
                 Ok(([-r, 0.0, -r], [r, h, r]))
             }
             Shape::Surface => Ok(self.specimen_surface()?.bounding_box()),
+            Shape::Mesh => Ok(self.specimen_mesh()?.bounding_box()),
         }
     }
 

@@ -4,6 +4,7 @@
 //! its table when the key is absent).
 
 use std::collections::BTreeMap;
+use std::path::Path;
 
 use fem_core::effects::{EffectError, EffectId, Effects, AGE_KEY};
 
@@ -13,6 +14,7 @@ use super::series::MarkerSeries;
 use crate::error::BundleError;
 use crate::source_map::SourceMap;
 use crate::surface::LengthUnit;
+use crate::tetmesh::TetMeshFormat;
 
 /// Layer thicknesses must sum to H within this [mm].
 pub const LAYER_SUM_TOLERANCE_MM: f64 = 1e-6;
@@ -111,10 +113,43 @@ fn validate_specimen(e: &Experiment, map: &SourceMap) -> Result<(), BundleError>
                 ));
             }
         }
+        Shape::Mesh => {
+            let file = require(map, "specimen.mesh", s.mesh.as_deref(), "for shape = \"mesh\"")?;
+            if file.trim().is_empty() {
+                return Err(map.invalid("specimen.mesh", "empty file name"));
+            }
+            if e.dimension == 2 {
+                return Err(
+                    map.invalid("dimension", "shape = \"mesh\" is a tetrahedral (3D) mesh: it needs dimension = 3")
+                );
+            }
+            if TetMeshFormat::of_path(Path::new(file)).is_err() {
+                return Err(map.invalid(
+                    "specimen.mesh",
+                    format!("\"{file}\": expected a Gmsh .msh (4.1 ASCII), a TetGen .node/.ele or a .vtu mesh"),
+                ));
+            }
+            refuse_key(map, "specimen.size_mm", s.size_mm.is_some(), not_for("size_mm", "a block"))?;
+            refuse_key(map, "specimen.radius_mm", s.radius_mm.is_some(), not_for("radius_mm", "a cylinder"))?;
+            refuse_key(map, "specimen.height_mm", s.height_mm.is_some(), not_for("height_mm", "a cylinder"))?;
+            refuse_key(map, "specimen.layers", !s.layers.is_empty(), not_for("layers", "a block"))?;
+            if s.regions.is_empty() && s.material.is_none() {
+                return Err(map.invalid(
+                    "specimen.regions",
+                    "missing required key for shape = \"mesh\": map each mesh region to a material (or give `material`)",
+                ));
+            }
+        }
     }
     if s.shape != Shape::Surface {
         refuse_key(map, "specimen.surface", s.surface.is_some(), not_for("surface", "shape = \"surface\""))?;
-        refuse_key(map, "specimen.regions", !s.regions.is_empty(), not_for("regions", "shape = \"surface\""))?;
+    }
+    if s.shape != Shape::Mesh {
+        refuse_key(map, "specimen.mesh", s.mesh.is_some(), not_for("mesh", "shape = \"mesh\""))?;
+    }
+    if !matches!(s.shape, Shape::Surface | Shape::Mesh) {
+        let owners = "shape = \"surface\" or \"mesh\"";
+        refuse_key(map, "specimen.regions", !s.regions.is_empty(), not_for("regions", owners))?;
     }
     // Material or layers.
     if s.shape == Shape::Block {
@@ -415,18 +450,18 @@ fn validate_tools(e: &Experiment, map: &SourceMap) -> Result<(), BundleError> {
 }
 
 /// The specimen's smallest size [mm] (block: min(W, H, T); cylinder: min(2R, H)),
-/// or `None` for a surface, whose geometry this crate does not load.
+/// or `None` for a surface or mesh, whose geometry is not loaded to validate a bundle.
 pub(crate) fn smallest_size(e: &Experiment) -> Option<f64> {
     let s = &e.specimen;
     match s.shape {
         Shape::Block => s.block_size().map(|b| b[0].min(b[1]).min(b[2])),
         Shape::Cylinder => Some((2.0 * s.radius_mm?).min(s.height_mm?)),
-        Shape::Surface => None,
+        Shape::Surface | Shape::Mesh => None,
     }
 }
 
 /// Distance [mm] from `p` to the specimen's surface (3D) or to its rectangle
-/// `[0, W] x [0, H]` (2D, zero inside); `None` for a surface specimen.
+/// `[0, W] x [0, H]` (2D, zero inside); `None` for a surface or mesh specimen.
 pub(crate) fn distance_to_surface(e: &Experiment, p: &[f64]) -> Option<f64> {
     let s = &e.specimen;
     let outside = |v: f64, lo: f64, hi: f64| (lo - v).max(v - hi).max(0.0);
@@ -453,7 +488,7 @@ pub(crate) fn distance_to_surface(e: &Experiment, p: &[f64]) -> Option<f64> {
                 Some(dr.max(0.0).hypot(dy.max(0.0)))
             }
         }
-        (Shape::Surface, _) => None,
+        (Shape::Surface | Shape::Mesh, _) => None,
     }
 }
 

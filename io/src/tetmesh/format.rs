@@ -10,7 +10,7 @@ use crate::vtu::{write_vtu, VtuFields};
 /// A tetrahedral mesh file format, told by the file's extension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum TetMeshFormat {
-    /// VTK XML unstructured grid (`.vtu`; written only).
+    /// VTK XML unstructured grid (`.vtu`; ASCII data arrays when read).
     Vtu,
     /// Gmsh MSH 4.1 ASCII (`.msh`).
     Gmsh,
@@ -31,15 +31,13 @@ impl TetMeshFormat {
     }
 }
 
-/// Reads a `.msh` or TetGen mesh, the format told by the extension.
+/// Reads a `.msh`, TetGen or `.vtu` mesh, the format told by the extension.
 pub fn read_tetmesh(path: impl AsRef<Path>) -> Result<TetMesh, TetMeshError> {
     let path = path.as_ref();
     match TetMeshFormat::of_path(path)? {
         TetMeshFormat::Gmsh => gmsh::read_gmsh(path),
         TetMeshFormat::TetGen => tetgen::read_tetgen(path),
-        TetMeshFormat::Vtu => {
-            Err(TetMeshError::invalid(path, 0, "format", "reading .vtu meshes is not supported; use .msh or .node"))
-        }
+        TetMeshFormat::Vtu => super::vtu::read_vtu_tetmesh(path),
     }
 }
 

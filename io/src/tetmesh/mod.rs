@@ -1,6 +1,7 @@
 //! Tetrahedral meshes from and to other meshers' files: TetGen's `.node`/`.ele`/
-//! `.face` ([`tetgen`]) and Gmsh's MSH 4.1 ASCII ([`gmsh`]), so that meshes made
-//! with TetGen or Gmsh can be pressed, and wagashi's meshes opened there.
+//! `.face` ([`tetgen`]), Gmsh's MSH 4.1 ASCII ([`gmsh`]) and, read only, VTK's
+//! ASCII `.vtu` ([`vtu`]), so that meshes made with TetGen, Gmsh or meshio can be
+//! pressed, and wagashi's meshes opened there.
 //!
 //! Both read into fem-core's [`fem_core::mesh::TetMesh`]: nodes [mm] (the files
 //! carry no unit; they are taken as mm), linear tets in VTK's positive order
@@ -9,7 +10,7 @@
 //! names, and boundary triangles as face sets. Writing keeps nodes, cells and
 //! regions so that reading the file back gives the same mesh (the round trip is
 //! tested). [`read_tetmesh`] and [`write_tetmesh`] choose the format by extension
-//! (`.vtu` is written only; see [`crate::vtu`]).
+//! (`.vtu` is written by [`crate::vtu`] and read by [`vtu`]).
 //!
 //! Every refusal is a [`TetMeshError`] naming the file, the 1-based line and the
 //! field (`cake.ele:7: node 3: 812 names no point (points 1..640)`); no input
@@ -35,8 +36,10 @@ mod error;
 mod format;
 pub mod gmsh;
 pub mod tetgen;
+pub mod vtu;
 
 pub use error::TetMeshError;
 pub use format::{read_tetmesh, write_tetmesh, TetMeshFormat};
 pub use gmsh::{gmsh_string, parse_gmsh, read_gmsh, write_gmsh};
 pub use tetgen::{parse_tetgen, read_tetgen, tetgen_strings, write_tetgen};
+pub use vtu::{parse_vtu_tetmesh, read_vtu_tetmesh};

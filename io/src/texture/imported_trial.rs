@@ -403,6 +403,7 @@ pub fn to_bundle(raw: &RawTest, options: &ImportOptions) -> Result<ImportedTrial
             material: Some(options.material.clone()),
             layers: Vec::new(),
             surface: None,
+            mesh: None,
             regions: Default::default(),
         },
         materials: options
