@@ -22,6 +22,39 @@ fn run(problem: &SolidPress, settings: &Settings) -> PressResult {
     press::simulate(problem, settings, &mut |_| {}).unwrap()
 }
 
+/// RK4 on `dx/dt = f(t, x)` from `x(0) = 0` to `t_end` in `steps` steps.
+fn rk4(f: impl Fn(f64, f64) -> f64, t_end: f64, steps: usize) -> f64 {
+    let dt = t_end / steps as f64;
+    let mut x = 0.0;
+    for i in 0..steps {
+        let t = i as f64 * dt;
+        let k1 = f(t, x);
+        let k2 = f(t + dt / 2.0, x + dt / 2.0 * k1);
+        let k3 = f(t + dt / 2.0, x + dt / 2.0 * k2);
+        let k4 = f(t + dt, x + dt * k3);
+        x += dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+    }
+    x
+}
+
+/// The largest force error at the step ends `times` against `want`, as a
+/// share of the first.
+fn worst_error(result: &PressResult, times: &[f64], want: &[f64]) -> f64 {
+    times
+        .iter()
+        .zip(want)
+        .map(|(&t, &w)| {
+            let s = result.steps.iter().find(|s| (s.t_s - t).abs() < 1e-9).expect("a step lands there");
+            (s.bottom_force_n - w).abs() / want[0].abs()
+        })
+        .fold(0.0, f64::max)
+}
+
+/// The observed orders of errors at halved steps.
+fn observed_orders(errors: &[f64]) -> Vec<f64> {
+    errors.windows(2).map(|w| (w[0] / w[1]).log2()).collect()
+}
+
 /// Uniaxial stress of the compressible neo-Hookean energy
 /// `mu/2 (I1bar - 3) + K/2 (J - 1)^2` at the axial stretch `lambda`, written
 /// here from the energy (not the engine's code): the lateral stretch `l` solves
@@ -144,18 +177,7 @@ fn a_viscous_network_in_uniaxial_compression_converges_to_an_independent_integra
         }
     };
     let reference = |t_end: f64| {
-        let n = 200_000;
-        let dt = t_end / n as f64;
-        let mut ee = 0.0;
-        for i in 0..n {
-            let t = i as f64 * dt;
-            let f = |t: f64, x: f64| eps_rate(t) - x / tau;
-            let k1 = f(t, ee);
-            let k2 = f(t + dt / 2.0, ee + dt / 2.0 * k1);
-            let k3 = f(t + dt / 2.0, ee + dt / 2.0 * k2);
-            let k4 = f(t + dt, ee + dt * k3);
-            ee += dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
-        }
+        let ee = rk4(|t, x| eps_rate(t) - x / tau, t_end, 200_000);
         // Nominal stress = Kirchhoff / axial stretch.
         let stretch = 1.0 - protocol.displacement(t_end) / h;
         e * ee / stretch
@@ -173,18 +195,11 @@ fn a_viscous_network_in_uniaxial_compression_converges_to_an_independent_integra
         .unwrap();
         let settings = Settings { fixed_dt_s: Some(push_s / n as f64), ..Settings::default() };
         let result = run(&problem, &settings);
-        let err = times
-            .iter()
-            .zip(&want)
-            .map(|(&t, &w)| {
-                let s = result.steps.iter().find(|s| (s.t_s - t).abs() < 1e-9).expect("a step lands there");
-                (s.bottom_force_n - w).abs() / want[0].abs()
-            })
-            .fold(0.0, f64::max);
+        let err = worst_error(&result, &times, &want);
         eprintln!("viscous network, {n} steps per push: error {err:.3e} of the peak");
         errors.push(err);
     }
-    let orders: Vec<f64> = errors.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
+    let orders = observed_orders(&errors);
     eprintln!("orders {orders:?}");
     assert!(orders.iter().all(|&p| p > 1.8 && p < 2.3), "orders {orders:?}");
     assert!(errors[2] < 1e-3, "{errors:?}");
@@ -264,18 +279,7 @@ fn a_flow_network_in_uniaxial_compression_follows_the_1d_law_at_first_order() {
     let nominal = |t: f64, tau: f64| -tau / (1.0 - protocol.displacement(t) / h) * area;
     // RK4 on dp/dt with the strain's exact time course.
     let reference = |t_end: f64| {
-        let steps = 400_000;
-        let dt = t_end / steps as f64;
-        let mut p = 0.0;
-        for i in 0..steps {
-            let t = i as f64 * dt;
-            let f = |t: f64, p: f64| rate(e * (eps_at(t) - p));
-            let k1 = f(t, p);
-            let k2 = f(t + dt / 2.0, p + dt / 2.0 * k1);
-            let k3 = f(t + dt / 2.0, p + dt / 2.0 * k2);
-            let k4 = f(t + dt, p + dt * k3);
-            p += dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
-        }
+        let p = rk4(|t, p| rate(e * (eps_at(t) - p)), t_end, 400_000);
         nominal(t_end, e * (eps_at(t_end) - p))
     };
     let times = [push_s, end_s];
@@ -312,18 +316,11 @@ fn a_flow_network_in_uniaxial_compression_follows_the_1d_law_at_first_order() {
             worst_scheme = worst_scheme.max((s.bottom_force_n - nominal(s.t_s, tau)).abs() / want[0].abs());
         }
         assert!(worst_scheme < 1e-8, "{steps} steps: the 1D scheme differs by {worst_scheme:.3e} of the peak");
-        let err = times
-            .iter()
-            .zip(&want)
-            .map(|(&t, &w)| {
-                let s = result.steps.iter().find(|s| (s.t_s - t).abs() < 1e-9).expect("a step lands there");
-                (s.bottom_force_n - w).abs() / want[0].abs()
-            })
-            .fold(0.0, f64::max);
+        let err = worst_error(&result, &times, &want);
         eprintln!("flow network, {steps} steps per push: error {err:.3e} of the peak, scheme {worst_scheme:.1e}");
         errors.push(err);
     }
-    let orders: Vec<f64> = errors.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
+    let orders = observed_orders(&errors);
     eprintln!("orders {orders:?}");
     assert!(orders.iter().all(|&p| p > 0.85 && p < 1.2), "orders {orders:?}");
     // The flow matters: the held stress relaxes well below the peak.
