@@ -70,7 +70,9 @@ Examples:
     long_about = "Identify material parameters from measured trials. Every material parameter a bundle does not \
 give is an unknown; a --materials file gives starting values and frees those parameters. A material used by \
 several trials is one set of unknowns. Writes materials.toml (loadable with --materials), fit.json (values with \
-95 % intervals, correlations, warnings), fit.svg and shapes.svg into OUT, atomically.",
+95 % intervals, correlations, warnings, each trial's misfit and, for a double compression, its measured and simulated \
+texture profile), fit.svg and shapes.svg into OUT, atomically. Prints each estimate as value [low, high], each \
+trial's misfit in noise units and as a share of its peak force, and the texture profiles.",
     after_help = FIT_AFTER_HELP
 )]
 pub struct FitArgs {
@@ -225,7 +227,7 @@ struct ForceMisfit {
     rms_n: f64,
     /// The trial's force noise [N].
     sigma_n: f64,
-    /// The largest measured force magnitude [N].
+    /// The largest measured force magnitude over `0 < t <= end_s` [N], all samples.
     peak_n: f64,
 }
 
@@ -276,7 +278,7 @@ fn trial_outcomes(
                 ForceMisfit {
                     rms_n: (sum / trial.force.len() as f64).sqrt(),
                     sigma_n: trial.force_sigma_n,
-                    peak_n: trial.force.iter().map(|f| f.1.abs()).fold(0.0, f64::max),
+                    peak_n: full_peak_n(bundle).unwrap_or(0.0),
                 }
             });
             let pairs = trial.marker_pairs(shape_run);
@@ -295,6 +297,15 @@ fn trial_outcomes(
             TrialOutcome { name: trial.name.clone(), force, markers, tpa }
         })
         .collect()
+}
+
+/// The largest measured force magnitude over `0 < t <= end_s` [N], from every
+/// sample of the bundle's force (the fit may use a thinned subset, which can
+/// miss the peak sample).
+fn full_peak_n(bundle: &Bundle) -> Option<f64> {
+    let end_s = bundle.experiment.protocol.end_s;
+    let force = bundle.force.as_ref()?;
+    Some(force.samples.iter().filter(|s| s.t_s > 0.0 && s.t_s <= end_s).map(|s| s.force_n.abs()).fold(0.0, f64::max))
 }
 
 /// The texture profiles of a bundle's measured force (read as `wagashi tpa
