@@ -113,13 +113,23 @@ impl fmt::Display for Warning {
                  interval only describes the fit with the bound in force",
                 number(*value)
             ),
-            Warning::WideInterval { parameter, lower, upper, relative_width } => write!(
-                f,
-                "{parameter} is poorly determined: its 95 % interval [{}, {}] is {:.0} % of its value",
-                number(*lower),
-                number(*upper),
-                100.0 * relative_width
-            ),
+            // The relative width (above 100 % here, often by orders of
+            // magnitude, or infinite) is not printed: past the value itself it
+            // says nothing more than "not determined". For a positive interval
+            // the ratio of its ends is what a log-scale parameter's width means.
+            Warning::WideInterval { parameter, lower, upper, relative_width: _ } => {
+                write!(
+                    f,
+                    "{parameter} is poorly determined: its 95 % interval [{}, {}] is wider than its value",
+                    number(*lower),
+                    number(*upper)
+                )?;
+                let ratio = upper / lower;
+                if *lower > 0.0 && ratio.is_finite() {
+                    write!(f, " (its ends a factor {} apart)", number(ratio))?;
+                }
+                Ok(())
+            }
             Warning::BetterFitInProfile { parameter, value, objective, best } => write!(
                 f,
                 "with {parameter} held at {} a refit reached objective {}, below the fit's {}: the fit stopped \
@@ -185,7 +195,18 @@ mod tests {
         };
         assert_eq!(
             wide.to_string(),
-            "c1_MPa_s is poorly determined: its 95 % interval [0.01235, 1.235e5] is 250 % of its value"
+            "c1_MPa_s is poorly determined: its 95 % interval [0.01235, 1.235e5] is wider than its value (its ends \
+             a factor 1.000e7 apart)"
+        );
+        let unbounded = Warning::WideInterval {
+            parameter: "nu".into(),
+            lower: -0.5,
+            upper: f64::INFINITY,
+            relative_width: f64::INFINITY,
+        };
+        assert_eq!(
+            unbounded.to_string(),
+            "nu is poorly determined: its 95 % interval [-0.5000, inf] is wider than its value"
         );
         assert_eq!(number(-2.5), "-2.500");
         assert_eq!(number(0.0), "0");

@@ -66,6 +66,11 @@ fn fits_a_simulated_trial_back_and_writes_every_output() {
     for key in ["objective", "iterations", "simulations"] {
         assert!(fit[key].is_number(), "{key} missing: {fit}");
     }
+    // One push: a misfit but no texture profile, and no note about one.
+    let trial = &fit["trials"][0];
+    assert!(trial.get("tpa").is_none(), "{trial}");
+    assert!(trial["misfit"]["force_rms_noise_units"].is_number() && trial["misfit"]["marker_rms_mm"].is_number());
+    assert!(!stdout(&o).contains("texture profile"), "{}", stdout(&o));
     // materials.toml loads with --materials.
     let o = wagashi_in(cwd, ["press", "in", "--materials", "fit/materials.toml", "--size-mm", "6", "-o", "again"]);
     assert_success(&o);
@@ -228,7 +233,68 @@ fn fits_a_double_compression_with_a_contact_plate_back() {
     assert_success(&o);
     let bundle = cwd.join("measured/experiment.toml");
     let text = std::fs::read_to_string(&bundle).unwrap();
-    fit_e1_and_c3_back(cwd, &bundle, &text);
+    let out = fit_e1_and_c3_back(cwd, &bundle, &text);
+    check_texture_misfit_and_intervals(cwd, &out);
+}
+
+/// What the double compression's fit reports beside its values: the measured
+/// and simulated texture profiles (the measured hardness is the largest sample
+/// of `measured/force.csv` before the split; fitted to its own simulated data,
+/// the simulated profile matches the measured one), the per-trial misfit
+/// (consistent in N, noise units and share of the peak, and small), and
+/// intervals as ranges with no relative width above 100 %.
+fn check_texture_misfit_and_intervals(cwd: &Path, out: &str) {
+    let fit: serde_json::Value = serde_json::from_slice(&std::fs::read(cwd.join("fit/fit.json")).unwrap()).unwrap();
+    let trial = &fit["trials"][0];
+    let (measured, simulated) = (&trial["tpa"]["measured"], &trial["tpa"]["simulated"]);
+    let split = measured["split_s"].as_f64().unwrap_or_else(|| panic!("no tpa in {trial}"));
+    let force = read_force_csv(&cwd.join("measured/force.csv"));
+    let peak = force.iter().filter(|&&(t, _)| t < split).map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
+    // The misfit's peak: every sample's largest magnitude (the protocol ends at 40 s).
+    let largest = force.iter().filter(|&&(t, _)| t > 0.0 && t <= 40.0).map(|p| p.1.abs()).fold(0.0, f64::max);
+    assert_eq!(measured["hardness_N"].as_f64().unwrap(), peak, "{measured}");
+    for key in ["hardness_N", "cohesiveness", "springiness", "resilience"] {
+        let (m, s) = (measured[key].as_f64().unwrap(), simulated[key].as_f64().unwrap());
+        assert!(m > 0.0 && (s / m - 1.0).abs() < 1e-3, "{key}: measured {m}, simulated {s}");
+    }
+    assert!(out.contains("texture profile, measured / simulated:"), "{out}");
+    let name = trial["name"].as_str().unwrap();
+    let row = out.lines().find(|l| l.trim_start().starts_with(&format!("{name} "))).unwrap_or_else(|| panic!("{out}"));
+    assert_eq!(row.matches(" / ").count(), 4, "{row}");
+    // The misfit, per trial.
+    let misfit = &trial["misfit"];
+    let [rms, units, share, peak_n] =
+        ["force_rms_N", "force_rms_noise_units", "force_rms_share_of_peak", "force_peak_N"]
+            .map(|k| misfit[k].as_f64().unwrap_or_else(|| panic!("{k} missing: {misfit}")));
+    assert!((units * trial["force_sigma_N"].as_f64().unwrap() / rms - 1.0).abs() < 1e-12, "{misfit}");
+    assert!((share * peak_n / rms - 1.0).abs() < 1e-12, "{misfit}");
+    assert_eq!(peak_n, largest, "{misfit}");
+    assert!(share < 1e-3, "a fit to its own simulated data misses by {share} of the peak");
+    let line = out
+        .lines()
+        .skip_while(|l| *l != "misfit of the fitted simulation, per trial:")
+        .nth(1)
+        .unwrap_or_else(|| panic!("no misfit lines: {out}"));
+    assert!(line.starts_with(&format!("  {name}: force rms ")), "{line}");
+    // The printed numbers (four digits) are the JSON's.
+    let printed = |before: &str| -> f64 {
+        let head = &line[..line.find(before).unwrap_or_else(|| panic!("no {before:?} in {line}"))];
+        head.rsplit(' ').next().unwrap().parse().unwrap()
+    };
+    assert!((printed(" noise units") / units - 1.0).abs() < 1e-3, "{line}");
+    assert!((printed(" % of its peak") / (100.0 * share) - 1.0).abs() < 1e-3, "{line}");
+    // Intervals: ranges, and no percentage above 100 (nor an infinite one).
+    let sets = out.lines().skip_while(|l| !l.starts_with("set ")).take_while(|l| !l.starts_with("misfit"));
+    for l in sets.filter(|l| l.starts_with("  ")) {
+        assert!(l.contains(" [") && l.contains("]"), "{l}");
+    }
+    assert!(!out.contains("inf %"), "{out}");
+    for (i, _) in out.match_indices(" %") {
+        let number = out[..i].rsplit([' ', '(', '[']).next().unwrap();
+        if let Ok(p) = number.parse::<f64>() {
+            assert!(p <= 100.0, "a percentage above 100: {}", &out[i.saturating_sub(80)..i + 2]);
+        }
+    }
 }
 
 /// The same double compression with a plastic slider in series
@@ -255,7 +321,8 @@ fn fits_a_double_compression_with_a_contact_plate_and_a_plastic_slider_back() {
 /// Removes E1 and c3 from the simulated bundle `measured` (its text `text`
 /// holds the truth's values), fits them back with the joint procedure and
 /// checks both return to 1e-4 of the truth (E1 = 0.0349 MPa, c3 = 29.719 MPa s).
-fn fit_e1_and_c3_back(cwd: &Path, bundle: &Path, text: &str) {
+/// Returns the fit's stdout.
+fn fit_e1_and_c3_back(cwd: &Path, bundle: &Path, text: &str) -> String {
     assert!(text.contains("E1_MPa = 0.0349\n") && text.contains("c3_MPa_s = 29.719\n"), "{text}");
     std::fs::write(bundle, text.replace("E1_MPa = 0.0349\n", "").replace("c3_MPa_s = 29.719\n", "")).unwrap();
     let o =
@@ -266,4 +333,5 @@ fn fit_e1_and_c3_back(cwd: &Path, bundle: &Path, text: &str) {
         let v = fit["sets"]["joint"]["mat1"][key]["value"].as_f64().unwrap_or_else(|| panic!("{fit}"));
         assert!((v / truth - 1.0).abs() < 1e-4, "{key} = {v} vs {truth}");
     }
+    stdout(&o)
 }
