@@ -143,8 +143,8 @@ impl fmt::Display for Warning {
 }
 
 /// Four significant digits, plain for magnitudes in [1e-3, 1e5), else in
-/// exponent form.
-fn number(value: f64) -> String {
+/// exponent form (a misfit of a fit to noise-free data is far below 1e-3).
+pub fn number(value: f64) -> String {
     let magnitude = value.abs();
     if magnitude == 0.0 || !magnitude.is_finite() {
         format!("{value}")

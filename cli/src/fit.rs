@@ -41,6 +41,7 @@ use crate::press::positive_number;
 use anyhow::{anyhow, bail};
 use calibrate::procedure::{run as run_procedure, Estimate, FitReport, Procedure, ProcedureOptions};
 use calibrate::trial::{set_parameter, Campaign, Channel};
+use calibrate::warning::number;
 use clap::{Args, ValueEnum};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::{json, Map, Value};
@@ -360,20 +361,6 @@ fn tpa_pair_json(pair: &TpaPair) -> Value {
         })
     };
     json!({ "measured": one(&pair.measured), "simulated": one(&pair.simulated) })
-}
-
-/// Four significant digits: plain for magnitudes in [1e-3, 1e5), else in
-/// exponent form (a misfit of a fit to noise-free data is far below 1e-3).
-fn number(value: f64) -> String {
-    let magnitude = value.abs();
-    if magnitude == 0.0 || !magnitude.is_finite() {
-        format!("{value}")
-    } else if (1e-3..1e5).contains(&magnitude) {
-        let decimals = (3 - magnitude.log10().floor() as i32).max(0) as usize;
-        format!("{value:.decimals$}")
-    } else {
-        format!("{value:.3e}")
-    }
 }
 
 /// Per trial, the fitted simulation's misfit: force in N, in noise units and as a

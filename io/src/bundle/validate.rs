@@ -72,6 +72,23 @@ fn validate_specimen(e: &Experiment, map: &SourceMap) -> Result<(), BundleError>
     let s = &e.specimen;
     let shape = format!("shape = \"{}\"", s.shape.as_str());
     let not_for = |key: &str, belongs: &str| format!("{key} belongs to {belongs}, not to {shape}");
+    // A surface or a mesh file brings its own shape: the generated shapes' keys
+    // are refused, and its regions need materials.
+    let file_shape_keys = |kind: &str| -> Result<(), BundleError> {
+        refuse_key(map, "specimen.size_mm", s.size_mm.is_some(), not_for("size_mm", "a block"))?;
+        refuse_key(map, "specimen.radius_mm", s.radius_mm.is_some(), not_for("radius_mm", "a cylinder"))?;
+        refuse_key(map, "specimen.height_mm", s.height_mm.is_some(), not_for("height_mm", "a cylinder"))?;
+        refuse_key(map, "specimen.layers", !s.layers.is_empty(), not_for("layers", "a block"))?;
+        if s.regions.is_empty() && s.material.is_none() {
+            return Err(map.invalid(
+                "specimen.regions",
+                format!(
+                    "missing required key for shape = \"{kind}\": map each {kind} region to a material (or give `material`)"
+                ),
+            ));
+        }
+        Ok(())
+    };
     positive(map, "specimen.mass_g", s.mass_g, "a mass")?;
     positive(map, "specimen.density_g_cm3", s.density_g_cm3, "a density")?;
     if e.dimension != 2 && s.plane.is_some() {
@@ -102,16 +119,7 @@ fn validate_specimen(e: &Experiment, map: &SourceMap) -> Result<(), BundleError>
             if file.trim().is_empty() {
                 return Err(map.invalid("specimen.surface", "empty file name"));
             }
-            refuse_key(map, "specimen.size_mm", s.size_mm.is_some(), not_for("size_mm", "a block"))?;
-            refuse_key(map, "specimen.radius_mm", s.radius_mm.is_some(), not_for("radius_mm", "a cylinder"))?;
-            refuse_key(map, "specimen.height_mm", s.height_mm.is_some(), not_for("height_mm", "a cylinder"))?;
-            refuse_key(map, "specimen.layers", !s.layers.is_empty(), not_for("layers", "a block"))?;
-            if s.regions.is_empty() && s.material.is_none() {
-                return Err(map.invalid(
-                    "specimen.regions",
-                    "missing required key for shape = \"surface\": map each surface region to a material (or give `material`)",
-                ));
-            }
+            file_shape_keys("surface")?;
         }
         Shape::Mesh => {
             let file = require(map, "specimen.mesh", s.mesh.as_deref(), "for shape = \"mesh\"")?;
@@ -129,16 +137,7 @@ fn validate_specimen(e: &Experiment, map: &SourceMap) -> Result<(), BundleError>
                     format!("\"{file}\": expected a Gmsh .msh (4.1 ASCII), a TetGen .node/.ele or a .vtu mesh"),
                 ));
             }
-            refuse_key(map, "specimen.size_mm", s.size_mm.is_some(), not_for("size_mm", "a block"))?;
-            refuse_key(map, "specimen.radius_mm", s.radius_mm.is_some(), not_for("radius_mm", "a cylinder"))?;
-            refuse_key(map, "specimen.height_mm", s.height_mm.is_some(), not_for("height_mm", "a cylinder"))?;
-            refuse_key(map, "specimen.layers", !s.layers.is_empty(), not_for("layers", "a block"))?;
-            if s.regions.is_empty() && s.material.is_none() {
-                return Err(map.invalid(
-                    "specimen.regions",
-                    "missing required key for shape = \"mesh\": map each mesh region to a material (or give `material`)",
-                ));
-            }
+            file_shape_keys("mesh")?;
         }
     }
     if s.shape != Shape::Surface {
