@@ -110,6 +110,17 @@ where
         self.face_sets.insert(name.to_string(), faces);
     }
 
+    /// Builds the node set and the face set `name` from the whole boundary: the
+    /// facets of one cell only ([`Self::boundary_facets`]) and their nodes, sorted.
+    pub fn add_boundary_sets(&mut self, name: &str) {
+        let faces = self.boundary_facets();
+        let mut nodes: Vec<u32> = faces.iter().flatten().copied().collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        self.node_sets.insert(name.to_string(), nodes);
+        self.face_sets.insert(name.to_string(), faces);
+    }
+
     /// The facets that belong to exactly one cell, oriented outward, sorted.
     pub fn boundary_facets(&self) -> Vec<[u32; D]> {
         // Facet i of a cell is the cell without node i; an outward orientation

@@ -78,12 +78,7 @@ impl Bundle {
                 ),
             ));
         }
-        let faces = mesh.boundary_facets();
-        let mut boundary: Vec<u32> = faces.iter().flatten().copied().collect();
-        boundary.sort_unstable();
-        boundary.dedup();
-        mesh.node_sets.insert("boundary".into(), boundary);
-        mesh.face_sets.insert("boundary".into(), faces);
+        mesh.add_boundary_sets("boundary");
         self.add_support_sets(&mut mesh)?;
         Ok(mesh)
     }

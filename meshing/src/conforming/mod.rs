@@ -597,12 +597,7 @@ pub fn conforming_mesh(surface: &Surface, options: &ConformingOptions) -> Result
     };
     let mut mesh =
         TetMesh { nodes, cells, cell_regions, region_names, node_sets: BTreeMap::new(), face_sets: BTreeMap::new() };
-    let faces = mesh.boundary_facets();
-    let mut boundary: Vec<u32> = faces.iter().flatten().copied().collect();
-    boundary.sort_unstable();
-    boundary.dedup();
-    mesh.node_sets.insert("boundary".into(), boundary);
-    mesh.face_sets.insert("boundary".into(), faces);
+    mesh.add_boundary_sets("boundary");
     mesh.validate().map_err(|e| ConformingError::Internal { cause: e.to_string() })?;
     stage(&mut stage_times.check_s);
     let stats = ConformingStats {

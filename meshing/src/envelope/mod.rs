@@ -672,12 +672,7 @@ pub fn envelope_mesh_with_progress(
     warnings.extend(thin_features(surface, &winding, h, diag, false));
     warnings.extend(thin_features(surface, &winding, h, diag, true));
 
-    let faces = mesh.boundary_facets();
-    let mut boundary: Vec<u32> = faces.iter().flatten().copied().collect();
-    boundary.sort_unstable();
-    boundary.dedup();
-    mesh.node_sets.insert("boundary".into(), boundary);
-    mesh.face_sets.insert("boundary".into(), faces);
+    mesh.add_boundary_sets("boundary");
     mesh.validate().map_err(|e| EnvelopeError::Internal { cause: e.to_string() })?;
     stats.time_s = start.elapsed().as_secs_f64();
     progress("done", 1.0);
