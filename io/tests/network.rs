@@ -166,6 +166,52 @@ fn a_chain_with_network_tables_and_a_network_with_chain_keys_are_refused() {
     assert!(msg.contains("the network has no part"), "{msg}");
 }
 
+/// `kinematics = "small"`: read, written back, and refused with a part that
+/// has no small-strain form or with an unknown name.
+#[test]
+fn a_small_strain_network_is_read_written_back_and_refused_where_it_cannot_run() {
+    let small = r#"[materials.mat1]
+model = "network"
+poisson = 0.3746
+kinematics = "small"
+
+[materials.mat1.equilibrium]
+energy = "neo-hookean"
+E_MPa = 0.01
+
+[[materials.mat1.viscous]]
+E_MPa = 0.02
+tau_s = 2.0
+
+[materials.mat1.damper]
+c_MPa_s = 0.005
+"#;
+    let toml = with_network(small);
+    let b = with_experiment(&toml);
+    let bundle = read_bundle(&b.dir).unwrap();
+    let spec = &bundle.experiment.materials["mat1"];
+    let net = spec.to_network().unwrap();
+    assert_eq!(net.strain, fem_core::material::network::Strain::Small);
+    let again = wagashi_io::bundle::MaterialSpec::from_material(&spec.to_material().unwrap());
+    assert_eq!(again.to_network().unwrap(), net);
+
+    let cases = [
+        (edit(small, "kinematics = \"small\"", "kinematics = \"tiny\""), "is not a kinematics (\"finite\", \"small\")"),
+        (edit(NETWORK, "poisson = 0.45", "poisson = 0.45\nkinematics = \"small\""), "has no small-strain form"),
+    ];
+    for (material, cause) in cases {
+        let toml = with_network(&material);
+        let b = with_experiment(&toml);
+        let msg = assert_invalid(
+            read_bundle(&b.dir),
+            &b.file("experiment.toml"),
+            line_of(&toml, "kinematics"),
+            "materials.mat1.kinematics",
+        );
+        assert!(msg.contains(cause), "{msg}");
+    }
+}
+
 /// A frictionless double compression of one network material: the plate
 /// pushes 40 %, leaves the specimen and touches it again.
 fn homogeneous_trial(specimen: &str, dimension: u32) -> String {

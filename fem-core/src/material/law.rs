@@ -149,6 +149,9 @@ pub enum LawFailure {
     /// A part's return mapping did not converge.
     #[error("the return mapping of the {law} part did not converge")]
     ReturnMapping { law: &'static str },
+    /// A part without a small-strain form asked for one (refused before a run).
+    #[error("the {law} part has no small-strain form")]
+    NoSmallStrainForm { law: &'static str },
 }
 
 /// What a law returns for one point and step.

@@ -43,6 +43,9 @@
 //! [materials.gel]
 //! model = "network"
 //! poisson = 0.45                 # of every part, in (-1, 0.4999]
+//! kinematics = "finite"          # the default; "small": every part on the small strain
+//!                                # (neo-Hookean equilibrium without softening, viscous
+//!                                # networks and the damper only: the seed's chain exactly)
 //! [materials.gel.equilibrium]    # absent: a fluid, like the seed's chain
 //! energy = "exponential"         # or "neo-hookean" or "ogden"
 //! E_MPa = 0.03                   # Young's modulus at small strain
@@ -85,7 +88,8 @@ use std::sync::Arc;
 
 use fem_core::material::law::ParameterSpec;
 use fem_core::material::network::{
-    energy_keys, parameters, part, Energy, Equilibrium, Mullins, Network, PartKind, ENERGIES, OGDEN_TERMS, PARTS,
+    energy_keys, parameters, part, Energy, Equilibrium, Mullins, Network, NetworkError, PartKind, Strain, ENERGIES,
+    OGDEN_TERMS, PARTS,
 };
 use fem_core::material::{Material, MaterialError, MullinsDamage, Rheology};
 use serde::{Deserialize, Serialize};
@@ -363,6 +367,9 @@ impl MaterialSpec {
                 }
             }
         }
+        if net.strain != Strain::Finite {
+            parts.insert(KINEMATICS.into(), toml::Value::String(net.strain.name().into()));
+        }
         Self { poisson: Some(net.poisson), equilibrium, parts, ..Self::new(Model::Network) }
     }
 
@@ -377,6 +384,12 @@ impl MaterialSpec {
             return Err(("poisson".into(), format!("{poisson} is outside {} for a network", mspec.range())));
         }
         let mut net = Network::new(poisson);
+        if let Some(v) = self.parts.get(KINEMATICS) {
+            let names = Strain::NAMES.iter().map(|(n, _)| format!("\"{n}\"")).collect::<Vec<_>>().join(", ");
+            let strain = v.as_str().and_then(|s| Strain::NAMES.iter().find(|(n, _)| *n == s)).map(|(_, k)| *k);
+            net.strain =
+                strain.ok_or_else(|| (KINEMATICS.to_string(), format!("{v} is not a kinematics ({names})")))?;
+        }
         if let Some(t) = &self.equilibrium {
             let energies = ENERGIES.join(", ");
             let energy = match t.get("energy") {
@@ -425,7 +438,7 @@ impl MaterialSpec {
             net = net.with_equilibrium(Equilibrium { energy, e_mpa, mullins });
         }
         for name in self.parts.keys() {
-            if part::kind(name).is_none() {
+            if name != KINEMATICS && part::kind(name).is_none() {
                 return Err((name.clone(), format!("not a key of the network model (its parts: {})", part_list())));
             }
         }
@@ -445,7 +458,10 @@ impl MaterialSpec {
                 net.parts.push((kind.build)(&values));
             }
         }
-        net.validate().map_err(|e| ("".to_string(), e.to_string()))?;
+        net.validate().map_err(|e| {
+            let key = if matches!(e, NetworkError::NoSmallStrainForm { .. }) { KINEMATICS } else { "" };
+            (key.to_string(), e.to_string())
+        })?;
         Ok(net)
     }
 
@@ -751,6 +767,10 @@ fn placeholder(key: &str) -> f64 {
 }
 
 /// The network's sub-tables as a message lists them.
+/// A network material's key for its kinematics: `kinematics = "finite"`
+/// (absent) or `"small"` ([`Strain`]).
+const KINEMATICS: &str = "kinematics";
+
 fn part_list() -> String {
     let mut names = vec!["[equilibrium]".to_string()];
     names.extend(PARTS.iter().map(|k| {

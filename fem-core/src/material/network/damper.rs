@@ -8,7 +8,7 @@ use std::sync::Arc;
 use nalgebra::Matrix3;
 
 use super::hencky;
-use super::part::{Kinematics, Part, PartKind};
+use super::part::{Kinematics, Part, PartKind, SmallKinematics};
 use crate::material::law::{LawFailure, ParameterSpec, Start, Tangent};
 
 /// The parallel damper.
@@ -51,6 +51,22 @@ impl Part for Damper {
 
     fn viscosity_mpa_s(&self) -> f64 {
         self.c_mpa_s
+    }
+
+    fn has_small_strain_form(&self) -> bool {
+        true
+    }
+
+    /// `sigma = c C1 : (eps - eps_n) / dt`: the chain's `B2 de/dt`.
+    fn respond_small(
+        &self,
+        k: &SmallKinematics,
+        _old: &[f64],
+        _new: &mut [f64],
+    ) -> Result<(Matrix3<f64>, Tangent), LawFailure> {
+        let lame = hencky::unit_lame(k.poisson);
+        let c = self.c_mpa_s / k.dt_s;
+        Ok((hencky::hooke(c, lame, &(k.eps - k.eps_n)), hencky::hooke_tangent(c, lame)))
     }
 
     fn respond(&self, k: &Kinematics, _old: &[f64], _new: &mut [f64]) -> Result<(Matrix3<f64>, Tangent), LawFailure> {

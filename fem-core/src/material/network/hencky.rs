@@ -65,6 +65,20 @@ pub(crate) fn hooke(e_mpa: f64, lame: (f64, f64), x: &Matrix3<f64>) -> Matrix3<f
     (Matrix3::identity() * (lame.0 * x.trace()) + x * (2.0 * lame.1)) * e_mpa
 }
 
+/// The tangent of `E C1 : sym(h)` by `h`: `d s_ij / d h_kl` in the layout of
+/// [`Tangent`] (rows `3 i + j`, columns `3 k + l`).
+pub(crate) fn hooke_tangent(e_mpa: f64, lame: (f64, f64)) -> Tangent {
+    let mut t = Tangent::zeros();
+    for i in 0..3 {
+        for k in 0..3 {
+            t[(3 * i + i, 3 * k + k)] += e_mpa * lame.0;
+            t[(3 * i + k, 3 * i + k)] += e_mpa * lame.1;
+            t[(3 * i + k, 3 * k + i)] += e_mpa * lame.1;
+        }
+    }
+    t
+}
+
 /// The inverse of [`hooke`]: the strain of a stress.
 pub(crate) fn hooke_inverse(e_mpa: f64, lame: (f64, f64), s: &Matrix3<f64>) -> Matrix3<f64> {
     // s = E (l tr x I + 2 m x): tr s = E (3 l + 2 m) tr x.

@@ -29,6 +29,16 @@
 //!
 //! Every part uses the material's one Poisson ratio.
 //!
+//! ## Small-strain kinematics
+//!
+//! A network may also run in small-strain kinematics ([`Strain::Small`],
+//! `kinematics = "small"`): every part on `eps = sym(h)`, the stress Cauchy's
+//! and no geometric term. The viscous networks then update by the chain's exact
+//! exponential rule and the damper is `c C1 : de/dt`, so the seed's chain as a
+//! network ([`Network::from_chain`]) is the chain itself to round-off. Parts
+//! without a small-strain form (plastic, flow, an energy other than
+//! neo-Hookean's, softening) are refused by [`Network::validate`].
+//!
 //! ## The viscous update: exact for the chain
 //!
 //! A network's state is its elastic log strain `eps_e`, kept as the inverse
@@ -90,7 +100,7 @@ mod viscous;
 pub use damper::Damper;
 pub use equilibrium::{energy_keys, Energy, Equilibrium, Mullins, ENERGIES, OGDEN_TERMS};
 pub use flow::FlowNetwork;
-pub use part::{Kinematics, Part, PartKind, PARTS};
+pub use part::{Kinematics, Part, PartKind, SmallKinematics, PARTS};
 pub use plastic::PlasticNetwork;
 pub use viscous::ViscousNetwork;
 
@@ -101,11 +111,40 @@ use nalgebra::Matrix3;
 use crate::material::law::{LawFailure, ParameterSpec, PointLaw, PointResponse, Tangent};
 use crate::material::Rheology;
 
+/// The kinematics a network works in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Strain {
+    /// Finite strain: the deformation gradient, logarithmic strains and the
+    /// exponential map (the module docs).
+    #[default]
+    Finite,
+    /// Small strain: every part on `eps = sym(h)`, the stress Cauchy's, with no
+    /// geometric terms. The seed's chain as a network is then the chain itself
+    /// (the linear chain's exact exponential update, design.md 3.3), which is
+    /// what a network layer beside a chain layer, or the null of a
+    /// finite-strain candidate, needs. Only the neo-Hookean equilibrium energy
+    /// without softening, the viscous networks and the damper have this form
+    /// ([`Part::has_small_strain_form`]).
+    Small,
+}
+
+impl Strain {
+    /// Every kinematics by its bundle name.
+    pub const NAMES: &'static [(&'static str, Strain)] = &[("finite", Strain::Finite), ("small", Strain::Small)];
+
+    /// Its bundle name.
+    pub fn name(self) -> &'static str {
+        Self::NAMES.iter().find(|(_, s)| *s == self).map(|(n, _)| *n).expect("every kinematics is named")
+    }
+}
+
 /// The finite-strain network material (module docs).
 #[derive(Debug, Clone)]
 pub struct Network {
     /// Poisson's ratio of every part, in (-1, 0.5).
     pub poisson: f64,
+    /// The kinematics ([`Strain`]; finite unless asked).
+    pub strain: Strain,
     /// The equilibrium network; `None`: a fluid.
     pub equilibrium: Option<Equilibrium>,
     /// The parts in parallel ([`part`]), in their order in the point's history.
@@ -115,6 +154,7 @@ pub struct Network {
 impl PartialEq for Network {
     fn eq(&self, other: &Self) -> bool {
         self.poisson == other.poisson
+            && self.strain == other.strain
             && self.equilibrium == other.equilibrium
             && self.parts.len() == other.parts.len()
             && self
@@ -134,6 +174,9 @@ pub enum NetworkError {
     /// More parts of a kind than it allows.
     #[error("{count} {table} parts: at most {max}")]
     TooMany { table: &'static str, count: usize, max: usize },
+    /// A part without a small-strain form in a small-strain network.
+    #[error("{what} has no small-strain form (kinematics = \"small\"; it needs \"finite\")")]
+    NoSmallStrainForm { what: String },
     /// Nothing carries stress.
     #[error("the network has no part: give an equilibrium network, a viscous network or a damper")]
     Empty,
@@ -261,7 +304,8 @@ pub mod parameters {
     }
 }
 
-/// The network's own history before the parts': `C_n^-1 - I` and `W_max`.
+/// The network's own history before the parts': `C_n^-1 - I` (in small-strain
+/// kinematics the strain) and `W_max`.
 const HISTORY_BASE: usize = 7;
 
 pub(crate) fn sym_to(m: &Matrix3<f64>, out: &mut [f64]) {
@@ -275,7 +319,12 @@ pub(crate) fn sym_from(v: &[f64]) -> Matrix3<f64> {
 impl Network {
     /// A network of Poisson ratio `poisson` with no part yet.
     pub fn new(poisson: f64) -> Self {
-        Self { poisson, equilibrium: None, parts: Vec::new() }
+        Self { poisson, strain: Strain::Finite, equilibrium: None, parts: Vec::new() }
+    }
+
+    /// The same network in the kinematics `strain`.
+    pub fn with_strain(self, strain: Strain) -> Self {
+        Self { strain, ..self }
     }
 
     /// The same network with the equilibrium network `equilibrium`.
@@ -373,7 +422,59 @@ impl Network {
         if self.equilibrium.is_none() && self.parts.is_empty() {
             return Err(NetworkError::Empty);
         }
+        if self.strain == Strain::Small {
+            if let Some(eq) = &self.equilibrium {
+                if eq.energy != Energy::NeoHookean {
+                    return Err(NetworkError::NoSmallStrainForm { what: "the equilibrium network's energy".into() });
+                }
+                if eq.mullins.is_some() {
+                    return Err(NetworkError::NoSmallStrainForm { what: "the equilibrium network's softening".into() });
+                }
+            }
+            if let Some(p) = self.parts.iter().find(|p| !p.has_small_strain_form()) {
+                return Err(NetworkError::NoSmallStrainForm { what: format!("the {} part", p.kind().table) });
+            }
+        }
         Ok(())
+    }
+}
+
+impl Network {
+    /// [`PointLaw::update`] in small-strain kinematics ([`Strain::Small`]):
+    /// the point's own history holds the strain at the step's start.
+    fn update_small(
+        &self,
+        h: &Matrix3<f64>,
+        dt_s: f64,
+        old: &[f64],
+        new: &mut [f64],
+    ) -> Result<PointResponse, LawFailure> {
+        let eps = hencky::symmetrize(h);
+        let lame = hencky::unit_lame(self.poisson);
+        let mut stress = Matrix3::zeros();
+        let mut tangent = Tangent::zeros();
+        new.copy_from_slice(old);
+        if let Some(eq) = &self.equilibrium {
+            if eq.energy != Energy::NeoHookean || eq.mullins.is_some() {
+                return Err(LawFailure::NoSmallStrainForm { law: "equilibrium" });
+            }
+            stress += hencky::hooke(eq.e_mpa, lame, &eps);
+            tangent += hencky::hooke_tangent(eq.e_mpa, lame);
+        }
+        let kinematics = SmallKinematics { eps, eps_n: sym_from(&old[0..6]), poisson: self.poisson, dt_s };
+        let mut o = HISTORY_BASE;
+        for part in &self.parts {
+            let n = part.history_len();
+            let (s, t) = part.respond_small(&kinematics, &old[o..o + n], &mut new[o..o + n])?;
+            stress += s;
+            tangent += t;
+            o += n;
+        }
+        sym_to(&eps, &mut new[0..6]);
+        if !(stress.iter().all(|x| x.is_finite()) && tangent.iter().all(|x| x.is_finite())) {
+            return Err(LawFailure::NonFinite);
+        }
+        Ok(PointResponse { stress, tangent })
     }
 }
 
@@ -397,6 +498,9 @@ impl PointLaw for Network {
     }
 
     fn update(&self, h: &Matrix3<f64>, dt_s: f64, old: &[f64], new: &mut [f64]) -> Result<PointResponse, LawFailure> {
+        if self.strain == Strain::Small {
+            return self.update_small(h, dt_s, old, new);
+        }
         let f = Matrix3::identity() + h;
         let tr = h.trace();
         let j = 1.0 + tr + 0.5 * (tr * tr - (h * h).trace()) + h.determinant();
@@ -527,6 +631,46 @@ mod tests {
         let p1 = net.update(&(f - Matrix3::identity()), 2.0, &h1, &mut h2).unwrap().stress;
         let want = p0 * (-2.0f64 / 3.0).exp();
         assert!((p1 - want).amax() < 1e-12 * p0.amax(), "{:.3e}", (p1 - want).amax());
+    }
+
+    /// Small-strain kinematics: the tangent matches central differences, the
+    /// stress is symmetric, and a rigid rotation's skew part of `h` carries no
+    /// stress (linearised objectivity); parts without the form are refused.
+    #[test]
+    fn the_small_strain_network_has_an_exact_tangent_and_refuses_finite_only_parts() {
+        let net = Network::new(0.3)
+            .with_strain(Strain::Small)
+            .with_equilibrium(Equilibrium { energy: Energy::NeoHookean, e_mpa: 0.02, mullins: None })
+            .with(ViscousNetwork { e_mpa: 0.015, tau_s: 2.0 })
+            .with(Damper { c_mpa_s: 5e-3 });
+        net.validate().unwrap();
+        let mut h0 = vec![0.0; net.history_len()];
+        net.initial_history(&mut h0);
+        let mut h1 = h0.clone();
+        let first = Matrix3::new(0.01, 0.02, 0.0, -0.01, -0.03, 0.005, 0.0, 0.002, 0.004);
+        net.update(&first, 0.7, &h0, &mut h1).unwrap();
+        let h = first * 1.5 + Matrix3::new(0.0, 0.0, 0.01, 0.0, 0.0, 0.0, -0.02, 0.0, 0.0);
+        let mut scratch = h1.clone();
+        let r = net.update(&h, 0.3, &h1, &mut scratch).unwrap();
+        let stress = |f: &Matrix3<f64>| {
+            let mut s = h1.clone();
+            net.update(&(f - Matrix3::identity()), 0.3, &h1, &mut s).unwrap().stress
+        };
+        let fd = tangent_by_differences(&(Matrix3::identity() + h), 1e-6, &stress);
+        let err = (r.tangent - fd).amax() / r.tangent.amax();
+        assert!(err < 1e-6, "tangent error {err:.3e}");
+        assert!((r.stress - r.stress.transpose()).amax() < 1e-15, "symmetric stress");
+        let skew = Matrix3::new(0.0, 0.01, -0.02, -0.01, 0.0, 0.03, 0.02, -0.03, 0.0);
+        let mut s2 = h1.clone();
+        let rotated = net.update(&(h + skew), 0.3, &h1, &mut s2).unwrap().stress;
+        assert!((rotated - r.stress).amax() < 1e-15 * r.stress.amax().max(1.0));
+        let refused = |n: Network| n.with_strain(Strain::Small).validate().unwrap_err().to_string();
+        assert_eq!(
+            refused(Network::new(0.3).with(PlasticNetwork { e_mpa: 0.04, yield_mpa: 1e-3, hardening_mpa: 0.0 })),
+            "the plastic part has no small-strain form (kinematics = \"small\"; it needs \"finite\")"
+        );
+        assert!(refused(full()).contains("the equilibrium network's energy"));
+        assert_eq!(Strain::Small.name(), "small");
     }
 
     #[test]

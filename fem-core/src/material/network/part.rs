@@ -44,6 +44,21 @@ pub struct Kinematics<'a> {
     pub dt_s: f64,
 }
 
+/// What a part sees of a point in a step in small-strain (linearised)
+/// kinematics ([`super::Strain::Small`]): the strain `eps = sym(h)` and its
+/// value at the step's start.
+#[derive(Debug, Clone, Copy)]
+pub struct SmallKinematics {
+    /// The strain at the step's end.
+    pub eps: Matrix3<f64>,
+    /// The strain at the step's start.
+    pub eps_n: Matrix3<f64>,
+    /// The material's Poisson ratio (every part uses it).
+    pub poisson: f64,
+    /// The step [s].
+    pub dt_s: f64,
+}
+
 /// One network in parallel with the others.
 pub trait Part: std::fmt::Debug + Send + Sync {
     /// What kind of part it is.
@@ -64,6 +79,23 @@ pub trait Part: std::fmt::Debug + Send + Sync {
     /// from its history `old` (zeros at rest); writes its history at the step's
     /// end into `new` (same length, a copy of `old` on entry).
     fn respond(&self, k: &Kinematics, old: &[f64], new: &mut [f64]) -> Result<(Matrix3<f64>, Tangent), LawFailure>;
+    /// Whether it has a small-strain form ([`Part::respond_small`]); a network
+    /// in small-strain kinematics with a part that has none is refused
+    /// ([`super::Network::validate`]).
+    fn has_small_strain_form(&self) -> bool {
+        false
+    }
+    /// Its stress and exact tangent `d sigma / d h` in small-strain kinematics
+    /// (the stress is the Cauchy stress, the tangent's layout that of
+    /// [`Part::respond`]), with the same history contract.
+    fn respond_small(
+        &self,
+        _k: &SmallKinematics,
+        _old: &[f64],
+        _new: &mut [f64],
+    ) -> Result<(Matrix3<f64>, Tangent), LawFailure> {
+        Err(LawFailure::NoSmallStrainForm { law: self.kind().table })
+    }
 }
 
 /// A kind of part, as readers and fitters see it.

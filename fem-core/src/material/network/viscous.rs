@@ -7,14 +7,15 @@
 //!
 //! History (12 values): `A - I` (`A = C_v^-1`), then the second
 //! Piola-Kirchhoff stress `S_n` at the step's start, symmetric tensors as
-//! `[xx, yy, zz, xy, xz, yz]`.
+//! `[xx, yy, zz, xy, xz, yz]`; in small-strain kinematics the network's stress
+//! at the step's start, then six unused values.
 
 use std::sync::Arc;
 
 use nalgebra::Matrix3;
 
 use super::hencky;
-use super::part::{Kinematics, Part, PartKind};
+use super::part::{Kinematics, Part, PartKind, SmallKinematics};
 use super::{sym_from, sym_to};
 use crate::material::law::{LawFailure, ParameterSpec, Start, Tangent};
 use crate::material::phi1;
@@ -59,6 +60,27 @@ impl Part for ViscousNetwork {
 
     fn small_strain_modulus(&self) -> f64 {
         self.e_mpa
+    }
+
+    fn has_small_strain_form(&self) -> bool {
+        true
+    }
+
+    /// The chain's exact exponential update for a strain linear in the step
+    /// (design.md 3.3): `sigma = e sigma_n + phi E C1 : (eps - eps_n)`, the
+    /// network's stress `sigma_n` at the step's start kept in `old[0..6]`.
+    fn respond_small(
+        &self,
+        k: &SmallKinematics,
+        old: &[f64],
+        new: &mut [f64],
+    ) -> Result<(Matrix3<f64>, Tangent), LawFailure> {
+        let lame = hencky::unit_lame(k.poisson);
+        let x = k.dt_s / self.tau_s;
+        let (decay, phi) = ((-x).exp(), phi1(x));
+        let sigma = sym_from(&old[0..6]) * decay + hencky::hooke(self.e_mpa * phi, lame, &(k.eps - k.eps_n));
+        sym_to(&sigma, &mut new[0..6]);
+        Ok((sigma, hencky::hooke_tangent(self.e_mpa * phi, lame)))
     }
 
     fn respond(&self, k: &Kinematics, old: &[f64], new: &mut [f64]) -> Result<(Matrix3<f64>, Tangent), LawFailure> {
