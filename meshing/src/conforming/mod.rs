@@ -193,8 +193,8 @@
 //! 0.1 % of 1.25 x TetGen's count (`tests/tetgen_golden.rs` asserts both).
 //! TetGen merges such triangles (its coplanarity tolerance) and drops the
 //! edge: its faces there lie 2e-7 mm off the input. Ours is at that floor:
-//! 1.47 (it was 2.23; 1.74 with the facets refined first but before
-//! smoothing for the ratio). No flips are done during refinement: it keeps
+//! 1.47 (2.23 without the facets refined first and smoothing for the ratio;
+//! 1.74 with the facets refined first but without the smoothing). No flips are done during refinement: it keeps
 //! the tetrahedralization Delaunay, which boundary recovery relies on; the
 //! 3-2 flips of stage 5 come after it.
 
