@@ -264,9 +264,9 @@ fn blocked_dashpot_against_a_large_instantaneous_viscosity_keeps_steps_and_close
 /// `t* = 2.375 s`: every step across `t*` fails, the accepted steps before it grow
 /// fourfold and fail again, so they crowd against `t*`. Asserted: the run ends
 /// with `NotConverged` naming the softening, at `t*` within 1e-6 s, in at most
-/// 2000 steps (measured: t = 2.375000 s, 39 steps). Not run against the stepper
-/// before the fix (no time in session 18); the hang it guards against was measured
-/// on the diagnosis (BENCHMARKS.md, "Diagnosis", session 18).
+/// 2000 steps (measured: t = 2.375000 s, 39 steps). Not run against a stepper
+/// without the least step; the hang it guards against was measured on the
+/// diagnosis (BENCHMARKS.md, "Diagnosis").
 #[test]
 fn a_step_that_fails_at_every_length_ends_the_run_at_the_least_step() {
     let (push, strain) = (4.0, 0.4);
