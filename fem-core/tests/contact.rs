@@ -220,8 +220,9 @@ fn coulomb_stick_then_slip() {
 /// three-element gel block (glued to the floor, 5 mm elements) pressed 1.5 mm in
 /// 5 s and held to 15 s by a plate tool with mu from 5e-7 to 0.3. At small mu the
 /// stick window `2 mu N / k` is as narrow as the rounding of a node's position, and
-/// the statuses at the cone's edge used to flip from pass to pass ("contact did not
-/// settle" at mu = 1e-3 and below). Every run now settles; the peak force does not
+/// the statuses at the cone's edge can flip from pass to pass (the failure this
+/// guards against: "contact did not settle" at mu = 1e-3 and below). Every run
+/// settles; the peak force does not
 /// decrease with mu, and its excess over the frictionless plate's stays within
 /// 0.2 mu of it (it is about 0.08 mu here: linear in mu, as the barrel's
 /// friction term is), down to the solves' rounding (1e-9).

@@ -891,10 +891,10 @@ fn material_point_refusals_name_the_key() {
 
     let slider = effect(EffectId::PlasticSlider, &[0.01, 0.01]);
     let with_friction = slider.clone().with(EffectId::PlateFriction, &[0.3]).unwrap();
-    // Plate friction (a friction contact tool) is no longer refused: it runs.
+    // Plate friction (a friction contact tool) is not refused: it runs.
     let r = press::simulate(&block(elastic.clone(), protocol.clone(), with_friction), &fixed(0.5), &mut |_| {});
     assert!(r.as_ref().is_ok_and(|r| r.peak_force() > 0.0), "{:?}", r.err());
-    // Machine compliance is no longer refused either (`tests/compliance.rs`): it runs.
+    // Machine compliance is not refused either (`tests/compliance.rs`): it runs.
     let with_compliance = slider.clone().with(EffectId::MachineCompliance, &[0.01]).unwrap();
     let r = press::simulate(&block(elastic.clone(), protocol.clone(), with_compliance), &fixed(0.5), &mut |_| {});
     assert!(r.as_ref().is_ok_and(|r| r.peak_force() > 0.0), "{:?}", r.err());

@@ -208,8 +208,8 @@ fn a_tet_spanning_a_crease_is_split_not_refused() {
 /// the teapot spout lip's sharpest edge), the ridge tilted off the lattice.
 /// The stuffing rounds a blade off at a fraction of its cells' size, and the
 /// graded sizing's thin test is blind there (the input point nearest to a
-/// cell is the ridge itself, both sides of it outside), so the cells along it
-/// stayed at the smallest size; now they are cut below it as at a rim (the
+/// cell is the ridge itself, both sides of it outside), so without a cut of
+/// their own the cells along it stay at the smallest size; they are cut below it as at a rim (the
 /// blade's edge among the sizing's rims) while `GAP_DEPTH` (2.5) times their
 /// longest edge exceeds the grading tolerance. h = 0.25 mm, 2 levels, grading
 /// tolerance 5e-3 and fitting 1e-2 of the diagonal (4.168 mm; tolerance

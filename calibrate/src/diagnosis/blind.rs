@@ -134,8 +134,8 @@
 //! generator sets it on the truth's engine problem (the bundles the diagnoser
 //! gets carry no `mullins_*` key). Adding
 //! it to [`OutOfLibrary::ALL`] lengthened [`full_cycle`], so the
-//! plans of the development seeds below, drawn before it, no longer come out of
-//! [`plan`] case for case.
+//! plans of the development seeds below, drawn with the shorter cycle, do not
+//! come out of [`plan`] case for case.
 //!
 //! **Mullins-type damage, measured** (development seeds 101 to 104, the issue's
 //! scatter, `cargo run --release -p wagashi-calibrate --example blind_mullins --

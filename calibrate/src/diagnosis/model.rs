@@ -35,8 +35,8 @@
 //! its reference distance from the null ([`DEADBAND`]) runs as the null: the
 //! effect of such values is far below any noise, and a refit creeping toward the
 //! null would otherwise spend runs on friction coefficients of order 1e-7 (the
-//! band was added when the engine's friction contact did not settle there; it
-//! does now, and the diagnosis tests give the same verdicts without the band).
+//! engine's friction contact settles there too: the diagnosis tests give the
+//! same verdicts without the band).
 
 use std::collections::BTreeMap;
 
