@@ -6,7 +6,7 @@
 //! (TetGen `.node`/`.ele` or Gmsh `.msh`). Prints the report as JSON (the
 //! `quality` object of `wagashi mesh --report`); `TIME_S`, the other mesher's
 //! time, is copied into `mesh_time_s`. It asserts nothing: it is the ruler of
-//! BENCHMARKS.md's comparison with fTetWild at matched accuracy (session 22).
+//! BENCHMARKS.md's comparison with fTetWild at matched accuracy.
 //!
 //! ```text
 //! cargo run --release --example mesh_report -- ../shared/data/meshes/npm_bunny.obj bunny_ftw.node 61.2

@@ -12,10 +12,10 @@
 //! (`-- --quick` stops before the swap study, `-- --no-symptom` skips step 2,
 //! `-- --swap-only` runs steps 1 and 4). The generator runs on 5 mm elements and
 //! fixed 0.25 s steps, the diagnoser on 10 mm elements and adaptive steps.
-//! Step 3 (the whole library) took 130 s (session 14, load about 4; on fixed
+//! Step 3 (the whole library) took 130 s (load about 4; on fixed
 //! 0.5 s steps 2214 s at load 12), each swap diagnosis minutes.
 //! `-- --no-symptom --quick` runs steps 1 and 3 only; `-- --fixed-steps` runs
-//! the diagnoser on fixed 0.5 s steps (session 13) instead of adaptive ones.
+//! the diagnoser on fixed 0.5 s steps instead of adaptive ones.
 //! `-- --truth stress-thinning,bingham-dashpot` matches and swaps only those
 //! causes (same noise draws as the full run); `-- --designs long-hold` runs
 //! the swap study on the hold-and-speed campaign plus a 728 s hold
@@ -55,8 +55,7 @@ const TRUTH_SIZE_MM: f64 = 5.0;
 const MATCH_SIZE_MM: f64 = 5.0;
 const SEED: u64 = 20_261_122;
 /// The diagnoser's fixed step with `--fixed-steps` [s] (the generator's is
-/// 0.25 s): until session 14 the engine's slider did not converge in the very
-/// short step adaptive control takes right after the release.
+/// 0.25 s), for comparison with the adaptive steps.
 const DIAGNOSER_DT_S: f64 = 0.5;
 
 const CANDIDATES: [EffectId; 4] =
@@ -69,8 +68,9 @@ fn options() -> DiagnosisOptions {
         bootstrap: 300,
         size_mm: Some(SIZE_MM),
         marker_sigma_mm: NoiseModel::SEED.marker_sigma_mm,
-        // Adaptive steps (the engine's slider converges there since session
-        // 14); `--fixed-steps`: the diagnoser's fixed 0.5 s steps of session 13.
+        // Adaptive steps (the engine's slider converges in the very short step
+        // adaptive control takes right after the release); `--fixed-steps`:
+        // the diagnoser on fixed 0.5 s steps.
         fixed_dt_s: if std::env::args().any(|a| a == "--fixed-steps") { Some(DIAGNOSER_DT_S) } else { None },
         ..DiagnosisOptions::default()
     }
@@ -182,7 +182,7 @@ const HELP: &str = "seed_gap: the seed's own gap, diagnosed (issue 6; module doc
   --quick          stop after step 3 (no swap study)
   --no-symptom     skip step 2 (the seed's three steps)
   --swap-only      steps 1 and 4 only
-  --fixed-steps    the diagnoser on fixed 0.5 s steps (session 13)
+  --fixed-steps    the diagnoser on fixed 0.5 s steps (default: adaptive)
   --truth IDS      the true causes to match and swap, comma-separated among
                    plastic-slider, bingham-dashpot, stress-thinning, dual-viscosity (default: all four)
   --designs NAMES  the swap study's campaigns, comma-separated among

@@ -93,7 +93,7 @@ fn the_bunny_to_vtu_with_a_json_report() {
 /// JSON keys give the cap's distance from the input (about the hole's radius)
 /// and from the level set, measured at the cap's vertices by the report's
 /// normal probe, whose floor is 9e-7 of the diagonal.
-/// Measured (session 22): 12 border edges, widest hole 1.866 mm, caps 2.89e-2 of
+/// Measured: 12 border edges, widest hole 1.866 mm, caps 2.89e-2 of
 /// the diagonal from the input and 9.0e-7 (the floor) from the level set.
 /// Asserted: the caps' vertices within 1e-6 of the diagonal of the level set,
 /// and the cap farther from the input than that.
@@ -218,7 +218,7 @@ fn refusals_are_one_line_errors() {
 /// creases, curved and thin parts) on the bunny at 0.8 mm: a closer boundary than
 /// the uniform lattice at the same size, the angles within [12°, 155°] (the
 /// envelope's final guard), and the levels in the report; out of range, a clap error.
-/// Measured (session 17): Hausdorff / diagonal 9.3e-2 uniform (the ears lost at
+/// Measured: Hausdorff / diagonal 9.3e-2 uniform (the ears lost at
 /// this size), 7.1e-3 graded; asserted: graded under half the uniform.
 #[test]
 fn grade_levels_refine_the_boundary() {

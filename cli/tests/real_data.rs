@@ -260,22 +260,21 @@ fn second_touch_of(force: &[(f64, f64)], threshold: f64) -> Option<f64> {
 /// calibrated on specimen 1's first stroke, validated on specimen 2's first
 /// stroke and on its whole double compression, whose plate is a contact tool.
 /// Contact runs have no sensitivities, so the held-out check anchors that trial
-/// on finite differences (it used to stop the diagnosis). The material-point
-/// effect strain-stiffening runs on that trial since session 17 (the contact
-/// fixed point on the operator scaled to the stiffest tangent, `fem_core::press`
-/// inelastic module, "Stiffer tangents", and pairs in contact starting each step
-/// on their tool); until then it diverged (step 24, t = 2.47 s) and was reported
-/// as not evaluated.
+/// on finite differences. The material-point effect strain-stiffening runs on
+/// that trial thanks to the contact fixed point on the operator scaled to the
+/// stiffest tangent (`fem_core::press` inelastic module, "Stiffer tangents") and
+/// pairs in contact starting each step on their tool; without them it diverges
+/// (step 24, t = 2.47 s).
 ///
 /// Asserted: the three candidates evaluated, with finite held-out gap
 /// closures. strain-stiffening is significant on the calibration trial but
 /// makes the held-out trials worse beyond noise, so the non-inferiority veto
 /// (diagnosis-details.md §5.4: `Delta_ho > -2 SE`, the SE of the paired block
-/// bootstrap since session 19) takes it out, force-offset likewise, and the
-/// verdict is `unexplained`. Measured (session 19): strain-stiffening LR
-/// 1.51e5, held-out gain -5.57e5 against SE 1.19e5 (-4.7 SE; the whole-segment
-/// SE of 8.32e5 kept it eligible until session 18, when the verdict was
-/// `partial: strain-stiffening` with G = -0.35); force-offset gain -7.70e7
+/// bootstrap) takes it out, force-offset likewise, and the verdict is
+/// `unexplained`. Measured: strain-stiffening LR 1.51e5, held-out gain -5.57e5
+/// against SE 1.19e5 (-4.7 SE; the whole-segment SE of 8.32e5 would keep it
+/// eligible, the verdict then `partial: strain-stiffening` with G = -0.35);
+/// force-offset gain -7.70e7
 /// against SE 5.53e5. finite-strain (full Green-Lagrange kinematics blended in
 /// by `lambda_g`, its score a secant at `lambda_g` = 1/2 because the runs at 1
 /// invert on this stroke) is not significant: the score's expected change

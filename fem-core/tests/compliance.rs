@@ -330,7 +330,7 @@ where
 /// 1e-7 of the peak (the curved tool's augmented Lagrangian settles each run's
 /// contact to its own tolerance, 1e-11 of the size, from different starts);
 /// measured 3.5e-9 (4.8e-9 with the sphere moved by
-/// waypoints before session 18). The reported plate force is the tool's (1e-12).
+/// waypoints). The reported plate force is the tool's (1e-12).
 #[test]
 fn sphere_behind_the_spring_sees_the_deflected_displacement() {
     let body = 10.0;

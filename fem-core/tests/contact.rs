@@ -220,8 +220,9 @@ fn coulomb_stick_then_slip() {
 /// three-element gel block (glued to the floor, 5 mm elements) pressed 1.5 mm in
 /// 5 s and held to 15 s by a plate tool with mu from 5e-7 to 0.3. At small mu the
 /// stick window `2 mu N / k` is as narrow as the rounding of a node's position, and
-/// the statuses at the cone's edge used to flip from pass to pass ("contact did not
-/// settle" at mu = 1e-3 and below). Every run now settles; the peak force does not
+/// the statuses at the cone's edge can flip from pass to pass (the failure this
+/// guards against: "contact did not settle" at mu = 1e-3 and below). Every run
+/// settles; the peak force does not
 /// decrease with mu, and its excess over the frictionless plate's stays within
 /// 0.2 mu of it (it is about 0.08 mu here: linear in mu, as the barrel's
 /// friction term is), down to the solves' rounding (1e-9).
@@ -528,22 +529,23 @@ fn flat_plate_tool_is_exact_with_one_solve_per_step() {
     }
 }
 
-/// Regression (session 16: "contact did not settle" at the first unloading step):
+/// Regression ("contact did not settle" at the first unloading step):
 /// a frictionless sphere (R = 5 mm) pressed 1 mm into a purely elastic
 /// axisymmetric sweet (radius and height 10 mm) in 5 s, lifted to 1 mm above
 /// the top by 10 s, left to 40 s; fixed 0.25 s steps and adaptive ones. The
-/// cause: at a step's start the retreating tool opened every pair (its whole
-/// increment as gap), so the first solve sprang the body back flat and the
-/// iteration restarted from far off; pairs in contact now start each step on
+/// cause: a retreating tool that opens every pair at a step's start (its whole
+/// increment as gap) makes the first solve spring the body back flat and the
+/// iteration restart from far off; so pairs in contact start each step on
 /// their tool. Checked: the elastic body is path-independent, so unloading
 /// retraces loading (the force at depths where a loading step ended, 3 on fixed
 /// steps: measured 3.4e-10 of the peak, asserted 1e-6); the sphere touches with
 /// a positive force while deeper than 0.01 mm and not at all once above the top
 /// (lift-off at depth 0, t = 7.5 s); the floor carries the sphere's load
 /// (measured 6e-15 and 7.5e-15 of the peak, asserted 1e-6); the shape recovers
-/// (largest displacement at the end, measured 0, asserted 1e-9 mm). Before:
-/// fixed steps failed at t = 5.0039 s, adaptive ones took 27,051 steps and failed
-/// at t = 6.87 s; now 161 and 109 steps.
+/// (largest displacement at the end, measured 0, asserted 1e-9 mm). Measured
+/// 161 and 109 steps (fixed, adaptive); with every pair opened at the step's
+/// start, fixed steps failed at t = 5.0039 s, adaptive ones took 27,051 steps
+/// and failed at t = 6.87 s.
 #[test]
 fn sphere_lifts_off_an_elastic_sweet() {
     let body = 10.0;

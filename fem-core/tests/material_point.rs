@@ -408,8 +408,8 @@ fn slider_signature_on_the_seed_material() {
 /// the step's mean stress (`material::point`, module doc); against a reference
 /// at 1e-5 s 2.26e-5, 2.3e-8, 6.6e-9 (orders 10.0 and 1.8: at 1e-4 s the
 /// reference's own error shows at 0.25 s; at 1e-3 s, about 1.3e-7 MPa, it hid
-/// the convergence). With backward Euler on the end stress (before session 19):
-/// first order, 0.28 % of sigma_B at 0.25 s. The linear chain relaxes towards
+/// the convergence). Backward Euler on the end stress would be first order,
+/// 0.28 % of sigma_B at 0.25 s. The linear chain relaxes towards
 /// zero instead.
 #[test]
 fn bingham_hold_relaxes_to_the_plateau() {
@@ -891,10 +891,10 @@ fn material_point_refusals_name_the_key() {
 
     let slider = effect(EffectId::PlasticSlider, &[0.01, 0.01]);
     let with_friction = slider.clone().with(EffectId::PlateFriction, &[0.3]).unwrap();
-    // Plate friction (a friction contact tool) is no longer refused: it runs.
+    // Plate friction (a friction contact tool) is not refused: it runs.
     let r = press::simulate(&block(elastic.clone(), protocol.clone(), with_friction), &fixed(0.5), &mut |_| {});
     assert!(r.as_ref().is_ok_and(|r| r.peak_force() > 0.0), "{:?}", r.err());
-    // Machine compliance is no longer refused either (`tests/compliance.rs`): it runs.
+    // Machine compliance is not refused either (`tests/compliance.rs`): it runs.
     let with_compliance = slider.clone().with(EffectId::MachineCompliance, &[0.01]).unwrap();
     let r = press::simulate(&block(elastic.clone(), protocol.clone(), with_compliance), &fixed(0.5), &mut |_| {});
     assert!(r.as_ref().is_ok_and(|r| r.peak_force() > 0.0), "{:?}", r.err());

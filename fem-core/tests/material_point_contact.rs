@@ -151,7 +151,7 @@ fn elastic_sweet() -> Material {
 
 /// With a plastic slider the punch leaves a dent after it lifts off (the
 /// yielded cells under it keep their inelastic strain; 0.0295 mm in 0.25 s
-/// steps, session 17: 0.070 mm before the contact predictor, see
+/// steps; 0.070 mm without the contact predictor, see
 /// [`adaptive_punch_dent_agrees_with_fixed_steps`]); without, the elastic sweet
 /// springs back to its shape exactly.
 #[test]
@@ -209,12 +209,12 @@ fn null_effects_with_tools_are_the_baseline() {
     }
 }
 
-/// The punch-with-slider dent on adaptive steps against fixed steps (session 17).
-/// Before, the unloading's first pass opened every pair in contact (the
-/// retreating punch's whole increment as gap), the iteration restarted from the
-/// body sprung back: the adaptive run took 8,600 to 11,700 steps and the
-/// fixed-step dents drifted with the step (session 16: 0.0528, 0.0697, 0.0795,
-/// 0.0848 mm at 0.5 to 0.0625 s). With
+/// The punch-with-slider dent on adaptive steps against fixed steps. Where the
+/// unloading's first pass opens every pair in contact (the retreating punch's
+/// whole increment as gap), the iteration restarts from the body sprung back:
+/// so measured, the adaptive run took 8,600 to 11,700 steps and the fixed-step
+/// dents drifted with the step (0.0528, 0.0697, 0.0795, 0.0848 mm at 0.5 to
+/// 0.0625 s). With
 /// pairs in contact starting each step on their tool, measured: fixed steps
 /// 0.02949, 0.02948, 0.02947 mm at 0.25, 0.125, 0.0625 s, adaptive 0.02946 mm
 /// in 173 steps. Asserted: the adaptive dent within 2e-3 of the fixed-step
@@ -250,7 +250,7 @@ fn adaptive_punch_dent_agrees_with_fixed_steps() {
 /// runs drift apart by up to 2.1e-10 of the peak (measured, axisymmetric; a
 /// tolerance set for this new test, not loosened after a failure of an old one).
 /// Not derived yet: the deciding run, `press::inelastic::TOLERANCE` at 1e-13
-/// (session 19, temporarily), does not reach the comparison: the iteration stops
+/// (set temporarily), does not reach the comparison: the iteration stops
 /// after the second press's release (t = 30.12 s) at 1.8e-13 of its force scale
 /// (axisymmetric: its rounding floor) and at 1.3e-6 (plane, t = 30.13 s), so
 /// whether the 2.1e-10 is the tolerance's growth is still open.
@@ -268,15 +268,13 @@ fn strong_stiffening() -> Effects {
 /// tangents"); with the chain's own matrix it overshot and diverged. A
 /// frictionless plate tool on a frictionless floor reproduces the frictionless
 /// plate's run, and a glued tool the glued plate's, to [`FORCE_TOL`] (bottom
-/// force, shape) and [`TOOL_TOL`] (tool force). Measured (session 17),
-/// frictionless: bottom force 1.8e-11 of the peak, tool force 3.8e-11 to 6.2e-11,
-/// shape 9.7e-12 mm (570 steps); glued: bottom force 8e-13 to 3.6e-12, tool force
-/// 1.3e-11 to 9.3e-11, shape 6.9e-13 mm (66 steps); plane, axisymmetric, solid.
-/// Session 19, with the run's largest force as the floor of the iteration's
-/// scale (`press::inelastic`, "The force scale"; the recovery after the release
-/// is unloaded): frictionless bottom force 1.5e-11 to 3.8e-11, tool force 4.6e-11
-/// to 9.2e-11, shape 4.0e-12 to 6.0e-11 mm (342 to 712 steps); glued bottom force
-/// 1.8e-12 to 3.6e-12, tool force 1.9e-11 to 9.3e-11, shape 4.9e-12 to 2.3e-11 mm.
+/// force, shape) and [`TOOL_TOL`] (tool force). Measured, with the run's largest
+/// force as the floor of the iteration's scale (`press::inelastic`, "The force
+/// scale"; the recovery after the release is unloaded), plane, axisymmetric,
+/// solid: frictionless bottom force 1.5e-11 to 3.8e-11 of the peak, tool force
+/// 4.6e-11 to 9.2e-11, shape 4.0e-12 to 6.0e-11 mm (342 to 712 steps); glued
+/// bottom force 1.8e-12 to 3.6e-12, tool force 1.9e-11 to 9.3e-11, shape 4.9e-12
+/// to 2.3e-11 mm.
 #[test]
 fn plate_tools_with_strong_strain_stiffening_reproduce_the_plates_at_half_compression() {
     for (attachment, contact) in
@@ -296,14 +294,12 @@ fn plate_tools_with_strong_strain_stiffening_reproduce_the_plates_at_half_compre
 /// second press. The run reaches its end; while the tool first holds (every step
 /// end up to its first lift-off) its force and the bottom force match the
 /// constrained frictionless plate's replay of the same steps (to the lift-off) to
-/// [`TOOL_TOL`] and [`STIFF_BOTTOM_TOL`] of the peak. Measured (session 17):
-/// lift-off at 14.13 / 14.18 / 14.09 s, contact again at 23.27 s, second peaks
-/// 0.98 of the first; tool force 1.3e-10 / 9.8e-11 / 2.4e-11, bottom force
-/// 3.1e-11 / 2.1e-10 / 1.2e-10 of the peak (plane / axisymmetric / solid; 783,
-/// 735 and 360 steps). Session 19 (the iteration's force scale with the run's
-/// largest force as its floor): lift-off at 14.10 / 14.27 / 14.16 s, tool force
-/// 1.6e-10 / 9.6e-11 / 2.8e-11, bottom force 3.0e-11 / 2.1e-10 / 1.2e-10 (912,
-/// 584 and 658 steps).
+/// [`TOOL_TOL`] and [`STIFF_BOTTOM_TOL`] of the peak. Measured (the iteration's
+/// force scale with the run's largest force as its floor; plane / axisymmetric
+/// / solid): lift-off at 14.10 / 14.27 / 14.16 s, contact again at 23.27 s,
+/// second peaks 0.98 of the first; tool force 1.6e-10 / 9.6e-11 / 2.8e-11,
+/// bottom force 3.0e-11 / 2.1e-10 / 1.2e-10 of the peak (912, 584 and 658
+/// steps).
 #[test]
 fn strong_stiffening_with_a_plate_tool_runs_press_release_press() {
     let mut protocol = Protocol::ramp_hold_release(0.75, 10.0, 30.0, 40.0);

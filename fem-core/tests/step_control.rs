@@ -71,15 +71,15 @@ fn hold_gap(a: &PressResult, b: &PressResult) -> f64 {
 /// Adaptive runs, largest hold-force gap to the reference, of the peak (`rtol`;
 /// `flow_rtol` at its default, a tenth of `rtol`):
 ///
-/// | rtol | before (displacements only) | now (with the flow) |
+/// | rtol | displacements only | with the flow |
 /// |---|---|---|
 /// | 1e-3 (default) | 1.04e-2 (42 steps) | 1.51e-3 (129 steps) |
 /// | 1e-4 | 1.81e-2 (43 steps) | 4.86e-4 (362 steps) |
 ///
-/// Before, the hold steps grew to the bound (20.5 s, a twentieth of the trial) at
-/// both tolerances and the gap did not shrink with `rtol`. Asserted: under
-/// 2.5e-3 of the peak at the default and 8e-4 at rtol 1e-4 (before: 4 and 23
-/// times over), and the tighter tolerance at least twice closer (measured 3.1:
+/// With the displacements only, the hold steps grow to the bound (20.5 s, a
+/// twentieth of the trial) at both tolerances and the gap does not shrink with
+/// `rtol`. Asserted: under 2.5e-3 of the peak at the default and 8e-4 at rtol
+/// 1e-4 (the displacements only: 4 and 23 times over), and the tighter tolerance at least twice closer (measured 3.1:
 /// a first-order flow under local control, the square root of 10). Also a
 /// refusal: a non-positive `flow_rtol` is a typed settings error.
 #[test]
@@ -194,17 +194,18 @@ fn hold_steps_follow_the_force_and_stay_few() {
 /// `c3` is 1e6 MPa s (relaxation time 2e7 s; at 1e12 MPa s the closed form's
 /// exponential term cancels to 5e-3 of the peak in double precision).
 ///
-/// History: the run did not end at first (2000 steps by t = 0.139 s); with BDF1
-/// and backward Euler on the step's end stress (`k = g dt/c3 < 0.95`, steps
-/// under 9e-4 s) it took 1353 steps, errors against the closed form 5.1e-2
-/// adaptive, 1.35e-1 and 6.5e-2 at fixed 1 and 0.5 ms steps. Now the correction
-/// acts on the step's mean stress (`material::point`, module doc) and the step
-/// control measures the net dashpot flow, zero here: 38 steps; errors 7.28e-2
-/// adaptive (the end stress lags the blocked chain's by about half a step, and
-/// nothing measures that lag while the net flow is zero: a miss against the
-/// 5.1e-2 before), 4.77e-4 and 2.44e-4 at fixed 1 and 0.5 ms (first order,
-/// measured ratio 1.96; as the 1D model of the scheme gives). Errors of the
-/// peak, at the step ends and every 5 ms. Asserted: at most 100 steps, adaptive
+/// The correction acts on the step's mean stress (`material::point`, module
+/// doc) and the step control measures the net dashpot flow, zero here:
+/// measured 38 steps; errors 7.28e-2 adaptive (the end stress lags the blocked
+/// chain's by about half a step, and nothing measures that lag while the net
+/// flow is zero: a miss against the 5.1e-2 of the alternative below), 4.77e-4
+/// and 2.44e-4 at fixed 1 and 0.5 ms (first order,
+/// measured ratio 1.96; as the 1D model of the scheme gives). With BDF1 and
+/// backward Euler on the step's end stress (`k = g dt/c3 < 0.95`, steps under
+/// 9e-4 s) it took 1353 steps, errors against the closed form 5.1e-2 adaptive,
+/// 1.35e-1 and 6.5e-2 at fixed 1 and 0.5 ms steps; with neither, the run did
+/// not end (2000 steps by t = 0.139 s). Errors of the peak, at the step ends
+/// and every 5 ms. Asserted: at most 100 steps, adaptive
 /// under 8e-2, fixed 0.5 ms under 5e-4, and halving the fixed step divides the
 /// error by 1.8 to 2.3.
 #[test]
@@ -264,9 +265,9 @@ fn blocked_dashpot_against_a_large_instantaneous_viscosity_keeps_steps_and_close
 /// `t* = 2.375 s`: every step across `t*` fails, the accepted steps before it grow
 /// fourfold and fail again, so they crowd against `t*`. Asserted: the run ends
 /// with `NotConverged` naming the softening, at `t*` within 1e-6 s, in at most
-/// 2000 steps (measured: t = 2.375000 s, 39 steps). Not run against the stepper
-/// before the fix (no time in session 18); the hang it guards against was measured
-/// on the diagnosis (BENCHMARKS.md, "Diagnosis", session 18).
+/// 2000 steps (measured: t = 2.375000 s, 39 steps). Not run against a stepper
+/// without the least step; the hang it guards against was measured on the
+/// diagnosis (BENCHMARKS.md, "Diagnosis").
 #[test]
 fn a_step_that_fails_at_every_length_ends_the_run_at_the_least_step() {
     let (push, strain) = (4.0, 0.4);

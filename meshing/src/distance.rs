@@ -30,7 +30,7 @@
 //!   at the samples that are mesh vertices only, as each test near the level
 //!   set is an exact sum: bounding every cap sample took 28 s instead of 3.3
 //!   s on the graded open scan) and their fraction are reported. The caps' bound is not folded into the
-//!   Hausdorff distance (session 21: the corpus figures were measured without
+//!   Hausdorff distance (the corpus figures are measured without
 //!   it; whether a cap's miss counts against the gate is the report
 //!   reader's call, with both figures side by side). The input's border edges (edges of one non-degenerate triangle
 //!   once vertices within 1e-6 of the diagonal are welded, so seams of unwelded
@@ -39,9 +39,9 @@
 //!   from its vertices' centroid is smaller than (1e-3 of the diagonal)^2 (a slit
 //!   enclosing no area) left out;
 //! - the **raw Hausdorff distance**: every input triangle counted, in both
-//!   directions, caps included (what the report gave before session 18).
+//!   directions, caps included.
 //!
-//! ## The mesh boundary against the solid's boundary (session 21)
+//! ## The mesh boundary against the solid's boundary
 //!
 //! The solid's boundary is the bounding input plus the level set `w = 1/2` where
 //! it leaves the input (caps over holes, the mouth of an open tube). For a mesh
@@ -55,19 +55,18 @@
 //! field erring by a few hundredths, away from 1/2; within 0.1 of 1/2 a
 //! precise far field, and within 0.01 the exact sum over every triangle); the
 //! change is located by bisection to [`LEVEL_SET_PRECISION`] (1e-6) of the
-//! diagonal, and the bound is the far end of the last interval. Session 18 to
-//! 20 left out the samples nearer to a fan patch over each chain of border
-//! edges than to the input (a proxy for the cap): a cap sample was not measured
-//! at all, and a sample by a hole but nearer the body than the rim's patch was
-//! measured against the input only. Now a sample by a hole, nearer to the
+//! diagonal, and the bound is the far end of the last interval. Leaving out
+//! the samples nearer to a fan patch over each chain of border edges than to
+//! the input (a proxy for the cap) would leave a cap sample unmeasured, and a
+//! sample by a hole but nearer the body than the rim's patch measured against
+//! the input only. So a sample by a hole, nearer to the
 //! input than a sample spacing (the rim of a cap, the mouth of a tube), is
 //! measured against the level set too, and a sample farther away is over a hole
 //! only where the level set is nearer to it than the input; its probe's bound
 //! (against the largest bound over a hole so far, so a sample on the level set
 //! settles in two tests at 0.9 of it) is reported as the caps' distance to the
-//! level set (before the review of session 21 a cap sample's distance to the
-//! level set was reported nowhere: a whole sphere over a scan's 40 deg hole,
-//! 0.234 off the flat level set at its pole, went unseen).
+//! level set (unreported, a whole sphere over a scan's 40 deg hole, 0.234 off
+//! the flat level set at its pole, would go unseen).
 //!
 //! Cost: only the samples that can set the largest bound or be over a hole are
 //! probed (a cap sample settles in two tests at 0.9 d, mostly decided by the
@@ -79,11 +78,11 @@
 //! the result does not depend on the thread count. The distance's time grows by
 //! 6 % on the graded bunny, 8 % on the graded teapot, 30 % on the holed bunny
 //! and 3x (0.39 -> 1.24 s) on the graded open scan with a 40 deg hole, whose
-//! cap's rim band needs exact sums (BENCHMARKS.md, session 21); bounding the
+//! cap's rim band needs exact sums (BENCHMARKS.md); bounding the
 //! caps at the mesh's vertices made it 3.3 s there (the machine more loaded:
 //! BENCHMARKS.md, "Review fixes").
 //!
-//! ## A single closed shell (session 22)
+//! ## A single closed shell
 //!
 //! When the input is one closed, consistently oriented, outward shell without
 //! self-intersections ([`is_single_closed_shell`]: one edge-connected
@@ -110,8 +109,9 @@
 //! is the right one. Measured: the reports of the conforming bunny (0.3 mm),
 //! fandisk (0.05 mm), armadillo (8 mm) and an icosphere (level 3, 0.2 mm), and
 //! of the envelope meshes of an icosphere (level 5, 0.2 mm), the bunny (2 mm)
-//! and fandisk (0.1 mm), equal before and after, bit for bit (BENCHMARKS.md,
-//! session 22); fandisk's report 3.41 -> 0.56 s. Open, non-manifold,
+//! and fandisk (0.1 mm), equal on the general path and this one, bit for bit
+//! (BENCHMARKS.md); fandisk's report 3.41 s on the general path, 0.56 s on
+//! this one. Open, non-manifold,
 //! self-intersecting and multi-component inputs take the general path.
 //!
 //! ## Sampling
@@ -141,10 +141,10 @@
 //! is placed within 1/128 of a fine grid edge (plus the pull, and the curve's
 //! bending inside one sub-triangle): on two overlapping boxes (closed form, test
 //! `the_boundary_distance_places_jump_curves_inside_triangles`), 1.6e-4 mm for
-//! grid edges of 1/48 mm. Session 18 kept sub-triangles with two or more jumping
-//! corners whole, which placed the curve within one fine spacing only: on the
-//! thin fin (a 1e-4 mm fin through a unit box) on the graded lattice its
-//! boundary figure was 2.41e-3 of the diagonal where the raw one is 5.8e-5; now
+//! grid edges of 1/48 mm. Keeping sub-triangles with two or more jumping
+//! corners whole places the curve within one fine spacing only: on the thin
+//! fin (a 1e-4 mm fin through a unit box) on the graded lattice its boundary
+//! figure is then 2.41e-3 of the diagonal where the raw one is 5.8e-5; clipped,
 //! 4.0e-5. The closed forms this is tested against (two overlapping spheres, two
 //! overlapping boxes, an open scan's cap) are in `meshing/tests/envelope.rs`.
 //! The maxima's places are returned ([`BoundaryDistance::mesh_to_boundary_at_mm`],
@@ -427,8 +427,8 @@ fn mesh_to_solid_boundary(
     while start < order.len() && face_max[order[start]] > farthest.0.min(spacing) {
         let end = (start + size).min(order.len());
         // The caps' target is at least the precision: a cap sample on the level
-        // set settles in two tests (session 21: without, each of the graded open
-        // scan's cap samples was bisected down to the precision, 28 s).
+        // set settles in two tests (without, each of the graded open scan's cap
+        // samples is bisected down to the precision, 28 s).
         let cap_target = cap_to_level_set_mm.max(precision);
         let (target, floor) = (farthest.0, farthest.0.min(spacing));
         // The samples farther than `floor`, with their face's normal, in order.

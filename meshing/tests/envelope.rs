@@ -175,15 +175,15 @@ fn corners(s: &Surface) -> Vec<[[f64; 3]; 3]> {
     s.triangles.iter().map(|t| t.map(|v| s.vertices[v as usize])).collect()
 }
 
-/// Regression, the teapot at 0.25 mm (session 20): a lattice tet whose four
+/// Regression, the teapot at 0.25 mm: a lattice tet whose four
 /// vertices are all warped onto the input, its long black edge onto a crease
 /// and its red edge's ends onto the two faces beside it, inherits the
 /// crease's interior angle (158 deg for a 22 deg crease: inside the stuffing's
 /// proven [10.7, 164.8], outside the issue's [12, 155]). Smoothing cannot
 /// change it (all four nodes slide on the input); the guard splits the
 /// tet's interior edge at a point moved off the edge into its ring, so two
-/// tets share the crease edge. Before: refused, 1 tet at 15.23..158.18 deg.
-/// Measured after (fitting on, the default): dihedral [13.83, 150.91] deg,
+/// tets share the crease edge. Without that split the guard refuses the mesh,
+/// 1 tet at 15.23..158.18 deg. Measured (fitting on, the default): dihedral [13.83, 150.91] deg,
 /// 1 bad tet before the guard, 1 split; volume error -1.76e-3 against the
 /// closed form (asserted under 5e-3: the box's edges are rounded to the
 /// lattice); 0.2 s.
@@ -208,8 +208,8 @@ fn a_tet_spanning_a_crease_is_split_not_refused() {
 /// the teapot spout lip's sharpest edge), the ridge tilted off the lattice.
 /// The stuffing rounds a blade off at a fraction of its cells' size, and the
 /// graded sizing's thin test is blind there (the input point nearest to a
-/// cell is the ridge itself, both sides of it outside), so the cells along it
-/// stayed at the smallest size; now they are cut below it as at a rim (the
+/// cell is the ridge itself, both sides of it outside), so without a cut of
+/// their own the cells along it stay at the smallest size; they are cut below it as at a rim (the
 /// blade's edge among the sizing's rims) while `GAP_DEPTH` (2.5) times their
 /// longest edge exceeds the grading tolerance. h = 0.25 mm, 2 levels, grading
 /// tolerance 5e-3 and fitting 1e-2 of the diagonal (4.168 mm; tolerance
@@ -468,7 +468,7 @@ fn sphere_quality_and_volume_convergence() {
 /// its edges and corners are rounded by the lattice, an error that converges too.
 /// Nothing here reads a surface distance: the cells' statistics alone
 /// (`cell_statistics`) and the volume against the closed form (the report's
-/// distance was 30 % of the test's time). Measured (session 21): volume errors
+/// distance was 30 % of the test's time). Measured: volume errors
 /// -3.47e-3, -9.19e-4, -3.15e-4 at 0.1, 0.05, 0.025 mm (order 1.73; asserted
 /// the finest under 5e-3, order above 1).
 #[test]
@@ -599,17 +599,17 @@ fn bunny_meets_the_angle_and_volume_targets() {
 
 /// The layered bunny on the graded lattice (base 0.2 mm, 3 levels, as the
 /// bunny family): three regions, and issue 3's envelope gates on clean input:
-/// every tet within [12°, 155°] (session 16: one 10.06° tet at a region
-/// interface at these options; now smoothed away by the final guard, whose
-/// smoothing lets the region shells' nodes slide along them), the boundary
+/// every tet within [12°, 155°] (a tet of 10.06° at a region interface at
+/// these options is smoothed by the final guard, whose smoothing lets the
+/// region shells' nodes slide along them), the boundary
 /// figure within 1e-3 of the diagonal (the inner shells bound no solid: left
 /// out), the whole volume within 2e-3 of the exact one (the json's three
-/// regions). Measured (session 20): 740k tets, dihedral [13.80, 151.24] deg,
+/// regions). Measured: 740k tets, dihedral [13.80, 151.24] deg,
 /// boundary figure 9.98e-4, volume error -4.4e-4; region volume errors
 /// -2.5e-5 (bunny), -1.80e-3 (sphere A), -4.50e-3 (sphere B: a **miss** of
 /// 2e-3 per region). Asserted per region: the bunny 2e-3, the spheres 1e-2
-/// (the bound of session 19's uniform test at 0.15 mm, 750k tets, which this
-/// test replaces), and no cell across sphere A (conforming interfaces).
+/// (the bound of the uniform lattice at 0.15 mm, 750k tets), and no cell
+/// across sphere A (conforming interfaces).
 #[test]
 fn the_graded_layered_bunny_meets_every_envelope_gate() {
     if skip_without_shared_data("the mesh fixture layered_bunny.obj") {
@@ -747,7 +747,7 @@ fn box_faces_outside(
     out
 }
 
-/// The distance's jump curves placed on the curve (session 19): two boxes given
+/// The distance's jump curves placed on the curve: two boxes given
 /// whole as one soup, A = [0, 1]^3 and B = [0.5, 1.5] x [0.25, 0.75]^2, 12
 /// triangles each, so the jump curves (where each box's faces enter the other)
 /// cross the input triangles inside. "Mesh" = the exact union's boundary: the
@@ -789,7 +789,7 @@ fn the_boundary_distance_places_jump_curves_inside_triangles() {
 /// cut off (one border loop of n = 64 chords). The solid's boundary over the hole
 /// is the flat rim polygon: the scan and the polygon bound a convex polyhedron,
 /// so from a point of the polygon every direction into the scan's side leaves
-/// through the scan once, and w = 1/2 there exactly (session 21).
+/// through the scan once, and w = 1/2 there exactly.
 ///
 /// - "Mesh" = the whole sphere: off the hole it is the input; over it, the
 ///   cut-off cap. Its samples farther than a sample spacing s (diag / 50 =
@@ -801,7 +801,7 @@ fn the_boundary_distance_places_jump_curves_inside_triangles() {
 ///   e sin(beta) above the polygon's plane, beta < alpha the facet's tilt, and
 ///   the probe along the normal meets the plane at e tan(beta) < s tan(alpha)
 ///   = 0.0559 (asserted, plus the precision; measured 0.03349 at x = 0.7926,
-///   0.0266 above the plane; session 21 asserted <= s only).
+///   0.0266 above the plane).
 ///   The cap apart: (a) how far it strays from the solid's boundary. The level
 ///   set over the hole is the flat rim polygon x = cos alpha, and the sphere's
 ///   farthest point above it is the pole, 1 - cos alpha = 0.23396 above the
@@ -812,8 +812,7 @@ fn the_boundary_distance_places_jump_curves_inside_triangles() {
 ///   is probed along a facet's normal, which meets the plane at (x - cos
 ///   alpha) / n_x, at most 0.23418 over the cap's corners (the pole's facets
 ///   tilted 2.5 deg): asserted within [1 - cos alpha, 0.23418 + 1e-6 of the
-///   diagonal], measured 0.23418 (before session 21's review: reported
-///   nowhere). (b) Its farthest point from the input is the pole, at
+///   diagonal], measured 0.23418. (b) Its farthest point from the input is the pole, at
 ///   sqrt((1 - cos alpha)^2 + sin^2 alpha cos^2(pi / n)) = 0.68331 from the
 ///   rim's chord midpoints (measured 0.68331, asserted within 1e-9); the
 ///   border loop's extent is 2 sqrt(2) sin(alpha) = 1.81808 (its vertices at
@@ -827,8 +826,7 @@ fn the_boundary_distance_places_jump_curves_inside_triangles() {
 ///   over the hole, reported apart), the figure must be within [delta, delta +
 ///   1e-6 of the diagonal] (asserted; measured delta + 0 to 2.0e-6, the
 ///   diagonal 3.3 mm), and so must the caps' distance to the level set, for a
-///   lift of 0.1 > s too (all of the polygon over the hole, which before
-///   session 21's review reported nothing of it).
+///   lift of 0.1 > s too (all of the polygon over the hole).
 #[test]
 fn the_cap_over_an_open_scans_hole_is_measured_apart() {
     use meshing::distance::boundary_distance;
@@ -890,7 +888,7 @@ fn the_cap_over_an_open_scans_hole_is_measured_apart() {
     }
 }
 
-/// The fitting carves boundary tets outside the solid (session 22): a thin void
+/// The fitting carves boundary tets outside the solid: a thin void
 /// bounded by a level set. The 40 deg open scan (the unit sphere, its cap x >
 /// cos 40 deg off: the level set over the hole is the plane x = cos 40 deg,
 /// as in the test above) and a box hovering over the hole, its bottom a gap g
@@ -952,7 +950,7 @@ fn the_fitting_carves_off_a_void_thinner_than_the_lattice_bounded_by_a_level_set
     assert_conforming(&fitted.mesh);
 }
 
-/// An open scan on the graded lattice (sessions 19, 20): the unit sphere with a
+/// An open scan on the graded lattice: the unit sphere with a
 /// polar cap of angular radius 40 deg cut off (as above). Where the solid leaves
 /// the input for the cap over the hole, its boundary has a crease along the rim
 /// that no input triangle shows, and the fitting cannot bring the boundary onto
@@ -960,9 +958,9 @@ fn the_fitting_carves_off_a_void_thinner_than_the_lattice_bounded_by_a_level_set
 /// below the smallest size, until their crease estimate meets the grading
 /// tolerance. Measured (h = 0.25 mm, 3 levels, 156k tets, mesh 4 to 9 s,
 /// report 2 to 3 s, the machine shared with four other helpers): boundary
-/// figure (caps apart) 7.43e-4 of the diagonal, its maximum now off the rim
-/// (in -> out at an input vertex by the equator; out -> in 6.91e-4); before
-/// session 20 (rim at the smallest size, 83k tets) 2.19e-3 at the midpoint of
+/// figure (caps apart) 7.43e-4 of the diagonal, its maximum off the rim
+/// (in -> out at an input vertex by the equator; out -> in 6.91e-4); with the
+/// rim refined to the smallest size only (83k tets) 2.19e-3 at the midpoint of
 /// a rim chord, without the rim's refinement 3.65e-3. Asserted <= 1e-3 (the
 /// issue's gate), angles in [12, 155] deg (measured [13.82, 150.89]). The cap
 /// over the hole is reported apart (1.9e-1).
@@ -1011,7 +1009,7 @@ fn boxes_sharing_a_face_become_two_regions() {
     }
 }
 
-/// Two unit boxes 0.01 mm apart (session 19): the gap between them, narrower
+/// Two unit boxes 0.01 mm apart: the gap between them, narrower
 /// than half the lattice spacing (0.05 mm at h = 0.1 mm), is reported as a thin
 /// gap on the two facing faces (x = 1 and x = 1.01), its width the boxes'
 /// distance: measured 1.0e-2 mm (the ray's start offset, 1e-7 of the
@@ -1089,12 +1087,12 @@ fn solid_volume_by_sampling(s: &Surface, h: f64) -> f64 {
 /// the exact union) is checked against the solid `w > 1/2` itself, sampled
 /// ([`solid_volume_by_sampling`]). The sampler is first checked on the closed
 /// bunny, whose solid's volume is its divergence-theorem volume, 194.288 mm^3.
-/// Measured (session 22): bunny (218.7 mm^2) at h = 0.2 mm 194.648 mm^3
+/// Measured: bunny (218.7 mm^2) at h = 0.2 mm 194.648 mm^3
 /// (+1.85e-3; the bound on the standard deviation 2.0e-3), asserted within
 /// 4.6e-3 (2.3 of them); teapot (1288.8 mm^2 of triangles) at h = 0.3 mm
 /// 3137.157 (six seeds of the hash: 3132.97 to 3137.16, mean 3135.73,
 /// standard deviation 1.45 mm^3 = 4.6e-4; the bound 6.8e-4), the mesh
-/// 3130.519 mm^3 (343,752 tets; 3132.473 before the fitting carved): -1.32e-2
+/// 3130.519 mm^3 (343,752 tets; 3132.473 without the fitting's carving): -1.32e-2
 /// against the divergence-theorem volume, -2.12e-3 against the solid's,
 /// asserted within 1e-2 less the sampler's three standard deviations' bound
 /// (2.1e-3).
@@ -1121,11 +1119,11 @@ fn the_teapot_meshes_with_the_proven_bounds() {
     assert!(error.abs() < 1e-2 - 2.1e-3, "{error}");
     // The triangles' volume counts the overlaps twice: about 1 % over the solid's.
     assert!(q.reference_volume_mm3 / solid - 1.0 > 5e-3, "{} vs {solid}", q.reference_volume_mm3);
-    // Session 18: 64 border edges once welded, the widest the body's top
-    // opening (a circle of diameter 14 mm: extent 14 sqrt 2 = 19.80 mm); the
-    // caps 1.31e-2 of the diagonal from the input; the boundary distance 2.35e-2
-    // (a miss of the issue's 1e-3), the raw one 4.16e-2. Session 19 located the
-    // boundary distance's maximum (input -> mesh) at the spout's tip, (16.07,
+    // 64 border edges once welded, the widest the body's top opening (a circle
+    // of diameter 14 mm: extent 14 sqrt 2 = 19.80 mm); measured: the caps
+    // 1.31e-2 of the diagonal from the input; the boundary distance 2.35e-2 (a
+    // miss of the issue's 1e-3), the raw one 4.16e-2; the boundary distance's
+    // maximum (input -> mesh) at the spout's tip, (16.07,
     // 4.51, 0) mm, 0.96 mm from the mesh: inside the box of the thin-feature
     // warning asserted below (the spout's wall, thinner than the lattice).
     assert_eq!(q.num_border_edges, 64);
@@ -1134,11 +1132,11 @@ fn the_teapot_meshes_with_the_proven_bounds() {
     assert!(q.raw_hausdorff_relative > q.hausdorff_relative, "{q:?}");
     assert!(out.warnings.iter().any(|w| matches!(w, EnvelopeWarning::ThinFeature { .. })), "{:?}", out.warnings);
     assert!(q.mesh_time_s > 0.0 && q.mesh_time_s.is_finite());
-    // Session 20: where the handle's open tube meets the body, outside the body
+    // Where the handle's open tube meets the body, outside the body
     // `w` is 0.49 to 0.51 (the tube's mouth), and the solid has a void there, a
     // wedge between the body and the level set `w = 1/2` (0 at |z| = 0.23 mm,
-    // 0.15 mm thick at |z| = 1.06 mm, up to 0.5 mm), which no centroid ray saw:
-    // the sampled thin test now reports it as a thin gap, on the handle's side.
+    // 0.15 mm thick at |z| = 1.06 mm, up to 0.5 mm), which no centroid ray sees:
+    // the sampled thin test reports it as a thin gap, on the handle's side.
     let gap = out.warnings.iter().find_map(|w| match w {
         EnvelopeWarning::ThinGap { lo_mm, hi_mm, .. } => Some((*lo_mm, *hi_mm)),
         _ => None,
@@ -1149,38 +1147,30 @@ fn the_teapot_meshes_with_the_proven_bounds() {
     assert!(hi[0] < 0.0, "the gap is on the handle's side: {lo:?}..{hi:?}");
 }
 
-/// The teapot on the graded lattice (0.5 mm, 3 levels), sessions 20-21. Session
-/// 20: the sizing refines cells across which the solid or a gap of it is
-/// thinner than the cell (the level set `w = 1/2` counted as a wall); the
-/// stuffing decides the inside exactly where `w` is within 0.1 of 1/2 (the
-/// figure 1.15e-2 -> 3.63e-3 of the diagonal, at the handle's mouth). Session
-/// 21: below the smallest size, cells across which such a part or gap is
-/// thinner than the cell are cut again while 2.5 times their longest edge
-/// exceeds the grading tolerance (the void at the handle's mouth, then the void
-/// between the spout's wall and the cap over its opening): input -> mesh
-/// 1.005e-3 (0.0412 mm at the spout's tip). Session 22: the spout lip's blade
-/// (its two faces 49.4 deg apart, the solid between them thinner than any
-/// cell) is cut below the smallest size as at a rim: input -> mesh measured
-/// 9.74e-4 (0.0399 mm, next at a quad's fold under the spout, a 50 deg crease
-/// the chord estimate passes at 0.177 mm cells), asserted < 1e-3 (the
-/// issue's gate); 1,600,206 tets. Mesh -> input 1.43e-3 under
-/// session 20's measure, which counted the samples nearer a hole's fan patch
-/// as caps; the true-boundary measure of session 21 (`distance.rs`) finds the
-/// mesh there 0.06 mm outside the level set at the handle's mouth (1.548e-3 on
-/// session 20's mesh: a miss of the mesher), asserted < 2e-3 then; dihedral
-/// angles measured 12.05-154.42 deg, asserted in [12, 155]. Session 22, the
-/// fitting carves the boundary tets outside the solid there (`fit.rs`: tets
+/// The teapot on the graded lattice (0.5 mm, 3 levels). The sizing refines
+/// cells across which the solid or a gap of it is thinner than the cell (the
+/// level set `w = 1/2` counted as a wall); the stuffing decides the inside
+/// exactly where `w` is within 0.1 of 1/2 (the figure 1.15e-2 -> 3.63e-3 of
+/// the diagonal, at the handle's mouth). Below the smallest size, cells across
+/// which such a part or gap is thinner than the cell are cut again while 2.5
+/// times their longest edge exceeds the grading tolerance (the void at the
+/// handle's mouth, then the void between the spout's wall and the cap over its
+/// opening): input -> mesh 1.005e-3 with that alone (0.0412 mm at the spout's
+/// tip). The spout lip's blade (its two faces 49.4 deg apart, the solid between
+/// them thinner than any cell) is cut below the smallest size as at a rim:
+/// input -> mesh 9.74e-4 (0.0399 mm, next at a quad's fold under the spout, a
+/// 50 deg crease the chord estimate passes at 0.177 mm cells). Mesh -> input
+/// is measured against the solid's true boundary (`distance.rs`): without the
+/// fitting's carving of the boundary tets outside the solid (`fit.rs`: tets
 /// with one corner inside the handle and three on the void's walls, kept whole
-/// by the stuffing): out->in measured 1.4155e-3 alone (0.0580 mm, then at
-/// (8.25, -1.125, 1.5): a mesh boundary inside the solid along the spout's
-/// wall inside the body), asserted < 1.45e-3. Both together, measured on the
-/// merged code: 1,600,198 tets, in->out 9.7373e-4, out->in 1.4155e-3, volume
-/// -1.199e-2 against the triangles, 12.05-154.42 deg. Session 23: that trench
-/// was dug by the peeling of boundary slivers (`graded.rs`, `peel_slivers`),
-/// whose corners counted as near the boundary when within half the tolerance
-/// of any input triangle, the spout's wall inside the body included; they now
-/// count by the solid's boundary (the bounding part of the input, as the
-/// report measures). Measured: 1,600,573 tets, 12.05-154.42 deg, out->in
+/// by the stuffing) the mesh is 0.06 mm outside the level set at the handle's
+/// mouth (1.548e-3); with it, and with the peeling of boundary slivers
+/// (`graded.rs`, `peel_slivers`) counting a corner as near the boundary when
+/// within half the tolerance of any input triangle, the spout's wall inside
+/// the body included, 1.4155e-3 (0.0580 mm at (8.25, -1.125, 1.5): a trench
+/// dug along the spout's wall inside the body). The peeling counts by the
+/// solid's boundary (the bounding part of the input, as the report measures).
+/// Measured: 1,600,573 tets, 12.05-154.42 deg (asserted in [12, 155]), out->in
 /// 8.5721e-4 (then at (-6.53, 4.55, 4.28)), in->out 9.7373e-4, both asserted
 /// < 1e-3 (the gate); volume -1.199e-2 against the triangles, -8.56e-4 against
 /// the sampled solid (asserted within 1e-2 less the sampler's bound, 2.1e-3).
@@ -1254,7 +1244,7 @@ fn corpus_obj(name: &str) -> Surface {
 }
 
 /// The graded lattice the bunny family needs for the Hausdorff gate: base 0.2
-/// mm, 3 levels (finest 0.025 mm). Measured (session 20, BENCHMARKS.md): 0.4 mm
+/// mm, 3 levels (finest 0.025 mm). Measured (BENCHMARKS.md): 0.4 mm
 /// with 4 levels and 0.8 mm with 5 (the same finest size) cost the same within
 /// 3 % and warn of the ear as thinner than half the base spacing; 0.3 mm with 3
 /// levels and 0.5 mm with 4 miss (1.54e-3 and 1.19e-3 of the diagonal), as does
@@ -1398,8 +1388,8 @@ fn convex_union_volume(a: &[[[f64; 3]; 3]], b: &[[[f64; 3]; 3]]) -> f64 {
     outside(a, &pb) + outside(b, &pa)
 }
 
-/// The clean bunny (session 16's graded test, now with every gate). Measured
-/// (session 20, 0.2 mm, 3 levels): 713k tets, dihedral [13.80, 151.24] deg,
+/// The clean bunny with every gate. Measured (0.2 mm, 3 levels): 713k tets,
+/// dihedral [13.80, 151.24] deg,
 /// volume error -4.4e-4 against its enclosed volume, boundary figure 9.98e-4
 /// of the diagonal (a thin margin: the same 9.98e-4 at every base size whose
 /// finest cells are 0.025 mm). Asserted: the gates, the volume within 2e-3
@@ -1416,7 +1406,7 @@ fn corpus_clean_bunny_meets_every_envelope_gate() {
 }
 
 /// The holed bunny (12 border edges in one loop, 1.87 mm wide), raw. Off the
-/// hole, the gates: boundary figure measured 9.98e-4 (session 19's rim
+/// hole, the gates: boundary figure measured 9.98e-4 (with the rim's
 /// refinement), volume -6.1e-4 from the clean bunny's (+8.5e-3 from the holed
 /// file's own divergence-theorem volume, which misses the hole's part).
 ///
@@ -1431,9 +1421,8 @@ fn corpus_clean_bunny_meets_every_envelope_gate() {
 /// l_i |v_i - c|^2 - |p - c|^2 <= rho^2, rho = max |v_i - c|: it is within rho
 /// of a rim vertex, a point of the input. The mesh's cap interpolates w = 1/2 on
 /// the lattice, whose finest spacing (0.025 mm) is added. Measured: cap 0.461 mm
-/// (2.93e-2 of the diagonal; session 21: 0.4554 mm, 2.890e-2) against the bound
-/// 0.742 + 0.025 mm; the cap's distance to the level set (session 21, printed
-/// only) 1.42e-5 mm = 9.0e-7 of the diagonal (the probe's floor: every cap
+/// (2.93e-2 of the diagonal) against the bound 0.742 + 0.025 mm; the cap's
+/// distance to the level set (printed only) 1.42e-5 mm = 9.0e-7 of the diagonal (the probe's floor: every cap
 /// vertex within 0.9e-6 of the diagonal of the level set); the widest hole's
 /// extent, the rim's bounding-box diagonal, 1.866 mm (asserted to 1e-9 mm).
 #[test]
@@ -1466,11 +1455,11 @@ fn corpus_holed_bunny_meets_every_gate_its_cap_within_its_bound() {
     assert!((q.widest_hole_mm - extent).abs() < 1e-9, "{} against {extent}", q.widest_hole_mm);
 }
 
-/// The bunny with 10 % of its faces flipped, raw. Regression (session 16): on
+/// The bunny with 10 % of its faces flipped, raw. Regression: left flipped, on
 /// the graded lattice it gave 200 tets outside [12, 155] deg (down to 0.36 deg)
 /// and 2.25M tets, the winding number inverted next to each flipped face; they
-/// are now turned back before the inside test, and said (367 triangles, as
-/// `repair` flips). Measured (session 20): the clean bunny's 713k tets,
+/// are turned back before the inside test, and said (367 triangles, as
+/// `repair` flips). Measured: the clean bunny's 713k tets,
 /// angles, boundary figure 9.98e-4 and volume (-4.4e-4 from the clean one's).
 #[test]
 fn corpus_flipped_bunny_meets_every_envelope_gate() {
@@ -1518,9 +1507,10 @@ fn corpus_soup_bunny_meets_every_envelope_gate() {
 /// does: the rounding makes or unmakes needles), slits enclosing no area (the
 /// widest chain's extent 1.26 mm): no mesh sample is over them (a sample over
 /// a hole is farther than a sample spacing, 1/300 of the diagonal, from the
-/// input; session 21's review), so no cap and no cap distance to the level set
-/// (measured 0 and 0, asserted; before session 21, slit caps of 2.4e-3 mm were
-/// measured apart). Measured 748k tets (the
+/// input), so no cap and no cap distance to the level set (measured 0 and 0,
+/// asserted; taking the samples nearer to a fan patch over each border chain
+/// than to the input as caps would measure slit caps of 2.4e-3 mm).
+/// Measured 748k tets (the
 /// border edges refined), boundary figure 9.98e-4, volume -4.4e-4 from the
 /// clean bunny's.
 #[test]
@@ -1543,9 +1533,9 @@ fn corpus_degenerate_bunny_meets_every_envelope_gate() {
 /// the two polyhedra (`convex_union_volume`): 7.071708 mm^3, against the
 /// closed form of the two balls' union (7.126287) less the facets' deficit per
 /// unit area times the union's area, 7.071768 (a first-order estimate: within
-/// 8.5e-6, asserted 1e-4). (Session 16's reference, the balls' union scaled by
-/// the deficit per unit volume, 7.064957, is 9.6e-4 low: the lens has more
-/// area per volume than a ball.) Measured (session 20): 250k tets, dihedral
+/// 8.5e-6, asserted 1e-4). (The balls' union scaled by the deficit per unit
+/// volume, 7.064957, is 9.6e-4 low: the lens has more area per volume than a
+/// ball.) Measured: 250k tets, dihedral
 /// [13.89, 151.21] deg, boundary figure 9.39e-4 (the inner caps, 540 input
 /// triangles wholly and 158 in part, bound nothing and are left out; the raw
 /// figure, 0.97 mm, is the inner poles' depth), volume -9.6e-4 from the exact
@@ -1593,7 +1583,7 @@ fn corpus_overlapping_spheres_mesh_their_exact_union() {
 /// the graded lattice (0.2 mm, 2 levels): the fin, thinner than half the
 /// lattice spacing, is reported (`ThinFeature`: 1e-4 mm, at x = 0.5), not
 /// dropped silently. Reference: the union of the two boxes (closed form), 1 +
-/// 0.64 x 9.9e-5 mm^3. Measured (session 20): 16k tets, dihedral [44.89,
+/// 0.64 x 9.9e-5 mm^3. Measured: 16k tets, dihedral [44.89,
 /// 120.03] deg, boundary figure 4.04e-5 of the diagonal (the fin, 9.9e-5 mm
 /// proud of the face, is within that of the box's face), volume error -6.35e-6.
 #[test]

@@ -116,16 +116,16 @@ const MODELS: [Model; 6] = [
     // Netgen's hinge (CAD STL, 1 212 triangles, needle-heavy, coordinates with
     // 7 digits): the p99.9 radius-edge ratio misses (measured: 1.468 against
     // TetGen's 1.408; 31 360 tets, 10.01..160.00 deg, 0 % under 10 deg; 1.74
-    // before smoothing for the ratio, 2.23 before the facets were refined for
-    // quality first, 3.95 before tets of high ratio refined subfacets of
-    // merged planes). The miss is forced by
+    // without smoothing for the ratio, 2.23 without that nor the facets refined
+    // for quality first, 3.95 without tets of high ratio refining subfacets of
+    // merged planes either). The miss is forced by
     // the input with an exact boundary (asserted below and by
     // `hinge_sharp_input_corners_force_the_radius_edge_miss`): 100 input
     // corners under 20.8 deg between two sharp input edges each make a tet of
     // ratio over 1.41, more than 0.1 % of 1.25 x TetGen's count. TetGen
     // merges those nearly coplanar triangles (its -T tolerance) and drops the
     // edge between them: its faces there lie 2e-7 mm (3e-9 of the diagonal)
-    // off the input, over the 1e-9 gate (BENCHMARKS.md, session 14).
+    // off the input, over the 1e-9 gate (BENCHMARKS.md).
     Model {
         name: "hinge",
         source: Source::Debian {
@@ -140,13 +140,13 @@ const MODELS: [Model; 6] = [
     // CGAL's armadillo scan (libcgal-demo, 26 002 vertices, 52 000 triangles,
     // 127 x 151 x 115 mm, input edges 1.33 mm median): the counts are set by
     // the surface, not by h (TetGen: 956 704 tets at 4 mm, 891 693 at 8 mm),
-    // so 8 mm, the cheaper. All gates hold since a cap's hinge is split only
-    // when it is the longest edge of both its subfacets (session 19,
-    // measured with `conforming_probe`: 383 881 tets, 7.64..161.62 deg,
-    // 0.004 % under 10 deg, p99.9 radius-edge 3.13, volume error 2e-14,
-    // Hausdorff 3e-16, 61 s user). Before, splitting any cap's hinge made
-    // wedges over ever shorter hinges (0.00..176.18 deg, 3.41 % under 10
-    // deg, p99.9 3e4, 4.5 to 6 min of CPU; BENCHMARKS.md, sessions 15 to 19).
+    // so 8 mm, the cheaper. All gates hold as a cap's hinge is split only
+    // when it is the longest edge of both its subfacets (measured with
+    // `conforming_probe`: 383 881 tets, 7.64..161.62 deg, 0.004 % under 10
+    // deg, p99.9 radius-edge 3.13, volume error 2e-14, Hausdorff 3e-16, 61 s
+    // user). Splitting any cap's hinge makes wedges over ever shorter hinges
+    // (0.00..176.18 deg, 3.41 % under 10 deg, p99.9 3e4, 4.5 to 6 min of CPU;
+    // BENCHMARKS.md).
     Model {
         name: "armadillo",
         source: Source::Debian { package: "libcgal-demo", path: CGAL_DATA, member: Some("data/meshes/armadillo.off") },

@@ -38,8 +38,8 @@
 //! whitening the markers for their shared initial-position error (the
 //! diagnoser starts every track at the measured, noisy, t = 0 position) left
 //! about 1 noise unit, and the null campaigns of the frozen set came out `none`.
-//! **Development seeds with the scatter** (session 13, `wagashi
-//! diagnose --blind 24 --seed S` for S = 101 to 104; 93 campaigns scored,
+//! **Development seeds with the scatter** (not re-run with the current
+//! code; `wagashi diagnose --blind 24 --seed S` for S = 101 to 104; 93 campaigns scored,
 //! three `plate-friction` truths failed to run): top-1 at lambda of 30 and
 //! more 22/40 (0.55; per seed 3/8, 6/9, 6/11, 7/12), at lambda = 12 5/21
 //! (0.24); false attribution on nulls 3/24 (0.13: two `force-offset` with LR
@@ -56,7 +56,7 @@
 //! `plate-friction` truths on the fine mesh sometimes stop with a contact that
 //! does not settle; such a campaign is listed as a failure, not scored.
 //!
-//! **The separating trials, tried and not kept (session 18).** The design
+//! **The separating trials, tried and not kept.** The design
 //! above, with two trials added and 5 s (not 2 s) before contact, the
 //! experiments the diagnosis names when it says `tie`
 //! ([`super::separating_experiment`]; commit 7dac917 on branch wt/blind):
@@ -70,13 +70,13 @@
 //! contact tool, without sensitivities) and a record with nothing on the
 //! sensor (the bundle format cannot say it). Measured on development seeds 101
 //! and 102 (`wagashi diagnose --blind 24 --seed S`, the scatter, the
-//! same case plans as session 16, 24 campaigns a seed, 44 scored and four
+//! same case plans as the four-trial runs, 24 campaigns a seed, 44 scored and four
 //! `plate-friction` truths failed;
 //! thresholds untouched, the frozen CI seed not used): top-1 at lambda of 30
 //! and more 8/17 (0.47; seed 101 5/9, seed 102 3/8), at lambda = 12 2/6
 //! (0.33), false attribution on nulls 0/11, out-of-library flagged 5/10
 //! (0.50; 2/6 and 3/4), median closure error 1.56 over 6 (1.41 and 1.57);
-//! session 16 (the same campaigns with the four trials, the session-16 code)
+//! the four-trial design on the same campaigns
 //! 9/18 (0.50; 4/9 and 5/9), 1/7, 0/11, 4/10 (0.40; 3/6 and 1/4), 0.006 over 3
 //! and 0.088 over 2. What went wrong: (1) the long hold makes a
 //! threshold of a few Pa visible (lambda 30 at `sigma_B` = 5.3 Pa on seed 101,
@@ -100,9 +100,10 @@
 //! failed; the six campaigns before it came out `none`, `force-offset`,
 //! `machine-compliance`, `none` (thinning at 30), `none`, `bingham-dashpot`);
 //! and (6) a campaign cost twice the CPU (first three campaigns of seed 101:
-//! 14.1 s user before, 29.2 s after). What it did right: Mullins-type damage
-//! came out `partial: strain-stiffening` (2/2 at 100 and 300, flagged; 0/12
-//! before), `gravity` at 30 and `dual-viscosity` at 30 were named. The
+//! 14.1 s user with the four trials, 29.2 s with the six). What it did right:
+//! Mullins-type damage came out `partial: strain-stiffening` (2/2 at 100 and
+//! 300, flagged; 0/12 with the four trials), `gravity` at 30 and
+//! `dual-viscosity` at 30 were named. The
 //! `plate-friction` failures (4 of 48) are the known contact that does not
 //! settle on the generator's fine mesh, three at t = 0 (trials 1, 3 and the
 //! new 25 % trial) and one at 0.11 s (the long hold). A design
@@ -133,8 +134,8 @@
 //! generator sets it on the truth's engine problem (the bundles the diagnoser
 //! gets carry no `mullins_*` key). Adding
 //! it to [`OutOfLibrary::ALL`] lengthened [`full_cycle`], so the
-//! plans of the development seeds below, drawn before it, no longer come out of
-//! [`plan`] case for case.
+//! plans of the development seeds below, drawn with the shorter cycle, do not
+//! come out of [`plan`] case for case.
 //!
 //! **Mullins-type damage, measured** (development seeds 101 to 104, the issue's
 //! scatter, `cargo run --release -p wagashi-calibrate --example blind_mullins --
@@ -353,7 +354,7 @@ pub struct Case {
 pub fn full_cycle() -> Vec<Case> {
     // Adhesion is withheld from the check: the design never pulls on the
     // specimen. Its plate withdraws to half the depth before the release, and the
-    // nominal trials still press there (session 14, `wagashi press` on the four
+    // nominal trials still press there (measured with `wagashi press` on the four
     // nominal trials, 5 mm elements: the force in the withdrawal stays above 3 to
     // 14 % of the peak, 0.073 N at the least), so no bond is ever loaded and no
     // strength reaches any lambda. Eliciting adhesion needs a pull-off (a plate

@@ -29,12 +29,12 @@
 //! SS_ho,j`, "its SE comes from a paired block bootstrap over trials and
 //! blocks"; §5.4.4: eligible only if `Delta_ho > -2 SE`). It is [`block_se`] on
 //! the held-out residuals, the same estimator as the tie rule's (below): the
-//! noise of `Delta_ho` for this design. Up to session 18 the veto used the
-//! whole-segment bootstrap of the closure's interval; when the held-out loss
-//! sits in a few segments that SE is about the loss itself (below), so a
-//! candidate that makes held-out trials far worse was never vetoed (the real
-//! fungi steak: dual-viscosity with `Delta_ho = -9.2e6` against a segment SE of
-//! 7.8e6, `G = -0.52`). The segment SE is still reported
+//! noise of `Delta_ho` for this design. The whole-segment bootstrap of the
+//! closure's interval does not serve: when the held-out loss sits in a few
+//! segments that SE is about the loss itself (below), so a candidate that makes
+//! held-out trials far worse is never vetoed (the real fungi steak:
+//! dual-viscosity with `Delta_ho = -9.2e6` against a segment SE of 7.8e6,
+//! `G = -0.52`). The segment SE is reported too
 //! ([`HeldOut::gain_se_segments`]).
 //!
 //! **The tie rule's standard error** ([`block_se`], diagnosis-details.md §5.4:
@@ -217,7 +217,7 @@ pub struct HeldOut {
     /// Its standard error for the non-inferiority veto: the paired block
     /// bootstrap ([`block_se`], module docs).
     pub gain_se: f64,
-    /// The whole-segment bootstrap's standard error (the veto's up to session 18).
+    /// The whole-segment bootstrap's standard error (for comparison; the veto uses [`Self::gain_se`]).
     pub gain_se_segments: f64,
     /// The held-out smooth gap `S0 - k` [smooth chi-square units].
     pub gap: f64,
@@ -245,7 +245,8 @@ pub enum TieBootstrap {
     /// around the segment's smooth trend ([`block_se`]).
     #[default]
     Blocks,
-    /// Whole segments drawn with replacement (the rule up to session 15).
+    /// Whole segments drawn with replacement (an option; the module docs say why
+    /// blocks are the default).
     Segments,
 }
 
@@ -555,8 +556,8 @@ mod tests {
         }
     }
 
-    /// Issue 6, the real fungi steak's pattern (session 18: dual-viscosity
-    /// with `G = -0.52 [-1.33, 0.19]` stayed eligible): the baseline's held-out
+    /// Issue 6, the real fungi steak's pattern (dual-viscosity with
+    /// `G = -0.52 [-1.33, 0.19]` stays eligible under the whole-segment SE): the baseline's held-out
     /// gap is a smooth misfit of 300 noise units squared in each of the six
     /// hold segments; the candidate halves it there (a gain of 225 each) but
     /// adds a smooth misfit of 3000 in one recovery segment. So `Delta_ho`
@@ -565,7 +566,7 @@ mod tests {
     /// Measured (seed 5): gain -1708.8, block SE 114.5, segment SE 3006.0,
     /// `G` = -0.923 with the 90 % interval [-5.72, 0.758]. Asserted: `G` < 0
     /// with an upper bound above 0 (the construction), the whole-segment SE
-    /// would keep the candidate (`gain > -2 SE_seg`, session 18's rule), the
+    /// would keep the candidate (`gain > -2 SE_seg`), the
     /// block SE vetoes it (`gain < -2 SE`, diagnosis-details.md §5.4.4).
     #[test]
     fn a_held_out_loss_in_one_segment_is_vetoed() {

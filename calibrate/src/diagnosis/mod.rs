@@ -97,17 +97,17 @@
 //! flagged after its refit. No gap: `none`. Eligible means significant and
 //! non-inferior on held-out data, `Delta_ho > -2 SE` with the SE of the same
 //! paired block bootstrap on the held-out residuals ([`HeldOut::non_inferior`];
-//! until session 18 a whole-segment bootstrap, which let a candidate that
-//! makes the held-out trials far worse pass). The tie rule's SE is that of a paired block
+//! a whole-segment bootstrap would let a candidate that makes the held-out
+//! trials far worse pass). The tie rule's SE is that of a paired block
 //! bootstrap (diagnosis-details.md §5.4, "over trials and blocks"): blocks of
 //! `round(n^(1/3))` whitened samples redrawn inside every segment, stratified
 //! by trial and segment, around the segment's smooth trend, on the calibration
 //! and the held-out residuals ([`heldout::block_se`], whose module docs say
-//! why). Up to session 15 whole segments were redrawn
-//! ([`TieBootstrap::Segments`], still an option): when the lead sits in one
-//! separating trial, that SE is about the lead itself, so such a lead was
-//! always a tie. [`Verdict::tie_test`] reports the margin and both SEs. (Tried on the development seeds in session 13
-//! and not kept: ranking by `LR - 2d`, the calibration SE alone and a cosine
+//! why). Redrawing whole segments ([`TieBootstrap::Segments`], an option)
+//! does not serve: when the lead sits in one separating trial, that SE is
+//! about the lead itself, so such a lead is always a tie.
+//! [`Verdict::tie_test`] reports the margin and both SEs. (Tried on the
+//! development seeds and not kept: ranking by `LR - 2d`, the calibration SE alone and a cosine
 //! of 0.95; on seed 101 it turned one correct attribution into a tie and
 //! resolved none.)
 //!
@@ -1035,8 +1035,8 @@ pub const TIE_COSINE: f64 = 0.9;
 /// one-parameter candidate in a model linear in its parameters the change is
 /// the projection of `r0` on `J~_j`, so its cosine is `cos(J~_1, J~_2)` up to
 /// sign, and it extends to multi-parameter candidates (the fitted directions)
-/// and to non-linear refits. Session 19 checked the rule against the document
-/// and kept it (unit test `collinear_corrections_tie_even_with_a_large_margin`);
+/// and to non-linear refits. The rule follows the document (unit test
+/// `collinear_corrections_tie_even_with_a_large_margin`);
 /// requiring the margin within its SE band for collinear pairs as well would
 /// depart from §5.4.
 pub fn is_tie(margin: f64, se: f64, cosine: f64) -> bool {

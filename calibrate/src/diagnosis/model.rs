@@ -35,8 +35,8 @@
 //! its reference distance from the null ([`DEADBAND`]) runs as the null: the
 //! effect of such values is far below any noise, and a refit creeping toward the
 //! null would otherwise spend runs on friction coefficients of order 1e-7 (the
-//! band was added when the engine's friction contact did not settle there; it
-//! does now, and the diagnosis tests give the same verdicts without the band).
+//! engine's friction contact settles there too: the diagnosis tests give the
+//! same verdicts without the band).
 
 use std::collections::BTreeMap;
 
@@ -446,7 +446,7 @@ pub fn force_noise_model(b: &Bundle) -> (Vec<(f64, f64)>, f64, f64) {
 /// power. With the blind check's runs (a 20-sample pre-contact record and a
 /// 200-sample recovery, rho = 0.5) the raw lag-1 estimate falls 0.04 short, and
 /// the whitened residuals keep a correlation that inflates the LR of every
-/// smooth effect (session 15: development seed 101 measured rho_hat - rho =
+/// smooth effect (with the raw estimate, development seed 101 measured rho_hat - rho =
 /// -0.045 over 92 trials, and force-offset was named on two of seven null
 /// campaigns). So the moments are matched to their exact expectations instead:
 /// for a run `x ~ AR(1)` with correlation matrix `S(rho)` and the detrending

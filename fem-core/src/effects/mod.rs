@@ -166,9 +166,9 @@
 //! exact at any step (forces 1e-15, set 1e-12 mm). Bingham hold above the threshold:
 //! exact at any step (the correction's rate is constant, so the chain's strain is
 //! linear in time); where the threshold is crossed inside a step (the correction
-//! on the step's mean stress since session 19), 1.8e-8 MPa against an RK4
-//! reference of the 1D chain at dt = 0.25 s (4.5e-6 of the threshold; before,
-//! backward Euler on the end stress: first order, 0.28 %); for the Cross and dual
+//! acts on the step's mean stress), 1.8e-8 MPa against an RK4 reference of the
+//! 1D chain at dt = 0.25 s (4.5e-6 of the threshold; backward Euler on the end
+//! stress would be first order, 0.28 %); for the Cross and dual
 //! laws first order in dt (orders 0.99 to 1.3; 0.1 to 0.3 % of the peak stress
 //! at dt = 0.25 s). With a blocked chain much faster than the steps (`c3/E` far
 //! below dt) Bingham's end stress lags the blocked chain's by about half a step,

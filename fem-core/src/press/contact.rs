@@ -701,9 +701,9 @@ impl<'t> ContactModel<'t> {
         // every pair opens, the first solve springs the body back clear of the
         // tool, and the iteration restarts from there. With adhesion every bonded
         // pair would start the step torn off; without, a sphere lifting off an
-        // elastic sweet did not settle (session 17; tests/contact.rs,
+        // elastic sweet does not settle (tests/contact.rs,
         // `sphere_lifts_off_an_elastic_sweet`) and a punch's unloading with a
-        // slider took thousands of adaptive steps (`tests/material_point_contact.rs`).
+        // slider takes thousands of adaptive steps (`tests/material_point_contact.rs`).
         // A pair that truly separates opens in the iteration as before.
         for (c, pairs) in state.pairs.iter().enumerate() {
             if !self.engaged(c, t1) || self.tools[c].tool.contact == ToolContact::Glued {

@@ -129,10 +129,10 @@
 //! three times in a row, but never below the least step `1e-10` of the trial
 //! (the error control's own floor): there the failure is returned as the run's
 //! error, on every step, the one that lands on the trial's end included. (That
-//! last step was an exception in session 18: the Mullins cycle of
+//! last step needs the floor of the tolerance's scale: the Mullins cycle of
 //! `fem-core/tests/mullins.rs` ends unloaded, where the material-point
-//! iteration's own force scale is round-off and its tolerance cannot be met at
-//! any length; the tolerance's scale now has the run's largest as its floor,
+//! iteration's own force scale is round-off and its tolerance could not be met
+//! at any length; the tolerance's scale has the run's largest as its floor,
 //! [`super::inelastic`], "The force scale".) Without that floor a step that
 //! failed at every length above some tiny one ran at that length for ever: each accepted step grew fourfold (its error
 //! ratio negligible), failed and was retried at a quarter (measured: a
@@ -156,10 +156,10 @@
 //! parasitic root would exceed [`PARASITIC_ROOT`] takes BDF1 (first order in the
 //! viscous term, as the corrections themselves are). Chains with a small `B2`
 //! (`b` about 1e-5 for the real materials' fits) and laws that block nothing keep
-//! BDF2, bit for bit. Since session 19 Bingham's correction acts on the step's
-//! mean stress, whose viscous part is the exact `B2 de/dt` of the step (no value
-//! two steps back: `crate::material::point`), so the root above no longer
-//! arises from it; the switch is kept for it all the same (BDF2 with a blocked
+//! BDF2, bit for bit. Bingham's correction acts on the step's mean stress, whose
+//! viscous part is the exact `B2 de/dt` of the step (no value two steps back:
+//! `crate::material::point`), so the root above does not arise from it; the
+//! switch covers it all the same (BDF2 with a blocked
 //! Bingham chain at `b = 1/2` was not tested).
 
 use std::cell::{Cell, RefCell};

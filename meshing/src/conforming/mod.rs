@@ -159,11 +159,10 @@
 //! and random face order, i.e. on machinery; the corners do not, and
 //! smoothing sums over each vertex's star in cell order, so its result
 //! (rounding, then which move wins) depends on that order. Sorting made the
-//! meshes independent of how points are located; it changed the smoothed
-//! coordinates of the meshes of session 13 (same cells, same refinement:
-//! measured with `conforming_probe`'s fingerprints) and their quality within
-//! the noise of smoothing, every gate still holding (BENCHMARKS.md,
-//! session 14).
+//! meshes independent of how points are located; against the unsorted order it
+//! changes the smoothed coordinates (same cells, same refinement: measured
+//! with `conforming_probe`'s fingerprints) and the quality within the noise of
+//! smoothing, every gate holding (BENCHMARKS.md).
 //!
 //! ## What is not done, and why
 //!
@@ -194,17 +193,17 @@
 //! 0.1 % of 1.25 x TetGen's count (`tests/tetgen_golden.rs` asserts both).
 //! TetGen merges such triangles (its coplanarity tolerance) and drops the
 //! edge: its faces there lie 2e-7 mm off the input. Ours is at that floor:
-//! 1.47 (it was 2.23; 1.74 with the facets refined first but before
-//! smoothing for the ratio). No flips are done during refinement: it keeps
+//! 1.47 (2.23 without the facets refined first and smoothing for the ratio;
+//! 1.74 with the facets refined first but without the smoothing). No flips are done during refinement: it keeps
 //! the tetrahedralization Delaunay, which boundary recovery relies on; the
 //! 3-2 flips of stage 5 come after it.
 
-//! **What was not done: a coarse, bent scan (CGAL's armadillo) kept
-//! thousands of flat caps** (sessions 15 to 18). At h = 8 mm 15 190 of its
+//! **Splitting every cap's hinge leaves thousands of flat tets on a coarse,
+//! bent scan (CGAL's armadillo).** At h = 8 mm 15 190 of its
 //! 16 458 tets under 10 deg had two faces on the boundary and four corners
 //! on the surface (down to 0.004 deg, which also made its p99.9 radius-edge
 //! ratio 3e4), and edge removal, star insertion and smoothing removed few
-//! (BENCHMARKS.md). Classified by shape (session 19: a corner over the
+//! (BENCHMARKS.md). Classified by shape (a corner over the
 //! opposite face is a cap, corners in convex position a sliver, one edge
 //! under a third of the longest a wedge, more a needle) they were no caps:
 //! 9 247 wedges and 5 934 needles, their largest angle at the hinge (mostly

@@ -61,11 +61,11 @@ pub const OFF_CENTRE: f64 = 0.3;
 /// A tet whose radius-edge ratio exceeds this, and all of whose candidates
 /// are blocked by a subfacet of a merged plane of the input (a facet of more
 /// than one input triangle) with circumradius at least the tet's shortest
-/// edge, refines that subfacet. Before the facets were refined for quality
-/// first (session 13, hinge: p99.9 radius-edge ratio, smallest dihedral
-/// angle), 2.3 was the smallest bound that kept every tet of the hinge over
-/// 10 deg (2.0 gave 2.08 but 5.00 deg; 1.5 gave 8.5 and 1.84 deg). With the
-/// facets refined first ([`FACET_QUALITY_EDGE`]) the slivers no longer come:
+/// edge, refines that subfacet. Without the facets refined for quality first
+/// (hinge: p99.9 radius-edge ratio, smallest dihedral angle), 2.3 is the
+/// smallest bound that keeps every tet of the hinge over 10 deg (2.0 gives
+/// 2.08 but 5.00 deg; 1.5 gives 8.5 and 1.84 deg). With the facets refined
+/// first ([`FACET_QUALITY_EDGE`]) these slivers do not come:
 /// measured on the hinge, 2.3 gives 1.90, 1.5 gives 1.74 (10.03 deg), 1.414
 /// gives 1.78.
 pub const PLANE_RADIUS_EDGE: f64 = 1.5;

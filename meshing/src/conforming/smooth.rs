@@ -25,7 +25,7 @@
 //! `orient3d`), under the volume bound of refinement and with the star's
 //! dihedral angles within their range where the vertex is (no smaller
 //! smallest angle, no larger largest one: a better quality alone could
-//! trade a small angle for a larger largest one, session 18). A move never
+//! trade a small angle for a larger largest one). A move never
 //! lowers the star's smallest quality; the connectivity is unchanged (the mesh is no
 //! longer Delaunay afterwards, which nothing downstream needs).
 //!

@@ -69,7 +69,7 @@
 //! queue. Without the range condition, stars whose worst tet was better by
 //! [`angle_quality`] (the smallest angle, or half the supplement of the
 //! largest) could still have a larger largest angle than the cavity they
-//! replaced: on the armadillo at 8 mm (session 18) two stars for slivers
+//! replaced: on the armadillo at 8 mm two stars for slivers
 //! raised it from 165.80 and 171.68 deg to 176.62 and 176.88 deg (the
 //! cavities' worst tets were flat at their smallest angle, 0.004 and 1.12
 //! deg). Sequential, every choice in a fixed order: the result depends on

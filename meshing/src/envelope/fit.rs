@@ -21,8 +21,8 @@
 //!    normal within `d` ([`crate::distance::level_set_bound`], the exact
 //!    inside test near `w = 1/2`), so a boundary over a cap `w = 1/2` (a hole,
 //!    an open tube's mouth) counts by its distance to the level set, not to the
-//!    hole's rim (before session 22 only `d`: such a boundary was a candidate
-//!    whose split would pull it towards the rim). Unlike the report's, `d` is
+//!    hole's rim (with `d` alone such a boundary would be a candidate whose
+//!    split pulls it towards the rim). Unlike the report's, `d` is
 //!    to every input triangle, not to the bounding part only: a boundary inside
 //!    the solid along input that bounds nothing (the teapot spout's wall inside
 //!    the body) is not seen; and
@@ -32,7 +32,7 @@
 //!    left out, as in the quality report. After the first round only edges and
 //!    triangles with a node of a changed tet, and the input vertices still far,
 //!    are looked at again.
-//! 2. **Carve** (output -> true boundary, session 22): the tet on a boundary
+//! 2. **Carve** (output -> true boundary): the tet on a boundary
 //!    face farther than `tol` is removed when its centroid is outside the solid
 //!    (the exact inside test), each of its corners is in another tet too and is
 //!    a boundary node or inside the solid (a node inside the mesh that comes to
@@ -43,8 +43,8 @@
 //!    where the stuffing filled a void thinner than its lattice bounded by a
 //!    level set (its lattice vertices warped onto the two walls, a tet with one
 //!    corner inside and three on the walls kept whole): the teapot handle's
-//!    mouth, between the body and the level set over the open tube (BENCHMARKS.md,
-//!    session 22). Removing tets makes no new ones, so the angle guard holds.
+//!    mouth, between the body and the level set over the open tube
+//!    (BENCHMARKS.md). Removing tets makes no new ones, so the angle guard holds.
 //!    A tet straddling the void with corners inside the solid on both of its
 //!    sides (its centroid inside) is not taken: cutting it along the void
 //!    would be needed (not done).

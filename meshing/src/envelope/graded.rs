@@ -44,9 +44,9 @@
 //! that estimate exceeds the tolerance (down to `h / 2^MAX_LEVELS`; so at most
 //! until `L = 4 tol`, a cost set by the rims' length over the tolerance, not by
 //! `h`): there the solid leaves the input for the cap `w = 1/2`
-//! over the hole, a crease no input triangle shows (session 19: the holed
-//! bunny's rim at 3 levels, 1.08e-3 -> 9.98e-4 of the diagonal; an open
-//! sphere's rim, 3.65e-3 -> 2.19e-3). The deeper cut (session 20) is there
+//! over the hole, a crease no input triangle shows (the holed bunny's rim at
+//! 3 levels, 1.08e-3 -> 9.98e-4 of the diagonal; an open sphere's rim,
+//! 3.65e-3 -> 2.19e-3). The deeper cut is there
 //! because the fitting (`fit.rs`) cannot bring the boundary onto a rim as it
 //! does onto an input crease: the stuffing's boundary cuts the rim's corner
 //! between nodes on the input and nodes on the cap (both directions of the
@@ -75,9 +75,9 @@
 //! crossing of the input or, where `w` is within 0.1 of 1/2, at the level set
 //! `w = 1/2`, found by 8 steps): the void where the teapot handle's open mouth
 //! meets the body is a wedge between the body and that level set, which no
-//! input triangle shows and which the lattice had closed into a crack (session
-//! 20: the teapot at 3 levels, 1.15e-2 -> 3.63e-3 of the diagonal). And
-//! **below the smallest size** (session 21), like the rims: a cell that
+//! input triangle shows and which the lattice would close into a crack (the
+//! teapot at 3 levels, 1.15e-2 -> 3.63e-3 of the diagonal). And
+//! **below the smallest size**, like the rims: a cell that
 //! descends from one the thin test cut, or that meets a rim, is cut again while
 //! the solid or a gap of it is thinner than the cell and [`GAP_DEPTH`] times its
 //! longest edge exceeds the tolerance (down to `h / 2^MAX_LEVELS`): a wedge's
@@ -91,14 +91,14 @@
 //! edge, where both sides are inside): the void between the spout's wall and
 //! the cap over its opening starts at `w` = 0.33. Teapot, 0.5 mm, 3 levels:
 //! input -> mesh 3.63e-3 -> 1.00e-3 of the diagonal (971k -> 1.59M tets).
-//! **Blades** (session 22) are cut as rims: an input edge whose two triangles'
+//! **Blades** are cut as rims: an input edge whose two triangles'
 //! normals are more than 90° apart ([`crate::distance::blade_edges`]) bounds
 //! a wedge of solid (or of void) narrower than 90°, thinner than any cell near
 //! its edge, but the input point nearest to such a cell's centroid is mostly
 //! the edge itself, where both probes across the input (along either
-//! triangle's normal) fall outside the wedge: the thin test saw nothing, and
-//! the cells along the teapot spout's lip (faces 49.4° apart) stayed at the
-//! smallest size, the stuffing rounding the lip off by 0.04 mm (0.0412 mm
+//! triangle's normal) fall outside the wedge: the thin test sees nothing, and
+//! without the cut the cells along the teapot spout's lip (faces 49.4° apart)
+//! stay at the smallest size, the stuffing rounding the lip off by 0.04 mm (0.0412 mm
 //! input -> mesh, the maximum). Among the rims, their cells get the inset
 //! probe and the deep cut: input -> mesh 1.005e-3 -> 9.74e-4 of the diagonal
 //! (1.589M -> 1.600M tets); the teapot has 2 blades, the bunny 18 (ear tips,

@@ -30,7 +30,7 @@
 //!    when all are positive. This repairs a tet whose two boundary faces lie on
 //!    the two sides of a crease of the input, its edge along the crease: it
 //!    has the crease's interior angle there, whatever its nodes do on the
-//!    input (the teapot at 0.25 mm, session 20: 158° at a 22° crease of the
+//!    input (the teapot at 0.25 mm: 158° at a 22° crease of the
 //!    lid's knob); cutting its inner edge at a point inside gives the crease
 //!    edge two tets.
 //!
@@ -507,7 +507,7 @@ mod tests {
     /// it and neither does a midpoint split (the halves keep the angle); the
     /// split at a point moved into the ring does: every tet in [12°, 155°]
     /// (measured worst score 2.21 after, 0.87 before), the volume kept (1e-12),
-    /// the new node off the edge's line. Before session 20: refused.
+    /// the new node off the edge's line.
     #[test]
     fn an_inner_edge_is_split_off_its_line() {
         let nodes0 = vec![

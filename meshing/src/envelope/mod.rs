@@ -65,8 +65,8 @@
 //! graded lattice reaches it on the bunny (base 0.2 mm, 3 levels, default
 //! grading tolerance: 9.98e-4, tested) but it is opt-in (about 10x the uniform
 //! lattice's time), and its angles are measured, not proven: no Labelle–Shewchuk
-//! bound covers its tets and thresholds. Measured on the corpus (BENCHMARKS.md,
-//! session 17): within [13.8°, 151.3°] on every file with 3 levels, once faces
+//! bound covers its tets and thresholds. Measured on the corpus (BENCHMARKS.md):
+//! within [13.8°, 151.3°] on every file with 3 levels, once faces
 //! flipped against their neighbours are turned back (step 1) and the final guard
 //! (step 7) has smoothed the layered bunny's one interface tet; its boundary
 //! slivers are peeled off within half the tolerance of the input. On a shape curved everywhere (a sphere) grading
@@ -84,8 +84,8 @@
 //! closed. Both test one ray per input triangle, from its centroid, with the
 //! graded lattice's ray test (`TriangleTree::thin_along`), and where `w` is
 //! within 0.1 of 1/2 (a wall may be the level set `w = 1/2`: the teapot
-//! handle's open mouth against the body, BENCHMARKS.md session 20, now
-//! reported as a thin gap) rays from a grid of points on the triangle; a thin
+//! handle's open mouth against the body, BENCHMARKS.md, reported as a thin
+//! gap) rays from a grid of points on the triangle; a thin
 //! part or gap between input triangles that no centroid faces is still not seen. Cells cut by region interfaces and layer planes have no proven angle
 //! bound; the quality report measures them, and the final guard refuses what it
 //! cannot bring into [12°, 155°]. The outer stencils' proven bound [10.7°,
@@ -94,7 +94,7 @@
 //! input, one edge onto a crease, has the crease's interior angle there (the
 //! teapot at 0.25 mm: 158° at the 22° crease along the lid knob's seam, 157° at
 //! a 23° one along the handle's; a roof with a 10° crease: 170°), which the
-//! guard's splits repair (BENCHMARKS.md, session 20).
+//! guard's splits repair (BENCHMARKS.md).
 
 //! ## Example
 //!
@@ -737,7 +737,7 @@ fn bounding_vertices(surface: &Surface, winding: &WindingNumber, diag: f64) -> V
 /// graded lattice's sizing ([`TriangleTree::thin_along`]: a thin wall may be
 /// the level set `w = 1/2` in an open tube's mouth), from each triangle's
 /// centroid and, in the soft field only, from a grid of points of spacing about
-/// `h / 2` on it. (Tried in session 20: the grid everywhere also flags 39
+/// `h / 2` on it. (Tried: the grid everywhere also flags 39
 /// triangles of the clean bunny at 0.2 mm, thinnest 0.026 mm, which the corpus
 /// test expects warning-free; not kept.)
 fn thin_features(surface: &Surface, winding: &WindingNumber, h: f64, diag: f64, gaps: bool) -> Vec<EnvelopeWarning> {

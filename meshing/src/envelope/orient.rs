@@ -7,7 +7,7 @@
 //! in the inside test. On a lattice coarser than the faces the stuffing averages
 //! it away (the volume is off nearby); a graded lattice refined to the size of
 //! the faces resolves the pillows as tiny features, with slivers down to 0.4°
-//! and 5.1M lattice tets on the bunny with 10 % of its faces flipped (session 16).
+//! and 5.1M lattice tets on the bunny with 10 % of its faces flipped.
 //!
 //! [`consistent_orientation`] turns such faces back: within each region, over
 //! the edges used by exactly two triangles (the manifold ones), a breadth-first
