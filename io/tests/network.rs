@@ -75,6 +75,36 @@ fn a_network_material_is_read_with_its_parts_and_defaults() {
     assert_eq!(again.to_network().unwrap(), spec.to_network().unwrap());
 }
 
+/// A part added as one file and one registration (`[bingham]`) is read,
+/// written back and refused through the registry like the others.
+#[test]
+fn a_bingham_part_is_read_written_back_and_refused_through_the_registry() {
+    let bingham = edit(
+        NETWORK,
+        "[materials.mat1.damper]",
+        "[materials.mat1.bingham]\nE_MPa = 0.004\nyield_MPa = 0.001\nviscosity_MPa_s = 0.02\n\n[materials.mat1.damper]",
+    );
+    let toml = with_network(&bingham);
+    let b = with_experiment(&toml);
+    let bundle = read_bundle(&b.dir).unwrap();
+    let spec = &bundle.experiment.materials["mat1"];
+    let net = spec.to_network().unwrap();
+    let values: Vec<Vec<f64>> = net.parts_of("bingham").map(|p| p.values()).collect();
+    assert_eq!(values, vec![vec![0.004, 0.001, 0.02]]);
+    let again = wagashi_io::bundle::MaterialSpec::from_material(&spec.to_material().unwrap());
+    assert_eq!(again.to_network().unwrap(), net);
+    assert!(spec.parameter_keys().contains(&"bingham.viscosity_MPa_s"));
+    let toml = with_network(&edit(&bingham, "viscosity_MPa_s = 0.02", "viscosity_MPa_s = -0.02"));
+    let b = with_experiment(&toml);
+    let msg = assert_invalid(
+        read_bundle(&b.dir),
+        &b.file("experiment.toml"),
+        line_of(&toml, "viscosity_MPa_s"),
+        "materials.mat1.bingham.viscosity_MPa_s",
+    );
+    assert!(msg.contains("outside (0, 1000000]"), "{msg}");
+}
+
 #[test]
 fn bad_network_keys_are_refused_naming_file_line_and_key() {
     let cases: [(&str, &str, &str, &str, &str); 10] = [
@@ -109,7 +139,7 @@ fn bad_network_keys_are_refused_naming_file_line_and_key() {
             "[[materials.mat1.flwo]]",
             "[[materials.mat1.flwo]]",
             "materials.mat1.flwo",
-            "its parts: [equilibrium], [[viscous]], [plastic], [[flow]], [damper]",
+            "its parts: [equilibrium], [[viscous]], [plastic], [[flow]], [bingham], [damper]",
         ),
         (
             "[materials.mat1.damper]\n",

@@ -10,7 +10,7 @@
 //! | `four-element`  | `E1_MPa, c1_MPa_s, E2_MPa, c3_MPa_s` (E2 the series spring) |
 //! | `five-element`  | `E1_MPa, E2_MPa, c1_MPa_s, c2_MPa_s, c3_MPa_s`     |
 //!
-//! | `network`       | `[equilibrium]` and the parts `[[viscous]]`, `[plastic]`, `[[flow]]`, `[damper]` (below) |
+//! | `network`       | `[equilibrium]` and the parts `[[viscous]]`, `[plastic]`, `[[flow]]`, `[bingham]`, `[damper]` (below) |
 //!
 //! Every parameter is optional when reading, so that identification can take a
 //! material that gives only its model and the parameters to hold fixed; a key
@@ -73,6 +73,10 @@
 //! E_MPa = 0.01
 //! stress_MPa = 0.004             # the equivalent stress flowing at a strain rate of 1/s
 //! exponent = 2.0                 # n >= 1 of the rate (1: Newtonian; default 1)
+//! [materials.gel.bingham]        # a Maxwell network flowing only above a yield stress
+//! E_MPa = 0.01
+//! yield_MPa = 0.001              # equivalent yield stress of the flow
+//! viscosity_MPa_s = 0.05         # plastic viscosity: sigma = sigma_y + eta d(eps)/dt
 //! [materials.gel.damper]         # a parallel Newtonian damper
 //! c_MPa_s = 0.005
 //! ```

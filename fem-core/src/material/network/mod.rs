@@ -24,6 +24,9 @@
 //! - up to two **power-law flow** networks ([`FlowNetwork`]): a Hencky spring
 //!   whose shear flows by Norton's law, by the plastic network's radial return
 //!   with a rate-dependent radius ([`flow`]);
+//! - an optional **Bingham** network ([`BinghamNetwork`]): a Hencky spring
+//!   whose shear flows only above a yield stress, at a rate proportional to the
+//!   excess, by the same return with a closed-form multiplier ([`bingham`]);
 //! - an optional parallel Newtonian **damper** of Young-type viscosity `c`
 //!   [MPa s], acting on the rate of the logarithmic strain.
 //!
@@ -84,11 +87,13 @@
 //!
 //! `[C_n^-1 - I (6), W_max (1)]`, then each part's own history in the order of
 //! [`Network::parts`] (a viscous network: `A - I (6), S_n (6)`; the plastic
-//! network: `Cp^-1 - I (6), alpha (1)`; a flow network: `Cv^-1 - I (6)`; the
+//! network: `Cp^-1 - I (6), alpha (1)`; a flow network: `Cv^-1 - I (6)`; a
+//! Bingham network: `Cv^-1 - I (6)` and one unused value; the
 //! damper: none), symmetric tensors as `[xx, yy, zz, xy, xz, yz]`. The configurations are kept
 //! as deviations from the identity, so that small strains keep their precision
 //! ([`hencky`]).
 
+pub mod bingham;
 mod damper;
 mod equilibrium;
 pub mod flow;
@@ -97,6 +102,7 @@ pub mod part;
 pub mod plastic;
 mod viscous;
 
+pub use bingham::BinghamNetwork;
 pub use damper::Damper;
 pub use equilibrium::{energy_keys, Energy, Equilibrium, Mullins, ENERGIES, OGDEN_TERMS};
 pub use flow::FlowNetwork;
@@ -553,6 +559,7 @@ mod tests {
             .with(ViscousNetwork { e_mpa: 0.01, tau_s: 40.0 })
             .with(PlasticNetwork { e_mpa: 0.04, yield_mpa: 1e-3, hardening_mpa: 5e-3 })
             .with(FlowNetwork { e_mpa: 0.01, stress_mpa: 3e-3, exponent: 2.5 })
+            .with(BinghamNetwork { e_mpa: 0.02, yield_mpa: 5e-4, viscosity_mpa_s: 2e-3 })
             .with(Damper { c_mpa_s: 5e-3 })
     }
 

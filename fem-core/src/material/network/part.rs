@@ -127,7 +127,7 @@ impl PartKind {
 
 /// Every kind of part, in the order a network holds them (its history layout).
 pub static PARTS: &[&PartKind] =
-    &[&super::viscous::KIND, &super::plastic::KIND, &super::flow::KIND, &super::damper::KIND];
+    &[&super::viscous::KIND, &super::plastic::KIND, &super::flow::KIND, &super::bingham::KIND, &super::damper::KIND];
 
 /// The kind whose sub-table is `table`.
 pub fn kind(table: &str) -> Option<&'static PartKind> {
