@@ -34,6 +34,25 @@ def test_press_matches_the_cli_bit_for_bit(sides, wagashi_bin):
     assert result.output == Path("out") and "peak force" in result.report
 
 
+def test_press_markers_are_the_simulated_markers_csv(sides, wagashi_bin):
+    # mat1-2d with two measured markers on its top corners (2D: no z column).
+    c, p = sides
+    for side in (c, p):
+        bundle = wagashi.set_bundle_keys(MAT1_2D, side / "marked", {"data.markers": "markers.csv"})
+        (bundle / "markers.csv").write_text(
+            "marker,t_s,x_mm,y_mm\nm01,0.0,0.0,59.5\nm01,210.93,0.1,53.7\nm02,0.0,58.0,59.5\nm02,400.0,58.1,59.0\n"
+        )
+    cli(wagashi_bin, ["press", "marked", "-o", "out", "--size-mm", "10"], c)
+    result = wagashi.press("marked", "out", size_mm=10.0)
+    assert_same_outputs(c / "out", p / "out")
+    rows = (p / "out" / "markers.csv").read_text().splitlines()
+    assert result.markers.dtype.names == ("marker", "t_s", "x_mm", "y_mm") and len(result.markers) == len(rows) - 1
+    for row, got in zip(rows[1:], result.markers):
+        name, *numbers = row.split(",")
+        assert got["marker"] == name and [got[k] for k in ("t_s", "x_mm", "y_mm")] == [float(x) for x in numbers]
+    assert result["markers"] == 2
+
+
 def test_press_of_a_double_compression_and_tpa_match_the_cli(sides, wagashi_bin):
     # The double compression as its axisymmetric section: tpa.json in the output.
     c, p = sides
