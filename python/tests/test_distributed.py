@@ -27,7 +27,7 @@ def client():
     cluster.close()
 
 
-def test_fit_each_equals_the_serial_cli_and_reports_a_failure(tmp_path, client, wagashi_bin):
+def test_fit_each_equals_the_serial_cli_and_reports_a_failure(tmp_path, monkeypatch, client, wagashi_bin):
     # Three measured trials (the 2D trial at three stiffnesses), and one bundle
     # with nothing measured in the middle.
     trials = []
@@ -37,9 +37,11 @@ def test_fit_each_equals_the_serial_cli_and_reports_a_failure(tmp_path, client, 
         trials.append(tmp_path / f"trial{i}")
     bundles = [trials[0], trials[1], MAT1_2D, trials[2]]
     start = five_element_start(tmp_path / "start.toml")
-    options = dict(materials=str(start), size_mm=20.0, starts=1)
+    # Relative paths are the client's: the workers get them made absolute.
+    monkeypatch.chdir(tmp_path)
+    options = dict(materials="start.toml", size_mm=20.0, starts=1)
 
-    results = fit_each(bundles, tmp_path / "campaign", client, **options)
+    results = fit_each(bundles, "campaign", client, **options)
 
     assert len(results) == 4
     bad = results[2]

@@ -98,6 +98,15 @@ def _press_task(bundle: str, point: dict, folder: str, threads: int | None, opti
         return TaskFailure(point, str(folder_path / "press"), str(e), type(e).__name__)
 
 
+# Options naming files: made absolute before they go to the workers, whose
+# working folder may differ from the client's.
+_PATH_OPTIONS = ("materials",)
+
+
+def _absolute_paths(options: dict) -> dict:
+    return {k: (os.fspath(Path(v).absolute()) if k in _PATH_OPTIONS and v is not None else v) for k, v in options.items()}
+
+
 def _safe_name(path: str) -> str:
     name = Path(path.rstrip("/\\")).name or "bundle"
     return re.sub(r"[^A-Za-z0-9._+-]", "_", name)
@@ -123,7 +132,8 @@ def fit_each(
 ) -> list:
     """One ``wagashi.fit`` per bundle on ``client``, each a task writing
     ``out_root/NNNN-NAME`` (NNNN: the bundle's 0-based index, NAME: its folder
-    name). Returns, in the order of ``bundles``, each fit's ``fit.json`` as a
+    name). Relative paths (the bundles, ``out_root``, ``materials``) are taken
+from the client's working folder. Returns, in the order of ``bundles``, each fit's ``fit.json`` as a
     dict, or a ``TaskFailure``. ``options`` are ``wagashi.fit``'s; ``threads``
     the rayon pool per task (default: see the module docs).
     """
@@ -132,7 +142,7 @@ def fit_each(
     paths = [os.fspath(Path(b).absolute()) for b in bundles]
     outs = [os.fspath((root / f"{i:04d}-{_safe_name(p)}").absolute()) for i, p in enumerate(paths)]
     futures = [
-        client.submit(_fit_task, p, o, threads, dict(options), key=f"wagashi-fit-{i:04d}-{_token(o)}", pure=False)
+        client.submit(_fit_task, p, o, threads, _absolute_paths(options), key=f"wagashi-fit-{i:04d}-{_token(o)}", pure=False)
         for i, (p, o) in enumerate(zip(paths, outs))
     ]
     return _gather(client, futures, [os.fspath(b) for b in bundles], outs)
@@ -176,7 +186,7 @@ def press_sweep(
     points = grid_points(grid)
     folders = [os.fspath((root / f"{i:04d}").absolute()) for i in range(len(points))]
     futures = [
-        client.submit(_press_task, source, p, f, threads, dict(options), key=f"wagashi-press-{i:04d}-{_token(f)}", pure=False)
+        client.submit(_press_task, source, p, f, threads, _absolute_paths(options), key=f"wagashi-press-{i:04d}-{_token(f)}", pure=False)
         for i, (p, f) in enumerate(zip(points, folders))
     ]
     return _gather(client, futures, points, [os.fspath(Path(f) / "press") for f in folders])
