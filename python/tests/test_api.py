@@ -176,7 +176,12 @@ def test_set_bundle_keys_edits_a_copy(tmp_path):
     assert "mass_g" not in doc["specimen"]
     with pytest.raises(wagashi.OptionError, match="not a table"):
         wagashi.set_bundle_keys(MAT1_2D, tmp_path / "x", {"protocol.end_s.deeper": 1})
-    assert not (tmp_path / "x").exists()
+    with pytest.raises(wagashi.WagashiError, match="exists"):
+        wagashi.set_bundle_keys(MAT1_2D, copy, {})
+    with pytest.raises(wagashi.WagashiError, match="experiment.toml: cannot read"):
+        wagashi.set_bundle_keys(tmp_path / "none", tmp_path / "y", {})
+    # Nothing left behind: neither the refused targets nor a partial copy.
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["copy"]
 
 
 def test_fungi_records_import_and_fit_as_the_cli(sides, wagashi_bin, fungi):

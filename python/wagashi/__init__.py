@@ -259,17 +259,30 @@ def set_bundle_keys(bundle: PathLike, target: PathLike, keys: Mapping[str, Any])
     with dotted keys of its ``experiment.toml`` set, e.g.
     ``{"protocol.end_s": 300.0, "materials.mat1.E1_MPa": 0.02}``; ``None``
     removes a key (``{"data": None}`` drops the measured data). The input is
-    never modified. Returns ``target``.
+    never modified. The copy is built beside ``target`` and renamed into
+    place, so ``target`` is either complete or absent. Returns ``target``.
     """
     import shutil
+    import uuid
 
     src, target = Path(bundle), Path(target)
     experiment = src / "experiment.toml"
-    text = experiment.read_text(encoding="utf-8")
+    try:
+        text = experiment.read_text(encoding="utf-8")
+    except OSError as e:
+        raise WagashiError(f"{experiment}: cannot read: {e.strerror or e}") from None
     pairs = [(str(k), json.dumps(v, allow_nan=False)) for k, v in keys.items()]
     edited = _set_toml_keys(os.fspath(experiment), text, pairs)
-    shutil.copytree(src, target)
-    (target / "experiment.toml").write_text(edited, encoding="utf-8")
+    if target.exists():
+        raise WagashiError(f"{target}: exists; set_bundle_keys writes a new folder")
+    # Built beside the target and renamed into place: never a partial copy.
+    partial = target.parent / f".{target.name}.partial-{uuid.uuid4().hex[:12]}"
+    try:
+        shutil.copytree(src, partial)
+        (partial / "experiment.toml").write_text(edited, encoding="utf-8")
+        os.rename(partial, target)
+    finally:
+        shutil.rmtree(partial, ignore_errors=True)
     return target
 
 
