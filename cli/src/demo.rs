@@ -52,7 +52,7 @@ pub fn demo_bundle() -> Result<Bundle, wagashi_io::BundleError> {
 }
 
 /// `wagashi demo`.
-pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
+pub fn run(args: &DemoArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let bundle = demo_bundle()?;
     let options = PressOptions {
         size_mm: Some(DEMO_SIZE_MM),
@@ -68,10 +68,9 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         allow_large: false,
         other_inputs: Vec::new(),
     };
-    let mut out = std::io::stdout().lock();
     writeln!(out, "The seed paper's material 1 trial (embedded {DEMO_BUNDLE_DIR}), 3D, x_force parameters")?;
-    let summary = press_bundle(&bundle, &options, &mut out)?;
-    print_results(&summary, &mut out)?;
+    let summary = press_bundle(&bundle, &options, out)?;
+    print_results(&summary, out)?;
     writeln!(out)?;
     writeln!(out, "Open the results in {}:", args.output.display())?;
     writeln!(out, "  force.svg             the force curve: open it in a web browser")?;

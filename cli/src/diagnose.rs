@@ -139,10 +139,10 @@ fn parse_effects(text: &str) -> anyhow::Result<Option<Vec<EffectId>>> {
 }
 
 /// `wagashi diagnose`.
-pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
+pub fn run(args: &DiagnoseArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let effects = parse_effects(&args.effects)?;
     if let Some(n) = args.blind {
-        return run_blind(args, n as usize, effects);
+        return run_blind(args, n as usize, effects, out);
     }
     let start: BTreeMap<String, MaterialSpec> = match &args.materials {
         Some(path) => read_materials_file(path)?,
@@ -190,7 +190,7 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
     });
     write_atomic(dir.join(wagashi_io::atomic::OUTPUT_MARKER_FILE), serde_json::to_string_pretty(&summary)?.as_bytes())?;
     output.commit()?;
-    print_report(&d, &args.output)?;
+    print_report(&d, &args.output, out)?;
     Ok(())
 }
 
@@ -351,8 +351,7 @@ pub fn diagnosis_json(d: &Diagnosis) -> Value {
     })
 }
 
-fn print_report(d: &Diagnosis, output: &std::path::Path) -> anyhow::Result<()> {
-    let mut out = std::io::stdout().lock();
+fn print_report(d: &Diagnosis, output: &std::path::Path, out: &mut dyn Write) -> anyhow::Result<()> {
     writeln!(out, "verdict: {}", d.verdict.label)?;
     writeln!(out, "  {}", d.verdict.sentence)?;
     if let Some(e) = &d.verdict.separating_experiment {
@@ -612,7 +611,7 @@ pub fn report_html(d: &Diagnosis) -> String {
 /// `OUT/blind.json` (every campaign: what it withheld, the realised strength,
 /// the generator's draws, the verdict, the gap closures, the timings; the
 /// scores, the targets and the confusion matrix) and the table on stdout.
-fn run_blind(args: &DiagnoseArgs, n: usize, effects: Option<Vec<EffectId>>) -> anyhow::Result<()> {
+fn run_blind(args: &DiagnoseArgs, n: usize, effects: Option<Vec<EffectId>>, out: &mut dyn Write) -> anyhow::Result<()> {
     use calibrate::diagnosis::blind;
     let output = crate::press::prepare_output(&[], &args.output, args.force)?;
     let options = DiagnosisOptions {
@@ -657,16 +656,17 @@ fn run_blind(args: &DiagnoseArgs, n: usize, effects: Option<Vec<EffectId>>) -> a
     let marker = json!({"command": "diagnose --blind", "campaigns": n, "seed": args.seed});
     write_atomic(dir.join(wagashi_io::atomic::OUTPUT_MARKER_FILE), serde_json::to_string_pretty(&marker)?.as_bytes())?;
     output.commit()?;
-    print_blind(&outcomes, &summary, &args.output)?;
+    print_blind(&outcomes, &summary, &args.output, out)?;
     for f in &failures {
-        println!(
+        writeln!(
+            out,
             "campaign {} (seed {}, withheld {} at lambda {}) not scored: {}",
             f.index,
             f.seed,
             f.case.truth.name(),
             f.case.lambda,
             f.error
-        );
+        )?;
     }
     Ok(())
 }
@@ -776,8 +776,8 @@ fn print_blind(
     outcomes: &[calibrate::diagnosis::blind::Outcome],
     s: &calibrate::diagnosis::blind::BlindSummary,
     output: &std::path::Path,
+    out: &mut dyn Write,
 ) -> anyhow::Result<()> {
-    let mut out = std::io::stdout().lock();
     writeln!(
         out,
         "{:<4} {:<22} {:>7} {:>9} {:<34} {:>7} {:>7} {:>8}",

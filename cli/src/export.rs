@@ -86,7 +86,7 @@ pub struct ExportArgs {
 }
 
 /// `wagashi export`.
-pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
+pub fn run(args: &ExportArgs, out: &mut dyn std::io::Write) -> anyhow::Result<()> {
     let dir = &args.output_dir;
     // The source first (what is wrong with it is the first thing to tell), then
     // the target, which may not lie inside it; both before anything is written.
@@ -95,7 +95,8 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
     let scene = run.scene()?;
     let bytes = glb_bytes(&scene).with_context(|| format!("{}: building the glTF", dir.display()))?;
     target.write(&bytes, None)?;
-    println!(
+    writeln!(
+        out,
         "{}: {} frames from {} ({} to {} s), {} triangles, tools: {}",
         args.gltf.display(),
         scene.specimen.frames.len(),
@@ -104,7 +105,7 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
         scene.specimen.frames.last().map_or(0.0, |f| f.t_s),
         scene.specimen.triangles.len(),
         scene.tools.iter().map(|t| t.name.as_str()).collect::<Vec<_>>().join(", "),
-    );
+    )?;
     Ok(())
 }
 

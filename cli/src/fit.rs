@@ -142,7 +142,7 @@ pub enum ProcedureArg {
 }
 
 /// `wagashi fit`.
-pub fn run(args: &FitArgs) -> anyhow::Result<()> {
+pub fn run(args: &FitArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let start: BTreeMap<String, MaterialSpec> = match &args.materials {
         Some(path) => read_materials_file(path)?,
         None => Default::default(),
@@ -217,7 +217,7 @@ pub fn run(args: &FitArgs) -> anyhow::Result<()> {
     let outcomes = trial_outcomes(&campaign, &bundles, &force_runs, &shape_runs);
 
     write_outputs(&campaign, &bundles, &report, &outcomes, (&force_runs, &shape_runs), output)?;
-    print_report(&report, &outcomes, &args.output)?;
+    print_report(&report, &outcomes, &args.output, out)?;
     Ok(())
 }
 
@@ -641,8 +641,12 @@ fn write_outputs(
     Ok(())
 }
 
-fn print_report(report: &FitReport, outcomes: &[TrialOutcome], output: &std::path::Path) -> anyhow::Result<()> {
-    let mut out = std::io::stdout().lock();
+fn print_report(
+    report: &FitReport,
+    outcomes: &[TrialOutcome],
+    output: &std::path::Path,
+    out: &mut dyn Write,
+) -> anyhow::Result<()> {
     for s in &report.steps {
         match &s.skipped {
             Some(why) => writeln!(out, "step {}: skipped: {why}", s.name)?,

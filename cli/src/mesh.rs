@@ -182,7 +182,7 @@ struct MeshReport<'a> {
 }
 
 /// Runs `wagashi mesh`.
-pub fn run(args: &MeshArgs) -> anyhow::Result<()> {
+pub fn run(args: &MeshArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     if args.mode == Mode::Conforming && !args.layers_mm.is_empty() {
         bail!("--layers-mm works with --mode envelope only (conforming mode keeps the input's regions)");
     }
@@ -249,7 +249,6 @@ pub fn run(args: &MeshArgs) -> anyhow::Result<()> {
             used: repair_used,
         },
     };
-    let mut out = std::io::stdout().lock();
     let detail = match (&envelope_stats, &conforming_stats) {
         (Some(e), _) => format!("{} lattice vertices, {} warped", e.lattice_vertices, e.warped_vertices),
         (_, Some(c)) => format!(
@@ -258,7 +257,7 @@ pub fn run(args: &MeshArgs) -> anyhow::Result<()> {
         ),
         _ => String::new(),
     };
-    print_table(&mut out, args, format, &input, &quality, &detail)?;
+    print_table(out, args, format, &input, &quality, &detail)?;
     let mut err = std::io::stderr().lock();
     for w in &imported.warnings {
         writeln!(err, "warning: {}: {w}", args.surface.display())?;

@@ -313,8 +313,8 @@ pub struct PressOptions {
     pub other_inputs: Vec<(&'static str, PathBuf)>,
 }
 
-/// `wagashi press`.
-pub fn run(args: &PressArgs) -> anyhow::Result<()> {
+/// `wagashi press`; the mesh line and the results go to `out` (stdout for the binary).
+pub fn run(args: &PressArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let external = match &args.materials {
         Some(path) => read_materials_file(path)?,
         None => Default::default(),
@@ -335,10 +335,9 @@ pub fn run(args: &PressArgs) -> anyhow::Result<()> {
         allow_large: args.allow_large,
         other_inputs: args.materials.iter().map(|m| ("materials file", m.clone())).collect(),
     };
-    let mut out = std::io::stdout().lock();
     let how = How { axisymmetric: args.axisymmetric, surface_mesh: args.mesh_mode.mode() };
-    let summary = press_bundle_as(&bundle, &options, how, args.gltf.as_deref(), &mut out)?;
-    print_results(&summary, &mut out)?;
+    let summary = press_bundle_as(&bundle, &options, how, args.gltf.as_deref(), out)?;
+    print_results(&summary, out)?;
     if let Some(gltf) = &args.gltf {
         writeln!(out, "glTF                  {}", gltf.display())?;
     }

@@ -18,7 +18,7 @@
 //! Every input is read and analysed before anything is written. `wagashi press`
 //! writes the same profile as `tpa.json` for a double compression ([`tpa_json`]).
 
-use std::io::Write as _;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::{anyhow, bail, Context};
@@ -116,7 +116,7 @@ struct Row {
 }
 
 /// `wagashi tpa`.
-pub fn run(args: &TpaArgs) -> anyhow::Result<()> {
+pub fn run(args: &TpaArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let options = TpaOptions { threshold_n: args.threshold_n, smoothing_samples: args.smooth_samples };
     // Check the output folder first: a bad one fails before the work.
     let output = match &args.output {
@@ -141,7 +141,6 @@ pub fn run(args: &TpaArgs) -> anyhow::Result<()> {
         let tpa = analyse(&record, &options)?;
         rows.push(Row { input: input.display().to_string(), record, tpa });
     }
-    let mut out = std::io::stdout().lock();
     if args.json {
         let array: Vec<serde_json::Value> = rows.iter().map(|r| tpa_json(&r.input, &r.tpa)).collect();
         writeln!(out, "{}", serde_json::to_string_pretty(&array)?)?;
