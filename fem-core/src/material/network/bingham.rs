@@ -119,20 +119,7 @@ mod tests {
     const NET: BinghamNetwork = BinghamNetwork { e_mpa: 0.05, yield_mpa: 2e-3, viscosity_mpa_s: 4e-3 };
 
     fn step(net: &BinghamNetwork, f: &Matrix3<f64>, dt: f64, old: &[f64]) -> (Matrix3<f64>, Tangent, Vec<f64>) {
-        let h = f - Matrix3::identity();
-        let f_inv = f.try_inverse().unwrap();
-        let k = Kinematics {
-            h: &h,
-            f: *f,
-            f_inv,
-            f_inv_t: f_inv.transpose(),
-            c_n_inv_dev: Matrix3::zeros(),
-            poisson: 0.35,
-            dt_s: dt,
-        };
-        let mut new = old.to_vec();
-        let (p, t) = net.respond(&k, old, &mut new).unwrap();
-        (p, t, new)
+        super::super::part::step_at(net, f, 0.35, dt, old)
     }
 
     fn equivalent_stress(p: &Matrix3<f64>, f: &Matrix3<f64>) -> f64 {

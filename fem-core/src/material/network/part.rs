@@ -134,6 +134,26 @@ pub fn kind(table: &str) -> Option<&'static PartKind> {
     PARTS.iter().copied().find(|k| k.table == table)
 }
 
+/// A part's step at the deformation gradient `f` from the history `old`, the
+/// configuration at the step's start the reference (the parts' unit tests):
+/// its stress, tangent and new history.
+#[cfg(test)]
+pub(crate) fn step_at(
+    part: &dyn Part,
+    f: &Matrix3<f64>,
+    poisson: f64,
+    dt_s: f64,
+    old: &[f64],
+) -> (Matrix3<f64>, Tangent, Vec<f64>) {
+    let h = f - Matrix3::identity();
+    let f_inv = f.try_inverse().expect("an invertible F");
+    let k =
+        Kinematics { h: &h, f: *f, f_inv, f_inv_t: f_inv.transpose(), c_n_inv_dev: Matrix3::zeros(), poisson, dt_s };
+    let mut new = old.to_vec();
+    let (p, t) = part.respond(&k, old, &mut new).expect("the part responds");
+    (p, t, new)
+}
+
 /// The spec of `key` in a parameter table.
 pub(crate) fn spec(table: &[ParameterSpec], key: &str) -> ParameterSpec {
     *table.iter().find(|s| s.key == key).expect("the key is in its table")
