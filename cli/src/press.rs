@@ -15,6 +15,7 @@
 //! | `final.vtu`        | the final shape (at `end_s`)                                      |
 //! | `force.svg`        | simulated (and measured) force against time                       |
 //! | `tpa.json`         | with two loading strokes in the protocol: the simulated force's texture profile ([`crate::tpa`]) |
+//! | `stress_strain.csv` | `t_s,strain,stress_kPa` for a block or cylinder under the protocol's plate, until `release_s`: nominal strain (the plate's travel over the initial height) and nominal stress (`force.csv` over the initial cross-section), compression positive |
 //! | `shapes.pvd`, `shapes/` | with `--pvd N`: N + 1 shapes evenly spaced in time           |
 //! | `frames.bin`       | with `--gltf`: the glTF's frames, for `wagashi export` ([`crate::export`]) |
 //! | `tools.csv`        | with contact tools: each tool's contact force, normal and tangential parts and contact area at every step |
@@ -526,6 +527,10 @@ fn press_bundle_as(
             Err(why) => writeln!(out, "note: no texture profile (tpa.json): {why}")?,
         }
     }
+    if let Some(csv) = stress_strain_csv(&bundle.experiment, &force) {
+        write_atomic(dir.join(STRESS_STRAIN_FILE), csv.as_bytes())?;
+        files.push(STRESS_STRAIN_FILE.into());
+    }
     if !markers.is_empty() {
         files.push("markers.csv".into());
     }
@@ -664,6 +669,53 @@ fn measured_until(measured: &ForceSeries, end_s: f64) -> (ForceSeries, usize) {
 }
 
 /// `0, dt, 2 dt, ...` up to `end_s`, and `end_s` itself when it is not on the grid.
+/// The nominal stress-strain curve's file ([`stress_strain_csv`]).
+pub const STRESS_STRAIN_FILE: &str = "stress_strain.csv";
+
+/// `stress_strain.csv`: the nominal strain (the plate's travel from first touch
+/// over the initial height) and the nominal stress (the force of `force.csv`
+/// over the initial cross-section: `W T` of a block, `pi R^2` of a cylinder)
+/// at each force sample until `release_s`, compression positive; `None` when
+/// the specimen has no defined height and area (a surface or a mesh) or the
+/// tool is not the plate.
+fn stress_strain_csv(experiment: &wagashi_io::Experiment, force: &ForceSeries) -> Option<String> {
+    use wagashi_io::bundle::{Shape, Tool};
+    let protocol = &experiment.protocol;
+    if protocol.tool != Tool::Plate {
+        return None;
+    }
+    let specimen = &experiment.specimen;
+    let (height_mm, area_mm2) = match specimen.shape {
+        Shape::Block => {
+            let size = specimen.size_mm.as_deref()?;
+            (size[1], size[0] * size[2])
+        }
+        Shape::Cylinder => {
+            let r = specimen.radius_mm?;
+            (specimen.height_mm?, std::f64::consts::PI * r * r)
+        }
+        _ => return None,
+    };
+    let travel = |t: f64| {
+        let w = &protocol.waypoints;
+        match w.iter().position(|p| p[0] >= t) {
+            None => w.last().map_or(0.0, |p| p[1]),
+            Some(0) => w[0][1],
+            Some(i) => {
+                let (a, b) = (w[i - 1], w[i]);
+                a[1] + (b[1] - a[1]) * (t - a[0]) / (b[0] - a[0])
+            }
+        }
+    };
+    let mut csv = String::from("t_s,strain,stress_kPa\n");
+    for s in force.samples.iter().filter(|s| s.t_s <= protocol.release_s) {
+        let strain = travel(s.t_s) / height_mm;
+        let stress_kpa = 1e3 * s.force_n / area_mm2;
+        let _ = writeln!(csv, "{},{},{}", number(s.t_s), number(strain), number(stress_kpa));
+    }
+    Some(csv)
+}
+
 fn uniform_times(end_s: f64, dt_s: f64) -> anyhow::Result<Vec<f64>> {
     let n = (end_s / dt_s + 1e-9).floor();
     if n > MAX_OUTPUT_SAMPLES {

@@ -40,6 +40,44 @@ fn every_paper_bundle_runs() {
         }
         // The output is itself a bundle: no markers here, so no markers.csv.
         assert!(!out.join("markers.csv").exists());
+        check_stress_strain(&bundle, &out);
+    }
+}
+
+/// `stress_strain.csv` against the bundle: the force of `force.csv` over the
+/// block's `W T`, and the plate's travel over `H`, at every sample until
+/// `release_s`, with the push's end at the waypoint's strain.
+fn check_stress_strain(bundle: &std::path::Path, out: &std::path::Path) {
+    let experiment: toml::Table =
+        toml::from_str(&std::fs::read_to_string(bundle.join("experiment.toml")).unwrap()).unwrap();
+    let size: Vec<f64> =
+        experiment["specimen"]["size_mm"].as_array().unwrap().iter().map(|v| v.as_float().unwrap()).collect();
+    let protocol = &experiment["protocol"];
+    let release_s = protocol["release_s"].as_float().unwrap();
+    let waypoints = protocol["waypoints"].as_array().unwrap();
+    let push = waypoints[1].as_array().unwrap();
+    let (push_s, push_mm) = (push[0].as_float().unwrap(), push[1].as_float().unwrap());
+    let force = read_force_csv(&out.join("force.csv"));
+    let text = std::fs::read_to_string(out.join("stress_strain.csv")).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("t_s,strain,stress_kPa"));
+    let rows: Vec<[f64; 3]> = lines
+        .map(|l| {
+            let v: Vec<f64> = l.split(',').map(|x| x.parse().unwrap()).collect();
+            [v[0], v[1], v[2]]
+        })
+        .collect();
+    assert_eq!(rows.len(), force.iter().filter(|f| f.0 <= release_s).count());
+    for (row, f) in rows.iter().zip(&force) {
+        assert_eq!(row[0], f.0);
+        let want = 1e3 * f.1 / (size[0] * size[2]);
+        assert!((row[2] - want).abs() <= 1e-12 * want.abs().max(1e-9), "stress {} against {want}", row[2]);
+        if row[0] <= push_s {
+            let strain = push_mm * row[0] / push_s / size[1];
+            assert!((row[1] - strain).abs() < 1e-12, "strain {} against {strain} at {} s", row[1], row[0]);
+        } else {
+            assert!((row[1] - push_mm / size[1]).abs() < 1e-12, "held strain {}", row[1]);
+        }
     }
 }
 
