@@ -40,6 +40,7 @@ mod outputs;
 mod plot;
 mod press;
 mod progress;
+mod shape_svg;
 mod summary;
 mod tpa;
 

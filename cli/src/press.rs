@@ -15,6 +15,7 @@
 //! | `final.vtu`        | the final shape (at `end_s`)                                      |
 //! | `force.svg`        | simulated (and measured) force against time                       |
 //! | `tpa.json`         | with two loading strokes in the protocol: the simulated force's texture profile ([`crate::tpa`]) |
+//! | `shape.svg`        | the specimen's outline (a 3D body's section through the middle of its depth) at the start, the keep time and the end, to scale in mm ([`crate::shape_svg`]) |
 //! | `stress_strain.csv` | `t_s,strain,stress_kPa` for a block or cylinder under the protocol's plate, until `release_s`: nominal strain (the plate's travel over the initial height) and nominal stress (`force.csv` over the initial cross-section), compression positive |
 //! | `shapes.pvd`, `shapes/` | with `--pvd N`: N + 1 shapes evenly spaced in time           |
 //! | `frames.bin`       | with `--gltf`: the glTF's frames, for `wagashi export` ([`crate::export`]) |
@@ -515,6 +516,13 @@ fn press_bundle_as(
     write_shape(&dir.join("keep.vtu"), &problem, keep)?;
     write_shape(&dir.join("final.vtu"), &problem, last)?;
     write_atomic(dir.join("force.svg"), force_svg(&bundle.experiment.name, &force, measured)?.as_bytes())?;
+    let rest = Snapshot { t_s: 0.0, displacement: vec![0.0; keep.displacement.len()], cell_stress: Vec::new() };
+    let (keep_label, end_label) =
+        (format!("keep, t = {} s", number(keep.t_s)), format!("end, t = {} s", number(last.t_s)));
+    let shapes = [("start", &rest), (keep_label.as_str(), keep), (end_label.as_str(), last)];
+    let outline = crate::shape_svg::Outline::of(&problem);
+    let svg = crate::shape_svg::shape_svg(&bundle.experiment.name, &problem, &outline, &shapes)?;
+    write_atomic(dir.join("shape.svg"), svg.as_bytes())?;
     let mut files: Vec<String> = ["experiment.toml", "force.csv"].map(String::from).to_vec();
     if crate::tpa::is_double_compression(&protocol.waypoints) {
         // The texture profile of the simulated force.csv (what `wagashi tpa OUT` reports).
@@ -534,7 +542,7 @@ fn press_bundle_as(
     if !markers.is_empty() {
         files.push("markers.csv".into());
     }
-    files.extend(["summary.json", "steps.csv", "keep.vtu", "final.vtu", "force.svg"].map(String::from));
+    files.extend(["summary.json", "steps.csv", "keep.vtu", "final.vtu", "force.svg", "shape.svg"].map(String::from));
     if !pvd_times.is_empty() {
         write_time_series(dir, &problem, &result, &pvd_times)?;
         files.extend(["shapes.pvd".to_string(), "shapes/".to_string()]);

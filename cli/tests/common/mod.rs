@@ -224,6 +224,11 @@ pub fn check_output(out: &Path, dimension: u64) -> serde_json::Value {
     let svg = std::fs::read_to_string(out.join("force.svg")).unwrap();
     roxmltree::Document::parse(&svg).expect("force.svg is well-formed XML");
     assert!(svg.contains("time [s]") && svg.contains("[N]"));
+    let shape = std::fs::read_to_string(out.join("shape.svg")).unwrap();
+    roxmltree::Document::parse(&shape).expect("shape.svg is well-formed XML");
+    for needle in ["x [mm]", "y [mm]", "start", "keep, t = ", "end, t = "] {
+        assert!(shape.contains(needle), "shape.svg lacks {needle:?}");
+    }
     // No temporary folders are left beside the output.
     let parent = out.parent().unwrap();
     for entry in std::fs::read_dir(parent).unwrap() {
