@@ -82,7 +82,7 @@ use wagashi_io::{
 
 use crate::plot::force_svg;
 use crate::progress::SimulationBar;
-use crate::summary::{number, steps_csv, ForceComparison, Summary};
+use crate::summary::{number, steps_csv, ForceComparison, StrokeShape, Summary};
 
 /// The most force samples `--output-dt` may ask for.
 const MAX_OUTPUT_SAMPLES: f64 = 1e7;
@@ -448,6 +448,16 @@ fn press_bundle_as(
         Some(_) => crate::export::frame_times(end_s, &pvd_times),
         None => pvd_times.clone(),
     };
+    // A protocol of several strokes: the shapes at each stroke's peak and after it.
+    let strokes = if crate::tpa::is_double_compression(&protocol.waypoints) {
+        stroke_times(&protocol.waypoints, end_s)
+    } else {
+        Vec::new()
+    };
+    let mut snapshot_times = snapshot_times;
+    snapshot_times.extend(strokes.iter().flat_map(|&(peak, after)| [peak, after]));
+    snapshot_times.sort_by(f64::total_cmp);
+    snapshot_times.dedup();
     set_snapshot_times(&mut problem, &snapshot_times);
     let mesh = MeshInfo::of(&problem)?;
     let model = match (&problem, surface_mesh_mode) {
@@ -502,6 +512,7 @@ fn press_bundle_as(
     let markers: Vec<MarkerSeries> = bundle.simulated_markers(&problem, &result.markers);
 
     let keep = snapshot(&result, keep_time_s)?;
+    let mut stroke_files: Vec<String> = Vec::new();
     let last = snapshot(&result, end_s)?;
     let name = format!("{}-sim", bundle.experiment.name);
     let dir = output.path();
@@ -515,6 +526,23 @@ fn press_bundle_as(
     write_atomic(dir.join("steps.csv"), steps_csv(&result.steps).as_bytes())?;
     write_shape(&dir.join("keep.vtu"), &problem, keep)?;
     write_shape(&dir.join("final.vtu"), &problem, last)?;
+    let mut stroke_shapes = Vec::new();
+    for (i, &(peak_t, after_t)) in strokes.iter().enumerate() {
+        let (peak, after) = (snapshot(&result, peak_t)?, snapshot(&result, after_t)?);
+        for (file, shape) in
+            [(format!("stroke{}-peak.vtu", i + 1), peak), (format!("stroke{}-after.vtu", i + 1), after)]
+        {
+            write_shape(&dir.join(&file), &problem, shape)?;
+            stroke_files.push(file);
+        }
+        stroke_shapes.push(StrokeShape {
+            peak_t_s: peak_t,
+            peak_force_n: result.bottom_force_at(peak_t),
+            peak_height_loss_mm: mesh.height_loss_mm(peak),
+            after_t_s: after_t,
+            after_height_loss_mm: mesh.height_loss_mm(after),
+        });
+    }
     write_atomic(dir.join("force.svg"), force_svg(&bundle.experiment.name, &force, measured)?.as_bytes())?;
     let rest = Snapshot { t_s: 0.0, displacement: vec![0.0; keep.displacement.len()], cell_stress: Vec::new() };
     let (keep_label, end_label) =
@@ -543,6 +571,7 @@ fn press_bundle_as(
         files.push("markers.csv".into());
     }
     files.extend(["summary.json", "steps.csv", "keep.vtu", "final.vtu", "force.svg", "shape.svg"].map(String::from));
+    files.extend(stroke_files);
     if !pvd_times.is_empty() {
         write_time_series(dir, &problem, &result, &pvd_times)?;
         files.extend(["shapes.pvd".to_string(), "shapes/".to_string()]);
@@ -594,6 +623,7 @@ fn press_bundle_as(
         final_height_loss_mm: mesh.height_loss_mm(last),
         keep_time_s,
         final_time_s: end_s,
+        strokes: stroke_shapes,
         force_samples: force.samples.len(),
         markers: markers.len(),
         measured_force_samples: measured.map(|m| m.samples.len()),
@@ -616,7 +646,21 @@ pub fn print_results(s: &Summary, out: &mut dyn Write) -> anyhow::Result<()> {
         s.final_time_s, s.steps, s.factorizations, s.free_dofs, s.wall_time_s
     )?;
     writeln!(out, "peak force            {:.4} N", s.peak_force_n)?;
-    writeln!(out, "force at end of hold  {:.4} N (t = {} s)", s.force_end_of_hold_n, s.keep_time_s)?;
+    if s.strokes.is_empty() {
+        writeln!(out, "force at end of hold  {:.4} N (t = {} s)", s.force_end_of_hold_n, s.keep_time_s)?;
+    }
+    for (i, k) in s.strokes.iter().enumerate() {
+        writeln!(
+            out,
+            "stroke {}              peak {:.4} N, height loss {:.4} mm (t = {} s); after it {:.4} mm (t = {} s)",
+            i + 1,
+            k.peak_force_n,
+            k.peak_height_loss_mm,
+            number(k.peak_t_s),
+            k.after_height_loss_mm,
+            number(k.after_t_s)
+        )?;
+    }
     writeln!(out, "final height loss     {:.4} mm (t = {} s)", s.final_height_loss_mm, s.final_time_s)?;
     if let (Some(rms), Some(max)) = (s.force_rms_diff_n, s.force_max_abs_diff_n) {
         writeln!(out, "simulated - measured  rms {rms:.4} N, max {max:.4} N")?;
@@ -677,6 +721,31 @@ fn measured_until(measured: &ForceSeries, end_s: f64) -> (ForceSeries, usize) {
 }
 
 /// `0, dt, 2 dt, ...` up to `end_s`, and `end_s` itself when it is not on the grid.
+/// The strokes of a protocol of several (`waypoints`, `[t_s, d_mm]`): each
+/// push's end (the plate deepest) and the end of the retreat that follows it
+/// (the plate highest again, or `end_s`).
+fn stroke_times(waypoints: &[[f64; 2]], end_s: f64) -> Vec<(f64, f64)> {
+    let mut out = Vec::new();
+    let mut i = 1;
+    while i < waypoints.len() {
+        // The end of a push: rising into it, not rising after it.
+        let rising_in = waypoints[i][1] > waypoints[i - 1][1];
+        let rising_out = waypoints.get(i + 1).is_some_and(|w| w[1] > waypoints[i][1]);
+        if rising_in && !rising_out {
+            let peak = waypoints[i][0].min(end_s);
+            let mut j = i;
+            while j + 1 < waypoints.len() && waypoints[j + 1][1] <= waypoints[j][1] {
+                j += 1;
+            }
+            let after = if j + 1 < waypoints.len() { waypoints[j][0] } else { end_s };
+            out.push((peak, after.min(end_s)));
+            i = j;
+        }
+        i += 1;
+    }
+    out
+}
+
 /// The nominal stress-strain curve's file ([`stress_strain_csv`]).
 pub const STRESS_STRAIN_FILE: &str = "stress_strain.csv";
 
@@ -1001,6 +1070,14 @@ fn ring_weights(nodes: &[[f64; 2]], set: &[u32], edges: &[[u32; 2]]) -> Vec<f64>
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn strokes_are_the_pushes_ends_and_the_retreats_ends() {
+        let w = [[0.0, 0.0], [10.0, 2.0], [20.0, 0.0], [25.0, 0.0], [35.0, 2.0], [36.0, 2.0], [45.0, 0.0]];
+        assert_eq!(stroke_times(&w, 50.0), vec![(10.0, 25.0), (35.0, 50.0)]);
+        let w = [[0.0, 0.0], [10.0, 2.0], [20.0, 0.5], [30.0, 2.5], [40.0, 0.0]];
+        assert_eq!(stroke_times(&w, 40.0), vec![(10.0, 20.0), (30.0, 40.0)]);
+    }
 
     #[test]
     fn uniform_times_cover_zero_to_end() {

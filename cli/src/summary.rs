@@ -66,6 +66,10 @@ pub struct Summary {
     pub keep_time_s: f64,
     /// Time of the final shape: `end_s` [s].
     pub final_time_s: f64,
+    /// A protocol of two or more strokes: each stroke's peak and the shape after
+    /// it (`strokeN-peak.vtu`, `strokeN-after.vtu`); empty otherwise.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub strokes: Vec<StrokeShape>,
     /// Rows of the written `force.csv`.
     pub force_samples: usize,
     /// Markers in the written `markers.csv`.
@@ -81,6 +85,22 @@ pub struct Summary {
     pub force_max_abs_diff_n: Option<f64>,
     /// The files written, relative to the output folder.
     pub files: Vec<String>,
+}
+
+/// One stroke of a protocol with several: the plate at its deepest, and back.
+#[derive(Debug, Clone, Serialize)]
+pub struct StrokeShape {
+    /// The end of the stroke's push (the plate deepest) [s].
+    pub peak_t_s: f64,
+    /// The bottom force then [N].
+    #[serde(rename = "peak_force_N")]
+    pub peak_force_n: f64,
+    /// The height loss then [mm] (as `keep_height_loss_mm`).
+    pub peak_height_loss_mm: f64,
+    /// The end of the plate's retreat after it (or `end_s`) [s].
+    pub after_t_s: f64,
+    /// The height loss then [mm].
+    pub after_height_loss_mm: f64,
 }
 
 impl Summary {

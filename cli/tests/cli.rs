@@ -168,6 +168,21 @@ fn tpa_of_a_simulated_double_compression() {
     assert_success(&press_in(cwd, &bundle, Path::new("dc"), &["--axisymmetric", "--size-mm", "2"]));
     let written: serde_json::Value =
         serde_json::from_slice(&std::fs::read(cwd.join("dc/tpa.json")).expect("press writes tpa.json")).unwrap();
+    // The shapes at each stroke's peak (the plate deepest, 10 s and 27.5 s) and
+    // after it, with the summary's figures: the first stroke's set recovers
+    // partly before the second, which compresses it again.
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(cwd.join("dc/summary.json")).unwrap()).unwrap();
+    let strokes = summary["strokes"].as_array().expect("summary.json lists the strokes");
+    assert_eq!(strokes.len(), 2);
+    let at = |i: usize, key: &str| strokes[i][key].as_f64().unwrap();
+    assert_eq!((at(0, "peak_t_s"), at(1, "peak_t_s")), (10.0, 27.5));
+    for (i, stroke) in strokes.iter().enumerate() {
+        assert!(at(i, "peak_height_loss_mm") > at(i, "after_height_loss_mm").max(0.0), "{stroke}");
+        for shape in ["peak", "after"] {
+            assert!(cwd.join(format!("dc/stroke{}-{shape}.vtu", i + 1)).is_file());
+        }
+    }
     let o = wagashi_in(cwd, ["tpa", "dc", "--json", "-o", "tpa"]);
     assert_success(&o);
     let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
