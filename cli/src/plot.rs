@@ -9,7 +9,7 @@ use wagashi_io::ForceSeries;
 const SIZE: (u32, u32) = (900, 560);
 
 /// Draws the series' legend at the upper right and writes the drawing out.
-fn legend_and_present<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+pub(crate) fn legend_and_present<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
     chart: &mut ChartContext<'a, DB, CT>,
     root: &DrawingArea<DB, plotters::coord::Shift>,
 ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {

@@ -227,14 +227,7 @@ pub fn shape_svg(
                 .label(*label)
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], colour.stroke_width(2)));
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.9))
-            .border_style(BLACK)
-            .draw()
-            .map_err(draw_err)?;
-        root.present().map_err(draw_err)?;
+        crate::plot::legend_and_present(&mut chart, &root).map_err(draw_err)?;
     }
     Ok(svg)
 }
