@@ -18,14 +18,17 @@
 //!   moduli: the flow relaxes the spring's whole log strain, volume included, as
 //!   the seed's Lamé split does);
 //! - an optional **plastic** network ([`PlasticNetwork`]): a Hencky spring on
-//!   `F = Fe Fp` with von Mises yield and linear isotropic hardening, by the
-//!   exponential map's closed-form radial return ([`plastic`]); it holds the
-//!   permanent set against the other networks;
+//!   `F = Fe Fp` with von Mises yield, linear isotropic and linear kinematic
+//!   (Prager) hardening, by the exponential map's closed-form radial return
+//!   ([`plastic`]); it holds the permanent set against the other networks;
 //! - up to two **power-law flow** networks ([`FlowNetwork`]): a Hencky spring
 //!   whose shear flows by Norton's law, by the plastic network's radial return
 //!   with a rate-dependent radius ([`flow`]);
 //! - an optional parallel Newtonian **damper** of Young-type viscosity `c`
-//!   [MPa s], acting on the rate of the logarithmic strain.
+//!   [MPa s], acting on the rate of the logarithmic strain;
+//! - up to two **dual-viscosity** networks ([`DualNetwork`]): a viscous network
+//!   whose relaxation time differs between loading and unloading of its spring
+//!   ([`dual`]).
 //!
 //! Every part uses the material's one Poisson ratio.
 //!
@@ -75,11 +78,12 @@
 //! `[C_n^-1 - I (6), W_max (1)]`, then each part's own history in the order of
 //! [`Network::parts`] (a viscous network: `A - I (6), S_n (6)`; the plastic
 //! network: `Cp^-1 - I (6), alpha (1)`; a flow network: `Cv^-1 - I (6)`; the
-//! damper: none), symmetric tensors as `[xx, yy, zz, xy, xz, yz]`. The configurations are kept
-//! as deviations from the identity, so that small strains keep their precision
+//! damper: none; a dual-viscosity network: a viscous network's), symmetric
+//! tensors as `[xx, yy, zz, xy, xz, yz]`. The configurations are kept as deviations from the identity, so that small strains keep their precision
 //! ([`hencky`]).
 
 mod damper;
+pub mod dual;
 mod equilibrium;
 pub mod flow;
 mod hencky;
@@ -88,6 +92,7 @@ pub mod plastic;
 mod viscous;
 
 pub use damper::Damper;
+pub use dual::DualNetwork;
 pub use equilibrium::{energy_keys, Energy, Equilibrium, Mullins, ENERGIES, OGDEN_TERMS};
 pub use flow::FlowNetwork;
 pub use part::{Kinematics, Part, PartKind, PARTS};
@@ -447,9 +452,10 @@ mod tests {
             })
             .with(ViscousNetwork { e_mpa: 0.015, tau_s: 2.0 })
             .with(ViscousNetwork { e_mpa: 0.01, tau_s: 40.0 })
-            .with(PlasticNetwork { e_mpa: 0.04, yield_mpa: 1e-3, hardening_mpa: 5e-3 })
+            .with(PlasticNetwork { e_mpa: 0.04, yield_mpa: 1e-3, hardening_mpa: 5e-3, kinematic_mpa: 8e-3 })
             .with(FlowNetwork { e_mpa: 0.01, stress_mpa: 3e-3, exponent: 2.5 })
             .with(Damper { c_mpa_s: 5e-3 })
+            .with(DualNetwork { e_mpa: 0.012, tau_load_s: 5.0, tau_unload_s: 0.8 })
     }
 
     /// A history after a few steps along a non-proportional path, so that every

@@ -14,7 +14,7 @@
 //! `static KIND: PartKind`, plus one line in [`PARTS`]. The bundle reader, the
 //! writer, the flat keys identification names (`flow[0].stress_MPa`), the fit's
 //! ranges and starts and the validation all follow from the kind: no other
-//! file names its keys. [`super::flow`] was added that way.
+//! file names its keys. [`super::flow`] and [`super::dual`] were added that way.
 
 use std::sync::Arc;
 
@@ -95,7 +95,7 @@ impl PartKind {
 
 /// Every kind of part, in the order a network holds them (its history layout).
 pub static PARTS: &[&PartKind] =
-    &[&super::viscous::KIND, &super::plastic::KIND, &super::flow::KIND, &super::damper::KIND];
+    &[&super::viscous::KIND, &super::plastic::KIND, &super::flow::KIND, &super::damper::KIND, &super::dual::KIND];
 
 /// The kind whose sub-table is `table`.
 pub fn kind(table: &str) -> Option<&'static PartKind> {
