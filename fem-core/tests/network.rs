@@ -398,9 +398,10 @@ fn a_plate_tool_leaves_an_elastic_network_cylinder_and_touches_it_again() {
 /// `tau = tau_load` while `ee d eps/dt >= 0` (the spring loads or holds) and
 /// `tau_unload` otherwise, integrated by RK4 per protocol segment. The spring
 /// stays compressed throughout (`ee` at least 0.026 from 0), so the direction
-/// changes only at the protocol's kinks, where the steps land: at three step
-/// sizes the engine's error falls at second order, and the unloading time
-/// matters.
+/// changes only at the protocol's kinks. The engine takes each step's time
+/// from the previous step's direction, one step late at the reversal: at three
+/// step sizes its error falls at first order (measured), and the unloading
+/// time matters.
 #[test]
 fn a_dual_viscosity_network_in_compression_and_pull_back_converges_to_the_1d_law() {
     let (e, nu, tau_load, tau_unload) = (0.02, 0.3, 3.0, 1.0);
@@ -458,8 +459,8 @@ fn a_dual_viscosity_network_in_compression_and_pull_back_converges_to_the_1d_law
     }
     let orders = observed_orders(&errors);
     eprintln!("orders {orders:?}; forces at the kinks {want:?}");
-    assert!(orders.iter().all(|&p| p > 1.8 && p < 2.3), "orders {orders:?}");
-    assert!(errors[2] < 1e-3, "{errors:?}");
+    assert!(orders.iter().all(|&p| p > 0.9 && p < 1.15), "orders {orders:?}");
+    assert!(errors[2] < 1.1e-2, "{errors:?}");
     // The unloading time matters: with the loading time throughout, the force
     // at the end of the pull back differs by a sixth of the peak or more.
     let single = reference(tau_load);
@@ -535,4 +536,50 @@ fn a_kinematically_hardening_plastic_network_in_push_pull_follows_the_1d_law() {
     // while the block is still in compression (isotropic hardening alone would
     // need a tension of sigma_y + H alpha).
     assert!(reverse_yield < -0.2 * sigma_y, "{reverse_yield}");
+}
+
+/// A dual-viscosity network in an inhomogeneous field: a block glued to both
+/// plates (with an exponential equilibrium network), pushed, held, pulled back
+/// and held, on adaptive steps. With equal times it is the viscous network to
+/// the last bit; with a fast unloading time it runs to the end (the choice of
+/// time is fixed within a step, so Newton's iteration converges as the
+/// viscous network's) and the pull back's force falls further than the
+/// viscous network's.
+#[test]
+fn a_glued_block_with_a_dual_viscosity_network_runs_and_equal_times_are_the_viscous_network() {
+    let equilibrium = Equilibrium { energy: Energy::Exponential { stiffening: 1.0 }, e_mpa: 0.01, mullins: None };
+    let base = Network::new(0.35).with_equilibrium(equilibrium);
+    let mut protocol = frictionless(1.2, 2.0, 6.0);
+    protocol.waypoints = vec![[0.0, 0.0], [2.0, 1.2], [3.0, 1.2], [4.0, 0.8], [6.0, 0.8]];
+    protocol.plate = Attachment::Glued;
+    protocol.support = Attachment::Glued;
+    let press = |net: Network| {
+        let problem = SolidPress::new_3d(
+            mesh::block([6.0, 4.0, 6.0], 2.0, "m").unwrap(),
+            vec![Material::network(net).unwrap()],
+            protocol.clone(),
+        )
+        .unwrap();
+        run(&problem, &Settings::default())
+    };
+    let viscous = press(base.clone().with(ViscousNetwork { e_mpa: 0.02, tau_s: 3.0 }));
+    let same = press(base.clone().with(DualNetwork { e_mpa: 0.02, tau_load_s: 3.0, tau_unload_s: 3.0 }));
+    assert_eq!(viscous.steps.len(), same.steps.len());
+    for (a, b) in viscous.steps.iter().zip(&same.steps) {
+        assert_eq!((a.t_s, a.bottom_force_n, a.plate_force_n), (b.t_s, b.bottom_force_n, b.plate_force_n));
+    }
+    let dual = press(base.with(DualNetwork { e_mpa: 0.02, tau_load_s: 3.0, tau_unload_s: 0.3 }));
+    let at = |r: &PressResult, t: f64| {
+        r.steps.iter().find(|s| (s.t_s - t).abs() < 1e-9).expect("a step lands").bottom_force_n
+    };
+    let peak = at(&viscous, 2.0);
+    eprintln!(
+        "glued block: dual-viscosity network {} steps; force at the pull back's end {:.5} N against the viscous \
+         network's {:.5} N (peak {peak:.5} N)",
+        dual.steps.len(),
+        at(&dual, 4.0),
+        at(&viscous, 4.0)
+    );
+    assert_eq!(at(&dual, 2.0), peak, "the push loads: the same as the viscous network");
+    assert!(at(&dual, 4.0) < at(&viscous, 4.0) - 0.05 * peak.abs());
 }

@@ -78,9 +78,10 @@
 //! `[C_n^-1 - I (6), W_max (1)]`, then each part's own history in the order of
 //! [`Network::parts`] (a viscous network: `A - I (6), S_n (6)`; the plastic
 //! network: `Cp^-1 - I (6), alpha (1)`; a flow network: `Cv^-1 - I (6)`; the
-//! damper: none; a dual-viscosity network: a viscous network's), symmetric
-//! tensors as `[xx, yy, zz, xy, xz, yz]`. The configurations are kept as deviations from the identity, so that small strains keep their precision
-//! ([`hencky`]).
+//! damper: none; a dual-viscosity network: a viscous network's, then the
+//! direction of its last step (1)), symmetric tensors as
+//! `[xx, yy, zz, xy, xz, yz]`. The configurations are kept as deviations from
+//! the identity, so that small strains keep their precision ([`hencky`]).
 
 mod damper;
 pub mod dual;
