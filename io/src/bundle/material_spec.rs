@@ -76,7 +76,8 @@
 //! [[materials.gel.dual]]         # up to two: a Maxwell network with a dual viscosity
 //! E_MPa = 0.01
 //! tau_load_s = 3.0               # relaxation time while its spring loads or holds
-//! tau_unload_s = 0.5             # relaxation time while it unloads
+//! tau_unload_s = 0.5             # relaxation time while it unloads (each step takes
+//!                                # the direction of the step before)
 //! ```
 //!
 //! A chain material runs beside network materials as its network equivalent
