@@ -89,9 +89,9 @@ pub static KIND: PartKind = PartKind {
 
 /// The relative fall of the spring's trial energy that still counts as a hold
 /// (module docs): above the rounding of the two energies and the solver's
-/// residual stresses times its last corrections (1e-13 of the energy and
-/// below), far below a step that unloads (a strain step of `x` of the elastic
-/// strain lowers the energy by about `2 x`).
+/// residual stresses times its last corrections (estimated at 1e-13 of the
+/// energy or less), far below a step that unloads (a strain step of `x` of the
+/// elastic strain lowers the energy by about `2 x`).
 const HOLD_BAND: f64 = 1e-10;
 
 impl DualNetwork {
