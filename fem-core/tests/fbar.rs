@@ -32,7 +32,7 @@ fn every_part(nu: f64) -> Network {
         .with_equilibrium(Equilibrium { energy: Energy::Exponential { stiffening: 1.0 }, e_mpa: 0.01, mullins: None })
         .with(ViscousNetwork { e_mpa: 0.05, tau_s: 0.5 })
         .with(ViscousNetwork { e_mpa: 0.02, tau_s: 5.0 })
-        .with(PlasticNetwork { e_mpa: 0.02, yield_mpa: 0.002, hardening_mpa: 0.004 })
+        .with(PlasticNetwork { e_mpa: 0.02, yield_mpa: 0.002, hardening_mpa: 0.004, kinematic_mpa: 0.0 })
         .with(Damper { c_mpa_s: 0.005 })
 }
 

@@ -1,7 +1,9 @@
 //! The network model on the Newton path against closed forms and the chain.
 
 use fem_core::element::Formulation;
-use fem_core::material::network::{Energy, Equilibrium, FlowNetwork, Network, PlasticNetwork, Strain, ViscousNetwork};
+use fem_core::material::network::{
+    DualNetwork, Energy, Equilibrium, FlowNetwork, Network, PlasticNetwork, Strain, ViscousNetwork,
+};
 use fem_core::material::{Material, Rheology};
 use fem_core::mesh;
 use fem_core::press::{self, Attachment, PlanePress, PressResult, Protocol, Settings, SolidPress};
@@ -292,7 +294,12 @@ fn a_viscous_network_in_uniaxial_compression_converges_to_an_independent_integra
 #[test]
 fn a_plastic_network_in_uniaxial_compression_and_reverse_yield_follows_the_1d_element() {
     let (e, nu, sigma_y, hardening) = (0.04, 0.3, 2e-3, 0.01);
-    let net = Network::new(nu).with(PlasticNetwork { e_mpa: e, yield_mpa: sigma_y, hardening_mpa: hardening });
+    let net = Network::new(nu).with(PlasticNetwork {
+        e_mpa: e,
+        yield_mpa: sigma_y,
+        hardening_mpa: hardening,
+        kinematic_mpa: 0.0,
+    });
     let h = 10.0;
     let mut protocol = frictionless(5.0, 10.0, 25.0);
     protocol.waypoints = vec![[0.0, 0.0], [10.0, 5.0], [20.0, 0.0]];
@@ -458,4 +465,197 @@ fn a_plate_tool_leaves_an_elastic_network_cylinder_and_touches_it_again() {
         assert!((a - b).abs() < 1e-6 * peak, "t = {t}: {a} vs {b}");
     }
     eprintln!("double compression: peak {peak:.6} N, {} steps", result.steps.len());
+}
+
+/// A dual-viscosity network pushed to 30 % strain between frictionless plates
+/// in 2 s, held 1 s, pulled back to 25 % in 1 s and held, against the 1D law
+/// integrated here. Under uniaxial stress the flow is proportional, so the axial
+/// elastic log strain `ee` alone follows `d ee/dt = d eps/dt - ee / tau`, with
+/// `tau = tau_load` while `ee d eps/dt >= 0` (the spring loads or holds) and
+/// `tau_unload` otherwise, integrated by RK4 per protocol segment. The spring
+/// stays compressed throughout (`ee` at least 0.026 from 0), so the direction
+/// changes only at the protocol's kinks. The engine takes each step's time
+/// from the previous step's direction, one step late at the reversal: at three
+/// step sizes its error falls at first order (measured), and the unloading
+/// time matters.
+#[test]
+fn a_dual_viscosity_network_in_compression_and_pull_back_converges_to_the_1d_law() {
+    let (e, nu, tau_load, tau_unload) = (0.02, 0.3, 3.0, 1.0);
+    let net = Network::new(nu).with(DualNetwork { e_mpa: e, tau_load_s: tau_load, tau_unload_s: tau_unload });
+    let h = 10.0;
+    let mut protocol = frictionless(3.0, 2.0, 6.0);
+    protocol.waypoints = vec![[0.0, 0.0], [2.0, 3.0], [3.0, 3.0], [4.0, 2.5], [6.0, 2.5]];
+    let kinks = [0.0, 2.0, 3.0, 4.0, 6.0];
+    // The axial log strain rate on a segment of constant plate speed v.
+    let eps_rate = |t: f64, v: f64| -v / (h - protocol.displacement(t));
+    let area = 36.0;
+    // The nominal axial force at each kink after the first, for a given
+    // unloading time.
+    let reference = |tau_u: f64| {
+        let mut ee = 0.0f64;
+        let mut out = Vec::new();
+        for w in kinks.windows(2) {
+            let (t0, t1) = (w[0], w[1]);
+            let v = (protocol.displacement(t1) - protocol.displacement(t0)) / (t1 - t0);
+            let rhs = |t: f64, x: f64| {
+                let r = eps_rate(t, v);
+                let tau = if x * r >= 0.0 { tau_load } else { tau_u };
+                r - x / tau
+            };
+            let steps = 100_000;
+            let dt = (t1 - t0) / steps as f64;
+            for i in 0..steps {
+                let t = t0 + i as f64 * dt;
+                let k1 = rhs(t, ee);
+                let k2 = rhs(t + dt / 2.0, ee + dt / 2.0 * k1);
+                let k3 = rhs(t + dt / 2.0, ee + dt / 2.0 * k2);
+                let k4 = rhs(t + dt, ee + dt * k3);
+                ee += dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+            }
+            let stretch = 1.0 - protocol.displacement(t1) / h;
+            out.push(-e * ee / stretch * area);
+        }
+        out
+    };
+    let want = reference(tau_unload);
+    let times = &kinks[1..];
+    let mut errors = Vec::new();
+    for n in [8usize, 16, 32] {
+        let problem = SolidPress::new_3d(
+            mesh::block([6.0, h, 6.0], 3.0, "m").unwrap(),
+            vec![Material::network(net.clone()).unwrap()],
+            protocol.clone(),
+        )
+        .unwrap();
+        let settings = Settings { fixed_dt_s: Some(2.0 / n as f64), ..Settings::default() };
+        let result = run(&problem, &settings);
+        let err = worst_error(&result, times, &want);
+        eprintln!("dual-viscosity network, {n} steps per push: error {err:.3e} of the peak");
+        errors.push(err);
+    }
+    let orders = observed_orders(&errors);
+    eprintln!("orders {orders:?}; forces at the kinks {want:?}");
+    assert!(orders.iter().all(|&p| p > 0.9 && p < 1.15), "orders {orders:?}");
+    assert!(errors[2] < 1.1e-2, "{errors:?}");
+    // The unloading time matters: with the loading time throughout, the force
+    // at the end of the pull back differs by a sixth of the peak or more.
+    let single = reference(tau_load);
+    eprintln!("with the loading time throughout: {single:?}");
+    assert!((single[2] - want[2]).abs() > 0.16 * want[0].abs(), "{single:?} against {want:?}");
+}
+
+/// Kinematic hardening: a plastic network with linear isotropic and kinematic
+/// (Prager) hardening pushed to 40 % strain between frictionless plates, pulled
+/// back past its starting height and held, against the 1D law written here:
+/// `tau = E (eps - p)` in the axial log strain, `|tau - H_k p| <= sigma_y + H alpha`,
+/// `d alpha = |dp|`, whose return from the trial `xi = tau_tr - H_k p_n` is
+/// `dp = (|xi| - sigma_y - H alpha_n) / (E + H_k + H) sign(xi)`, exact for any
+/// step. The engine must match it to the solver's tolerance at every step end;
+/// and the Bauschinger effect shows: reverse yield starts where the stress has
+/// fallen by `2 (sigma_y + H alpha)` from the back stress `H_k p`, well before
+/// the reversed stress reaches the forward peak.
+#[test]
+fn a_kinematically_hardening_plastic_network_in_push_pull_follows_the_1d_law() {
+    let (e, nu, sigma_y, h_iso, h_kin) = (0.04, 0.3, 2e-3, 2e-3, 0.012);
+    let net = Network::new(nu).with(PlasticNetwork {
+        e_mpa: e,
+        yield_mpa: sigma_y,
+        hardening_mpa: h_iso,
+        kinematic_mpa: h_kin,
+    });
+    let h = 10.0;
+    let mut protocol = frictionless(4.0, 10.0, 25.0);
+    protocol.waypoints = vec![[0.0, 0.0], [10.0, 4.0], [20.0, -1.0]];
+    let problem = SolidPress::new_3d(
+        mesh::block([6.0, h, 6.0], 3.0, "m").unwrap(),
+        vec![Material::network(net).unwrap()],
+        protocol.clone(),
+    )
+    .unwrap();
+    let settings = Settings { fixed_dt_s: Some(0.25), ..Settings::default() };
+    let result = run(&problem, &settings);
+    let area = 36.0;
+    let (mut p, mut alpha) = (0.0f64, 0.0f64);
+    let mut want = Vec::new();
+    // The Kirchhoff stress where yield first reverses (closed form), and the
+    // trial stress of that step.
+    let mut reverse: Option<(f64, f64)> = None;
+    let mut last_sign = 0.0;
+    for s in &result.steps {
+        let stretch = 1.0 - protocol.displacement(s.t_s) / h;
+        let eps = stretch.ln();
+        let xi = e * (eps - p) - h_kin * p;
+        let excess = xi.abs() - (sigma_y + h_iso * alpha);
+        if excess > 0.0 {
+            if last_sign != 0.0 && xi.signum() != last_sign && reverse.is_none() {
+                // Yield reverses within this step: where it starts, the stress
+                // is the back stress less the radius (both of the step's start).
+                reverse = Some((h_kin * p - last_sign * (sigma_y + h_iso * alpha), e * (eps - p)));
+            }
+            last_sign = xi.signum();
+            let dp = excess / (e + h_kin + h_iso) * xi.signum();
+            p += dp;
+            alpha += dp.abs();
+        }
+        want.push(-e * (eps - p) / stretch * area);
+    }
+    let peak = want.iter().fold(0.0f64, |m, w| m.max(w.abs()));
+    let worst = result.steps.iter().zip(&want).map(|(s, w)| (s.bottom_force_n - w).abs() / peak).fold(0.0, f64::max);
+    let (reverse_yield, _) = reverse.expect("the pull back yields in reverse");
+    eprintln!(
+        "kinematic plastic network: {} steps, worst force error {worst:.3e} of the peak {peak:.5} N; reverse \
+         yield at a Kirchhoff stress of {reverse_yield:.3e} MPa, plastic strain at the end {p:.4}",
+        result.steps.len()
+    );
+    assert!(worst < 1e-8, "worst {worst:.3e}");
+    // The yield surface moved with the back stress: the pull back yields again
+    // while the block is still in compression (isotropic hardening alone would
+    // need a tension of sigma_y + H alpha).
+    assert!(reverse_yield < -0.2 * sigma_y, "{reverse_yield}");
+}
+
+/// A dual-viscosity network in an inhomogeneous field: a block glued to both
+/// plates (with an exponential equilibrium network), pushed, held, pulled back
+/// and held, on adaptive steps. With equal times it is the viscous network to
+/// the last bit; with a fast unloading time it runs to the end (the choice of
+/// time is fixed within a step, so Newton's iteration converges as the
+/// viscous network's) and the pull back's force falls further than the
+/// viscous network's.
+#[test]
+fn a_glued_block_with_a_dual_viscosity_network_runs_and_equal_times_are_the_viscous_network() {
+    let equilibrium = Equilibrium { energy: Energy::Exponential { stiffening: 1.0 }, e_mpa: 0.01, mullins: None };
+    let base = Network::new(0.35).with_equilibrium(equilibrium);
+    let mut protocol = frictionless(1.2, 2.0, 6.0);
+    protocol.waypoints = vec![[0.0, 0.0], [2.0, 1.2], [3.0, 1.2], [4.0, 0.8], [6.0, 0.8]];
+    protocol.plate = Attachment::Glued;
+    protocol.support = Attachment::Glued;
+    let press = |net: Network| {
+        let problem = SolidPress::new_3d(
+            mesh::block([6.0, 4.0, 6.0], 2.0, "m").unwrap(),
+            vec![Material::network(net).unwrap()],
+            protocol.clone(),
+        )
+        .unwrap();
+        run(&problem, &Settings::default())
+    };
+    let viscous = press(base.clone().with(ViscousNetwork { e_mpa: 0.02, tau_s: 3.0 }));
+    let same = press(base.clone().with(DualNetwork { e_mpa: 0.02, tau_load_s: 3.0, tau_unload_s: 3.0 }));
+    assert_eq!(viscous.steps.len(), same.steps.len());
+    for (a, b) in viscous.steps.iter().zip(&same.steps) {
+        assert_eq!((a.t_s, a.bottom_force_n, a.plate_force_n), (b.t_s, b.bottom_force_n, b.plate_force_n));
+    }
+    let dual = press(base.with(DualNetwork { e_mpa: 0.02, tau_load_s: 3.0, tau_unload_s: 0.3 }));
+    let at = |r: &PressResult, t: f64| {
+        r.steps.iter().find(|s| (s.t_s - t).abs() < 1e-9).expect("a step lands").bottom_force_n
+    };
+    let peak = at(&viscous, 2.0);
+    eprintln!(
+        "glued block: dual-viscosity network {} steps; force at the pull back's end {:.5} N against the viscous \
+         network's {:.5} N (peak {peak:.5} N)",
+        dual.steps.len(),
+        at(&dual, 4.0),
+        at(&viscous, 4.0)
+    );
+    assert_eq!(at(&dual, 2.0), peak, "the push loads: the same as the viscous network");
+    assert!(at(&dual, 4.0) < at(&viscous, 4.0) - 0.05 * peak.abs());
 }

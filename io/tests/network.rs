@@ -54,14 +54,14 @@ fn a_network_material_is_read_with_its_parts_and_defaults() {
     let spec = &bundle.experiment.materials["mat1"];
     let net = spec.to_network().unwrap();
     // The parts in the registry's order, each with its values in its table's
-    // order, defaults filled in (the hardening's, the flow's exponent).
+    // order, defaults filled in (the hardenings', the flow's exponent).
     let parts: Vec<(&str, Vec<f64>)> = net.parts.iter().map(|p| (p.kind().table, p.values())).collect();
     assert_eq!(
         parts,
         vec![
             ("viscous", vec![0.02, 2.0]),
             ("viscous", vec![0.01, 40.0]),
-            ("plastic", vec![0.01, 0.002, 0.0]),
+            ("plastic", vec![0.01, 0.002, 0.0, 0.0]),
             ("flow", vec![0.005, 0.003, 1.0]),
             ("damper", vec![0.005]),
         ]
@@ -139,7 +139,7 @@ fn bad_network_keys_are_refused_naming_file_line_and_key() {
             "[[materials.mat1.flwo]]",
             "[[materials.mat1.flwo]]",
             "materials.mat1.flwo",
-            "its parts: [equilibrium], [[viscous]], [plastic], [[flow]], [bingham], [damper]",
+            "its parts: [equilibrium], [[viscous]], [plastic], [[flow]], [bingham], [damper], [[dual]]",
         ),
         (
             "[materials.mat1.damper]\n",
@@ -354,6 +354,80 @@ fn an_ogden_equilibrium_is_read_written_back_and_its_bad_keys_refused() {
     ];
     for (from, to, line, field, cause) in cases {
         let toml = with_network(&edit(&ogden, from, to));
+        let b = with_experiment(&toml);
+        let msg = assert_invalid(read_bundle(&b.dir), &b.file("experiment.toml"), line_of(&toml, line), field);
+        assert!(msg.contains(cause), "{msg}");
+    }
+}
+
+/// The dual-viscosity part and the plastic part's kinematic hardening: read,
+/// written back, named for identification, and each bad key refused as
+/// `file:line: key: cause`; an absent time is an unknown.
+#[test]
+fn dual_viscosity_parts_and_kinematic_hardening_are_read_written_back_and_refused() {
+    let dual = "[[materials.mat1.dual]]\nE_MPa = 0.004\ntau_load_s = 3.0\ntau_unload_s = 0.5\n";
+    let material = edit(NETWORK, "yield_MPa = 0.002", "yield_MPa = 0.002\nkinematic_MPa = 0.006") + dual;
+    let toml = with_network(&material);
+    let b = with_experiment(&toml);
+    let bundle = read_bundle(&b.dir).unwrap();
+    let spec = &bundle.experiment.materials["mat1"];
+    let net = spec.to_network().unwrap();
+    let parts: Vec<(&str, Vec<f64>)> = net.parts.iter().map(|p| (p.kind().table, p.values())).collect();
+    assert_eq!(parts[2], ("plastic", vec![0.01, 0.002, 0.0, 0.006]));
+    assert_eq!(parts.last().unwrap(), &("dual", vec![0.004, 3.0, 0.5]));
+    let again = wagashi_io::bundle::MaterialSpec::from_material(&spec.to_material().unwrap());
+    assert_eq!(again.to_network().unwrap(), net);
+    let keys = spec.parameter_keys();
+    for key in ["plastic.kinematic_MPa", "dual[0].E_MPa", "dual[0].tau_load_s", "dual[0].tau_unload_s"] {
+        assert!(keys.contains(&key), "{key} in {keys:?}");
+    }
+    // An absent unloading time is an unknown for identification.
+    let toml_unknown = with_network(&edit(&material, "tau_unload_s = 0.5\n", ""));
+    let b_unknown = with_experiment(&toml_unknown);
+    let unknown = read_bundle(&b_unknown.dir).unwrap();
+    assert_eq!(unknown.experiment.materials["mat1"].missing(), vec!["dual[0].tau_unload_s"]);
+
+    let cases: [(&str, &str, &str, &str, &str); 5] = [
+        (
+            "kinematic_MPa = 0.006",
+            "kinematic_MPa = -0.006",
+            "kinematic_MPa",
+            "materials.mat1.plastic.kinematic_MPa",
+            "outside [0, 10000]",
+        ),
+        (
+            "tau_unload_s = 0.5",
+            "tau_unload_s = 0.0",
+            "tau_unload_s",
+            "materials.mat1.dual[0].tau_unload_s",
+            "outside (0, 1000000000]",
+        ),
+        (
+            "tau_load_s = 3.0",
+            "tau_load_s = \"slow\"",
+            "tau_load_s",
+            "materials.mat1.dual[0].tau_load_s",
+            "is not a number",
+        ),
+        (
+            "tau_unload_s = 0.5",
+            "tau_unlaod_s = 0.5",
+            "tau_unlaod_s",
+            "materials.mat1.dual[0].tau_unlaod_s",
+            "not a key here",
+        ),
+        (
+            "[[materials.mat1.dual]]\n",
+            "[[materials.mat1.dual]]\nE_MPa = 0.001\ntau_load_s = 1.0\ntau_unload_s = 1.0\n\
+             [[materials.mat1.dual]]\nE_MPa = 0.001\ntau_load_s = 1.0\ntau_unload_s = 1.0\n\
+             [[materials.mat1.dual]] # a third\n",
+            "# a third",
+            "materials.mat1.dual[2]",
+            "at most 2 dual parts",
+        ),
+    ];
+    for (from, to, line, field, cause) in cases {
+        let toml = with_network(&edit(&material, from, to));
         let b = with_experiment(&toml);
         let msg = assert_invalid(read_bundle(&b.dir), &b.file("experiment.toml"), line_of(&toml, line), field);
         assert!(msg.contains(cause), "{msg}");

@@ -10,7 +10,7 @@
 //! | `four-element`  | `E1_MPa, c1_MPa_s, E2_MPa, c3_MPa_s` (E2 the series spring) |
 //! | `five-element`  | `E1_MPa, E2_MPa, c1_MPa_s, c2_MPa_s, c3_MPa_s`     |
 //!
-//! | `network`       | `[equilibrium]` and the parts `[[viscous]]`, `[plastic]`, `[[flow]]`, `[bingham]`, `[damper]` (below) |
+//! | `network`       | `[equilibrium]` and the parts `[[viscous]]`, `[plastic]`, `[[flow]]`, `[bingham]`, `[damper]`, `[[dual]]` (below) |
 //!
 //! Every parameter is optional when reading, so that identification can take a
 //! material that gives only its model and the parameters to hold fixed; a key
@@ -69,6 +69,7 @@
 //! E_MPa = 0.01                   # its Hencky spring
 //! yield_MPa = 0.002              # uniaxial yield stress (von Mises)
 //! hardening_MPa = 0.005          # linear isotropic hardening (default 0)
+//! kinematic_MPa = 0.0            # linear kinematic (Prager) hardening (default 0)
 //! [[materials.gel.flow]]         # a Maxwell network with power-law (Norton) flow of its shear
 //! E_MPa = 0.01
 //! stress_MPa = 0.004             # the equivalent stress flowing at a strain rate of 1/s
@@ -79,6 +80,11 @@
 //! viscosity_MPa_s = 0.05         # plastic viscosity: sigma = sigma_y + eta d(eps)/dt
 //! [materials.gel.damper]         # a parallel Newtonian damper
 //! c_MPa_s = 0.005
+//! [[materials.gel.dual]]         # up to two: a Maxwell network with a dual viscosity
+//! E_MPa = 0.01
+//! tau_load_s = 3.0               # relaxation time while its spring loads or holds
+//! tau_unload_s = 0.5             # relaxation time while it unloads (each step takes
+//!                                # the direction of the step before)
 //! ```
 //!
 //! A chain material runs beside network materials as its network equivalent

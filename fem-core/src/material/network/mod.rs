@@ -18,9 +18,9 @@
 //!   moduli: the flow relaxes the spring's whole log strain, volume included, as
 //!   the seed's Lamé split does);
 //! - an optional **plastic** network ([`PlasticNetwork`]): a Hencky spring on
-//!   `F = Fe Fp` with von Mises yield and linear isotropic hardening, by the
-//!   exponential map's closed-form radial return ([`plastic`]); it holds the
-//!   permanent set against the other networks;
+//!   `F = Fe Fp` with von Mises yield, linear isotropic and linear kinematic
+//!   (Prager) hardening, by the exponential map's closed-form radial return
+//!   ([`plastic`]); it holds the permanent set against the other networks;
 //! - up to two **power-law flow** networks ([`FlowNetwork`]): a Hencky spring
 //!   whose shear flows by Norton's law, by the plastic network's radial return
 //!   with a rate-dependent radius ([`flow`]);
@@ -28,7 +28,10 @@
 //!   whose shear flows only above a yield stress, at a rate proportional to the
 //!   excess, by the same return with a closed-form multiplier ([`bingham`]);
 //! - an optional parallel Newtonian **damper** of Young-type viscosity `c`
-//!   [MPa s], acting on the rate of the logarithmic strain.
+//!   [MPa s], acting on the rate of the logarithmic strain;
+//! - up to two **dual-viscosity** networks ([`DualNetwork`]): a viscous network
+//!   whose relaxation time differs between loading and unloading of its spring
+//!   ([`dual`]).
 //!
 //! Every part uses the material's one Poisson ratio.
 //!
@@ -88,13 +91,15 @@
 //! `[C_n^-1 - I (6), W_max (1)]`, then each part's own history in the order of
 //! [`Network::parts`] (a viscous network: `A - I (6), S_n (6)`; the plastic
 //! network: `Cp^-1 - I (6), alpha (1)`; a flow network: `Cv^-1 - I (6)`; a
-//! Bingham network: `Cv^-1 - I (6)` and one unused value; the
-//! damper: none), symmetric tensors as `[xx, yy, zz, xy, xz, yz]`. The configurations are kept
-//! as deviations from the identity, so that small strains keep their precision
-//! ([`hencky`]).
+//! Bingham network: `Cv^-1 - I (6)` and one unused value; the damper: none; a
+//! dual-viscosity network: a viscous network's, then the direction of its last
+//! step (1)), symmetric tensors as `[xx, yy, zz, xy, xz, yz]`. The
+//! configurations are kept as deviations from the identity, so that small
+//! strains keep their precision ([`hencky`]).
 
 pub mod bingham;
 mod damper;
+pub mod dual;
 mod equilibrium;
 pub mod flow;
 mod hencky;
@@ -104,6 +109,7 @@ mod viscous;
 
 pub use bingham::BinghamNetwork;
 pub use damper::Damper;
+pub use dual::DualNetwork;
 pub use equilibrium::{energy_keys, Energy, Equilibrium, Mullins, ENERGIES, OGDEN_TERMS};
 pub use flow::FlowNetwork;
 pub use part::{Kinematics, Part, PartKind, SmallKinematics, PARTS};
@@ -557,10 +563,11 @@ mod tests {
             })
             .with(ViscousNetwork { e_mpa: 0.015, tau_s: 2.0 })
             .with(ViscousNetwork { e_mpa: 0.01, tau_s: 40.0 })
-            .with(PlasticNetwork { e_mpa: 0.04, yield_mpa: 1e-3, hardening_mpa: 5e-3 })
+            .with(PlasticNetwork { e_mpa: 0.04, yield_mpa: 1e-3, hardening_mpa: 5e-3, kinematic_mpa: 8e-3 })
             .with(FlowNetwork { e_mpa: 0.01, stress_mpa: 3e-3, exponent: 2.5 })
             .with(BinghamNetwork { e_mpa: 0.02, yield_mpa: 5e-4, viscosity_mpa_s: 2e-3 })
             .with(Damper { c_mpa_s: 5e-3 })
+            .with(DualNetwork { e_mpa: 0.012, tau_load_s: 5.0, tau_unload_s: 0.8 })
     }
 
     /// A history after a few steps along a non-proportional path, so that every
@@ -673,7 +680,12 @@ mod tests {
         assert!((rotated - r.stress).amax() < 1e-15 * r.stress.amax().max(1.0));
         let refused = |n: Network| n.with_strain(Strain::Small).validate().unwrap_err().to_string();
         assert_eq!(
-            refused(Network::new(0.3).with(PlasticNetwork { e_mpa: 0.04, yield_mpa: 1e-3, hardening_mpa: 0.0 })),
+            refused(Network::new(0.3).with(PlasticNetwork {
+                e_mpa: 0.04,
+                yield_mpa: 1e-3,
+                hardening_mpa: 0.0,
+                kinematic_mpa: 0.0,
+            })),
             "the plastic part has no small-strain form (kinematics = \"small\"; it needs \"finite\")"
         );
         assert!(refused(full()).contains("the equilibrium network's energy"));

@@ -14,7 +14,7 @@
 //! `static KIND: PartKind`, plus one line in [`PARTS`]. The bundle reader, the
 //! writer, the flat keys identification names (`flow[0].stress_MPa`), the fit's
 //! ranges and starts and the validation all follow from the kind: no other
-//! file names its keys. [`super::flow`] was added that way.
+//! file names its keys. [`super::flow`] and [`super::dual`] were added that way.
 
 use std::sync::Arc;
 
@@ -126,8 +126,14 @@ impl PartKind {
 }
 
 /// Every kind of part, in the order a network holds them (its history layout).
-pub static PARTS: &[&PartKind] =
-    &[&super::viscous::KIND, &super::plastic::KIND, &super::flow::KIND, &super::bingham::KIND, &super::damper::KIND];
+pub static PARTS: &[&PartKind] = &[
+    &super::viscous::KIND,
+    &super::plastic::KIND,
+    &super::flow::KIND,
+    &super::bingham::KIND,
+    &super::damper::KIND,
+    &super::dual::KIND,
+];
 
 /// The kind whose sub-table is `table`.
 pub fn kind(table: &str) -> Option<&'static PartKind> {
@@ -157,4 +163,32 @@ pub(crate) fn step_at(
 /// The spec of `key` in a parameter table.
 pub(crate) fn spec(table: &[ParameterSpec], key: &str) -> ParameterSpec {
     *table.iter().find(|s| s.key == key).expect("the key is in its table")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every registered part's parameters: the fit range inside the accepted
+    /// bounds, the start inside the fit range for apparent moduli from 1 kPa to
+    /// 100 MPa and every part of the kind, the default accepted.
+    #[test]
+    fn every_kinds_fit_ranges_starts_and_defaults_lie_within_its_bounds() {
+        for kind in PARTS {
+            for s in kind.parameters {
+                let name = kind.flat_key(0, s.key);
+                assert!(s.fit.lower < s.fit.upper, "{name}");
+                assert!(s.accepts(s.fit.lower) && s.accepts(s.fit.upper), "{name}: fit range outside {}", s.range());
+                for e_app in [1e-3, 1.0, 100.0] {
+                    for index in 0..kind.max_count {
+                        let v = s.start.value(e_app, index);
+                        assert!(v >= s.fit.lower && v <= s.fit.upper, "{name}: start {v} at E_app {e_app}");
+                    }
+                }
+                if let Some(d) = s.default {
+                    assert!(s.accepts(d), "{name}: default {d}");
+                }
+            }
+        }
+    }
 }
