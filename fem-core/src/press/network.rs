@@ -50,7 +50,8 @@
 //! Newton step solves the current tangent: by conjugate gradients
 //! preconditioned with the last numeric factorization while they reach the
 //! solve's tolerance within a few iterations, else by a new factorization,
-//! which is then kept ([`solve_tangent`]). A step
+//! which is then kept ([`solve_tangent`]); the contact tools' solves factor
+//! every time (their penalties change the tangent from solve to solve). A step
 //! that does not converge in [`MAX_ITERATIONS`], or whose law fails (an inverted
 //! cell), is retried at a quarter of its length; below [`MIN_STEP_FRACTION`] of
 //! the trial the run ends with an error naming the step, the time, the element
@@ -734,7 +735,7 @@ where
                 // from there.
                 let mut start = state.u.clone();
                 model.prescribe(constraints, t1, &mut start);
-                let step = ContactSolve { system, kept, held: &constraints.held, dt, t1, step_index, largest_force };
+                let step = ContactSolve { system, held: &constraints.held, dt, t1, step_index, largest_force };
                 break contact_step(&newton, nc, cs, &step, &state, start).map(|(c, s)| {
                     settled = Some(s);
                     c
@@ -748,7 +749,7 @@ where
             }
             let step = StepSystem {
                 system,
-                kept,
+                kept: Some(kept),
                 held: &constraints.held,
                 cut: &cut,
                 dt,
@@ -901,9 +902,8 @@ where
 }
 
 /// What a contact step's Newton solves share beside the contact's own data.
-struct ContactSolve<'a, 's> {
-    system: &'s ReducedSystem,
-    kept: &'a RefCell<Option<Factor<'s>>>,
+struct ContactSolve<'a> {
+    system: &'a ReducedSystem,
     held: &'a [bool],
     dt: f64,
     t1: f64,
@@ -919,7 +919,7 @@ fn contact_step<const D: usize, const N: usize, const S: usize>(
     newton: &Newton<'_, '_, D, N, S>,
     contact: &NetworkContact<'_>,
     contact_state: &ContactState,
-    solve: &ContactSolve<'_, '_>,
+    solve: &ContactSolve<'_>,
     state: &State,
     u0: Vec<f64>,
 ) -> Result<(Converged, Settled), StepFailure>
@@ -927,7 +927,7 @@ where
     Simplex<D, N>: ReferenceSimplex<D, N>,
 {
     let model = newton.model;
-    let ContactSolve { system, kept, held, dt, t1, step_index, largest_force } = *solve;
+    let ContactSolve { system, held, dt, t1, step_index, largest_force } = *solve;
     let eval = newton
         .evaluate(&state.u, dt, &state.history, true)
         .map_err(|c| StepFailure::Law { element: c.element, failure: c.failure })?;
@@ -946,7 +946,7 @@ where
     let mut newton_solve = |penalty: Option<&Penalty>, fixed: &[(usize, f64)], u: Vec<f64>| {
         let mut cut = vec![false; u.len()];
         fixed.iter().for_each(|&(d, _)| cut[d] = true);
-        let step = StepSystem { system, kept, held, cut: &cut, dt, history: &state.history, penalty };
+        let step = StepSystem { system, kept: None, held, cut: &cut, dt, history: &state.history, penalty };
         let c = solve_step(newton, &step, u, largest_force)?;
         factorizations += c.factorizations;
         Ok(c)
@@ -982,8 +982,9 @@ where
 struct StepSystem<'a, 's> {
     system: &'s ReducedSystem,
     /// The last numeric factorization on `system`, reused while it serves
-    /// ([`solve_tangent`]).
-    kept: &'a RefCell<Option<Factor<'s>>>,
+    /// ([`solve_tangent`]); `None`: every solve factors (the contact tools'
+    /// iteration, whose penalties change the tangent from solve to solve).
+    kept: Option<&'a RefCell<Option<Factor<'s>>>>,
     held: &'a [bool],
     cut: &'a [bool],
     dt: f64,
@@ -1122,7 +1123,7 @@ where
     Simplex<D, N>: ReferenceSimplex<D, N>,
 {
     let system = step.system;
-    if let Some(factor) = step.kept.borrow().as_ref() {
+    if let Some(factor) = step.kept.and_then(|k| k.try_borrow().ok()).as_ref().and_then(|k| k.as_ref()) {
         let norm = rhs.iter().map(|x| x * x).sum::<f64>().sqrt();
         let tolerance = (PCG_RELATIVE * norm).max(floor);
         if let Some(x) = pcg(system, newton.pattern(), k, step.cut, factor, rhs, tolerance, pcg_budget(system)) {
@@ -1132,7 +1133,9 @@ where
     }
     let (factor, n) = factor_shifted(system, k, newton.diagonal_positions(), step.cut)?;
     factor.solve_in_place(rhs);
-    *step.kept.borrow_mut() = Some(factor);
+    if let Some(kept) = step.kept {
+        *kept.borrow_mut() = Some(factor);
+    }
     Ok(n)
 }
 
@@ -1420,7 +1423,7 @@ mod tests {
             let kept = RefCell::new(None);
             let step = StepSystem {
                 system: &system,
-                kept: &kept,
+                kept: Some(&kept),
                 held: &model.attached.held,
                 cut: &cut,
                 dt: 1.0,
