@@ -2,9 +2,9 @@
 //! fungi-like double compression to 50 % by a frictionless plate tool that
 //! leaves the specimen and touches it again, with the default network
 //! structure at the fungi fit's values (VALIDATION.md) and with the seed's
-//! five-element chain. Prints the wall time, steps, Newton iterations and
-//! factorizations of each; with `fbar` after the size, the network with F-bar
-//! patches too.
+//! five-element chain. Prints the wall time, the process's CPU time (user and
+//! system, every thread; Linux), steps, Newton iterations and factorizations
+//! of each; with `fbar` after the size, the network with F-bar patches too.
 //!
 //! `cargo run --release -p wagashi-workspace-tests --example network_cost -- SIZE_MM [fbar]`
 
@@ -14,6 +14,18 @@ use fem_core::material::network::{Damper, Energy, Equilibrium, Mullins, Network,
 use fem_core::material::Material;
 use fem_core::mesh;
 use fem_core::press::{self, Attachment, Protocol, Settings, SolidPress, Tool, ToolContact, Volumetric};
+
+/// The process's CPU time so far (user and system, every thread) [s], from
+/// `/proc/self/stat` (Linux; `None` elsewhere). Its clock ticks are the
+/// kernel's fixed user-space 100 Hz.
+fn cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the command's closing parenthesis start at the third: utime
+    // and stime are the 14th and 15th.
+    let fields: Vec<&str> = stat[stat.rfind(')')? + 1..].split_whitespace().collect();
+    let ticks = |i: usize| fields.get(i - 3)?.parse::<f64>().ok();
+    Some((ticks(14)? + ticks(15)?) / 100.0)
+}
 
 fn main() {
     let size: f64 = std::env::args().nth(1).map_or(1.0, |s| s.parse().expect("SIZE_MM: a number"));
@@ -58,13 +70,18 @@ fn main() {
             f64::INFINITY,
         )];
         let clock = Instant::now();
+        let cpu0 = cpu_seconds();
         let settings = Settings { volumetric, ..Settings::default() };
         let result = press::simulate(&problem, &settings, &mut |_| {}).unwrap();
         let wall = clock.elapsed().as_secs_f64();
+        let cpu = match (cpu0, cpu_seconds()) {
+            (Some(a), Some(b)) => format!("{:.1} s CPU", b - a),
+            _ => "CPU time n/a".to_string(),
+        };
         let steps = result.steps.len();
         let iterations: usize = result.steps.iter().map(|s| s.newton_iterations).sum();
         println!(
-            "{name}: {wall:.1} s, {steps} steps, {:.2} Newton iterations and {:.2} factorizations per step, peak {:.4} N",
+            "{name}: {wall:.1} s wall, {cpu}, {steps} steps, {:.2} Newton iterations and {:.2} factorizations per step, peak {:.4} N",
             iterations as f64 / steps as f64,
             result.num_factorizations as f64 / steps as f64,
             result.peak_force()

@@ -46,7 +46,12 @@
 //! the residual's norm: from the previous step's end, extrapolated along its
 //! velocity, with the held dofs at the step's prescribed values, until the
 //! free rows' out-of-balance force is below [`TOLERANCE`] of the force scale
-//! (the largest reaction so far, at least that of the current iterate). A step
+//! (the largest reaction so far, at least that of the current iterate). Each
+//! Newton step solves the current tangent: by conjugate gradients
+//! preconditioned with the last numeric factorization while they reach the
+//! solve's tolerance within a few iterations, else by a new factorization,
+//! which is then kept ([`solve_tangent`]); the contact tools' solves factor
+//! every time (their penalties change the tangent from solve to solve). A step
 //! that does not converge in [`MAX_ITERATIONS`], or whose law fails (an inverted
 //! cell), is retried at a quarter of its length; below [`MIN_STEP_FRACTION`] of
 //! the trial the run ends with an error naming the step, the time, the element
@@ -63,6 +68,7 @@
 //! redone shorter. The first step after a kink starts at a fiftieth of its
 //! segment (at most `max_dt`) and is accepted on convergence alone.
 
+use std::cell::{OnceCell, RefCell};
 use std::time::Instant;
 
 use nalgebra::{DMatrix, DVector, Matrix3, SVector};
@@ -81,7 +87,7 @@ use crate::assembly::{assemble_blocks, assemble_vector, CsrPattern};
 use crate::element::{CellGeometry, Formulation, ReferenceSimplex, Simplex};
 use crate::material::law::{LawFailure, PointLaw};
 use crate::material::network::Network;
-use crate::solve::ReducedSystem;
+use crate::solve::{Factor, ReducedSystem};
 
 /// Converged at this out-of-balance force, relative to the force scale.
 pub(crate) const TOLERANCE: f64 = 1e-10;
@@ -636,19 +642,10 @@ where
     let max_dt = settings.max_dt_s.unwrap_or(end / 20.0);
     let min_dt = MIN_STEP_FRACTION * end;
 
-    // Symbolic factorizations per constraint set (attached, released).
-    let mut systems: [Option<ReducedSystem>; 2] = [None, None];
-    let system_for = |systems: &mut [Option<ReducedSystem>; 2], released: bool| -> Result<(), PressError> {
-        let i = released as usize;
-        if systems[i].is_none() {
-            let c = if released { &model.released } else { &model.attached };
-            systems[i] = Some(
-                ReducedSystem::new(newton.pattern(), &c.held, Some(newton.node_order()))
-                    .map_err(|e| model.singular(0, 0.0, e))?,
-            );
-        }
-        Ok(())
-    };
+    // Symbolic factorizations per constraint set (attached, released), each
+    // with the last numeric factorization made on it ([`solve_tangent`]).
+    let systems: [OnceCell<ReducedSystem>; 2] = [OnceCell::new(), OnceCell::new()];
+    let kept: [RefCell<Option<Factor<'_>>>; 2] = [RefCell::new(None), RefCell::new(None)];
 
     let mut state = State {
         t: 0.0,
@@ -698,9 +695,14 @@ where
         let step_index = steps.len() + 1;
         let t1 = state.t + dt;
         let released = t1 > protocol.release_s * (1.0 + 1e-12);
-        system_for(&mut systems, released)?;
-        let system = systems[released as usize].as_ref().unwrap();
         let constraints = if released { &model.released } else { &model.attached };
+        if systems[released as usize].get().is_none() {
+            let system = ReducedSystem::new(newton.pattern(), &constraints.held, Some(newton.node_order()))
+                .map_err(|e| model.singular(0, 0.0, e))?;
+            let _ = systems[released as usize].set(system);
+        }
+        let system = systems[released as usize].get().expect("set above");
+        let kept = &kept[released as usize];
         let clock = Instant::now();
 
         // Predictor: the previous step's velocity; after a kink, and whenever the
@@ -745,8 +747,15 @@ where
                     u0[node * D + 1] = faces[h as usize].unwrap() - mesh.nodes[node][1];
                 }
             }
-            let step =
-                StepSystem { system, held: &constraints.held, cut: &cut, dt, history: &state.history, penalty: None };
+            let step = StepSystem {
+                system,
+                kept: Some(kept),
+                held: &constraints.held,
+                cut: &cut,
+                dt,
+                history: &state.history,
+                penalty: None,
+            };
             let solved = if predict {
                 tangent_predictor(&newton, &step, &start, u0)
                     .map(|(u, n)| {
@@ -874,8 +883,8 @@ where
         }
         progress(Progress { t_s: t1, end_s: end, steps: steps.len() });
     }
-    let num_free_dofs = systems.iter().flatten().map(|s| s.num_free()).max().unwrap_or(0);
-    let factor_nonzeros = systems.iter().flatten().map(|s| s.factor_nonzeros()).max().unwrap_or(0);
+    let num_free_dofs = systems.iter().filter_map(OnceCell::get).map(|s| s.num_free()).max().unwrap_or(0);
+    let factor_nonzeros = systems.iter().filter_map(OnceCell::get).map(|s| s.factor_nonzeros()).max().unwrap_or(0);
     Ok(PressResult {
         dim: D,
         num_stress: S,
@@ -937,7 +946,7 @@ where
     let mut newton_solve = |penalty: Option<&Penalty>, fixed: &[(usize, f64)], u: Vec<f64>| {
         let mut cut = vec![false; u.len()];
         fixed.iter().for_each(|&(d, _)| cut[d] = true);
-        let step = StepSystem { system, held, cut: &cut, dt, history: &state.history, penalty };
+        let step = StepSystem { system, kept: None, held, cut: &cut, dt, history: &state.history, penalty };
         let c = solve_step(newton, &step, u, largest_force)?;
         factorizations += c.factorizations;
         Ok(c)
@@ -970,8 +979,12 @@ where
 /// What one step's solves share: the system of its constraint set, the dofs it
 /// holds and those contact holds, the step size and the history at its start.
 #[derive(Clone, Copy)]
-struct StepSystem<'a> {
-    system: &'a ReducedSystem,
+struct StepSystem<'a, 's> {
+    system: &'s ReducedSystem,
+    /// The last numeric factorization on `system`, reused while it serves
+    /// ([`solve_tangent`]); `None`: every solve factors (the contact tools'
+    /// iteration, whose penalties change the tangent from solve to solve).
+    kept: Option<&'a RefCell<Option<Factor<'s>>>>,
     held: &'a [bool],
     cut: &'a [bool],
     dt: f64,
@@ -983,14 +996,14 @@ struct StepSystem<'a> {
 /// Newton's iteration of one step from `u` (held dofs already prescribed).
 fn solve_step<const D: usize, const N: usize, const S: usize>(
     newton: &Newton<'_, '_, D, N, S>,
-    step: &StepSystem<'_>,
+    step: &StepSystem<'_, '_>,
     mut u: Vec<f64>,
     largest_force: f64,
 ) -> Result<Converged, StepFailure>
 where
     Simplex<D, N>: ReferenceSimplex<D, N>,
 {
-    let StepSystem { system, held, cut, dt, history, penalty } = *step;
+    let StepSystem { system, held, cut, dt, history, penalty, .. } = *step;
     let model = newton.model;
     let body = &model.body_force;
     let law_err = |c: CellFailure| StepFailure::Law { element: c.element, failure: c.failure };
@@ -1049,10 +1062,8 @@ where
         if let Some(p) = penalty {
             k.iter_mut().zip(&p.values).for_each(|(a, b)| *a += b);
         }
-        let (factor, n) = factor_shifted(system, &k, newton.diagonal_positions(), cut)?;
-        factorizations += n;
         let mut du = r.clone();
-        factor.solve_in_place(&mut du);
+        factorizations += solve_tangent(step, newton, &k, &mut du, LINEAR_TOLERANCE * TOLERANCE * scale)?;
         // Backtracking line search on the residual's norm.
         let mut alpha = 1.0;
         let mut accepted = None;
@@ -1089,6 +1100,138 @@ where
     }
     let element = model.cell_of_node(worst_dof / D).unwrap_or(0);
     Err(StepFailure::NotConverged { residual: norm / scale, element })
+}
+
+/// Solves the tangent system `k du = rhs` on the free dofs (the dofs marked in
+/// `step.cut` stay at zero): by conjugate gradients preconditioned with the
+/// last numeric factorization on the system ([`pcg`]) while that reaches
+/// `max(PCG_RELATIVE |rhs|, floor)` within [`pcg_budget`] iterations, otherwise
+/// by a new factorization ([`factor_shifted`]), which is kept for the next
+/// solves. Over a step and from step to step the tangent changes little, so
+/// the factor of an earlier tangent is a close preconditioner and a few
+/// triangular solves replace a factorization; Newton's steps stay those of the
+/// current tangent (to `PCG_RELATIVE`), so its convergence does not change.
+/// Returns the factorizations made.
+fn solve_tangent<const D: usize, const N: usize, const S: usize>(
+    step: &StepSystem<'_, '_>,
+    newton: &Newton<'_, '_, D, N, S>,
+    k: &[f64],
+    rhs: &mut [f64],
+    floor: f64,
+) -> Result<usize, StepFailure>
+where
+    Simplex<D, N>: ReferenceSimplex<D, N>,
+{
+    let system = step.system;
+    if let Some(factor) = step.kept.and_then(|k| k.try_borrow().ok()).as_ref().and_then(|k| k.as_ref()) {
+        let norm = rhs.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let tolerance = (PCG_RELATIVE * norm).max(floor);
+        if let Some(x) = pcg(system, newton.pattern(), k, step.cut, factor, rhs, tolerance, pcg_budget(system)) {
+            rhs.copy_from_slice(&x);
+            return Ok(0);
+        }
+    }
+    let (factor, n) = factor_shifted(system, k, newton.diagonal_positions(), step.cut)?;
+    factor.solve_in_place(rhs);
+    if let Some(kept) = step.kept {
+        *kept.borrow_mut() = Some(factor);
+    }
+    Ok(n)
+}
+
+/// The linear residual the preconditioned solves reach, relative to the
+/// right-hand side's norm.
+const PCG_RELATIVE: f64 = 1e-10;
+/// Or below this share of Newton's own tolerance (absolute, as a force): the
+/// linear error then adds at most this share of [`TOLERANCE`] to the next
+/// iterate's out-of-balance force.
+const LINEAR_TOLERANCE: f64 = 1e-3;
+
+/// The most conjugate-gradient iterations before refactoring: about the
+/// number of triangular-solve pairs a factorization costs. A factorization
+/// takes about `sum_j c_j^2` flops (`c_j` the factor's column counts, here
+/// their mean `nnz(L) / n`), an iteration `4 nnz(L)` for its two triangular
+/// solves and the tangent's product; a quarter of the mean column count.
+fn pcg_budget(system: &ReducedSystem) -> usize {
+    let n = system.num_free().max(1);
+    (system.factor_nonzeros() / n / 4).clamp(4, 40)
+}
+
+/// Conjugate gradients on `k` restricted to the free, uncut dofs, preconditioned
+/// by `factor` (a factorization of an earlier tangent, with its own cut set;
+/// projected onto the uncut dofs). Returns the solution when the residual's
+/// norm falls below `tolerance` within `budget` iterations, `None` when it does
+/// not or when the tangent shows a direction of non-positive curvature (the
+/// caller then factors, shifting if it must). Sums run in a fixed order: the
+/// result does not depend on the thread count.
+#[allow(clippy::too_many_arguments)]
+fn pcg(
+    system: &ReducedSystem,
+    pattern: &CsrPattern,
+    k: &[f64],
+    cut: &[bool],
+    factor: &Factor<'_>,
+    rhs: &[f64],
+    tolerance: f64,
+    budget: usize,
+) -> Option<Vec<f64>> {
+    let n = system.num_free();
+    let uncut: Vec<bool> = system.dof_of_free.iter().map(|&d| !cut[d as usize]).collect();
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    let mut full = vec![0.0; pattern.num_dofs()];
+    let mut product = vec![0.0; pattern.num_dofs()];
+    let mut apply = |x: &[f64], y: &mut [f64]| {
+        for (i, &d) in system.dof_of_free.iter().enumerate() {
+            full[d as usize] = if uncut[i] { x[i] } else { 0.0 };
+        }
+        pattern.mul_vec(k, &full, &mut product);
+        for (i, &d) in system.dof_of_free.iter().enumerate() {
+            y[i] = if uncut[i] { product[d as usize] } else { 0.0 };
+        }
+    };
+    let precondition = |r: &[f64], z: &mut [f64]| {
+        z.copy_from_slice(r);
+        factor.solve_in_place(z);
+        z.iter_mut().zip(&uncut).for_each(|(v, &u)| *v = if u { *v } else { 0.0 });
+    };
+    let mut r: Vec<f64> = rhs.iter().zip(&uncut).map(|(&v, &u)| if u { v } else { 0.0 }).collect();
+    let mut x = vec![0.0; n];
+    if dot(&r, &r).sqrt() <= tolerance {
+        return Some(x);
+    }
+    let mut z = vec![0.0; n];
+    precondition(&r, &mut z);
+    let mut p = z.clone();
+    let mut rz = dot(&r, &z);
+    let mut q = vec![0.0; n];
+    for _ in 0..budget {
+        apply(&p, &mut q);
+        let curvature = dot(&p, &q);
+        if !(curvature > 0.0 && rz > 0.0) {
+            return None;
+        }
+        let alpha = rz / curvature;
+        x.iter_mut().zip(&p).for_each(|(x, p)| *x += alpha * p);
+        r.iter_mut().zip(&q).for_each(|(r, q)| *r -= alpha * q);
+        if dot(&r, &r).sqrt() <= tolerance {
+            // The recurrence's residual drifts from the true one: check it.
+            apply(&x, &mut q);
+            let true_norm = q
+                .iter()
+                .zip(rhs)
+                .zip(&uncut)
+                .map(|((kx, b), &u)| if u { (b - kx).powi(2) } else { 0.0 })
+                .sum::<f64>()
+                .sqrt();
+            return (true_norm <= 2.0 * tolerance && x.iter().all(|v| v.is_finite())).then_some(x);
+        }
+        precondition(&r, &mut z);
+        let rz_next = dot(&r, &z);
+        let beta = rz_next / rz;
+        rz = rz_next;
+        p.iter_mut().zip(&z).for_each(|(p, z)| *p = z + beta * *p);
+    }
+    None
 }
 
 /// Factors the tangent `k`; where it is not positive definite (compressive
@@ -1135,7 +1278,7 @@ fn factor_shifted<'s>(
 /// factorizations made.
 fn tangent_predictor<const D: usize, const N: usize, const S: usize>(
     newton: &Newton<'_, '_, D, N, S>,
-    step: &StepSystem<'_>,
+    step: &StepSystem<'_, '_>,
     u_start: &[f64],
     mut u0: Vec<f64>,
 ) -> Result<(Vec<f64>, usize), StepFailure>
@@ -1163,8 +1306,7 @@ where
             }
         })
         .collect();
-    let (factor, n) = factor_shifted(system, &k, newton.diagonal_positions(), cut)?;
-    factor.solve_in_place(&mut rhs);
+    let n = solve_tangent(step, newton, &k, &mut rhs, 0.0)?;
     for (i, &d) in system.dof_of_free.iter().enumerate() {
         if !cut[d as usize] {
             u0[d as usize] = u_start[d as usize] + rhs[i];
@@ -1278,8 +1420,10 @@ mod tests {
             let mut u0 = vec![0.0; model.num_dofs()];
             model.prescribe(&model.attached, 1.0, &mut u0);
             let cut = vec![false; u0.len()];
+            let kept = RefCell::new(None);
             let step = StepSystem {
                 system: &system,
+                kept: Some(&kept),
                 held: &model.attached.held,
                 cut: &cut,
                 dt: 1.0,
