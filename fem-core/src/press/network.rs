@@ -86,7 +86,7 @@ use super::{
 use crate::assembly::{assemble_blocks, assemble_vector, CsrPattern};
 use crate::element::{CellGeometry, Formulation, ReferenceSimplex, Simplex};
 use crate::material::law::{LawFailure, PointLaw};
-use crate::material::network::Network;
+use crate::material::network::{Network, Strain};
 use crate::solve::{Factor, ReducedSystem};
 
 /// Converged at this out-of-balance force, relative to the force scale.
@@ -1046,7 +1046,8 @@ where
         norms.push(norm / scale);
         let rounding = penalty.map_or(0.0, |p| p.rounding(newton.diagonal_positions(), &u));
         if norm <= TOLERANCE * scale || (iteration > 0 && at_floor(&eval, &r)) || norm <= rounding {
-            let stress = cauchy_stresses::<S>(&eval, model.problem.formulation);
+            let stress =
+                cauchy_stresses::<S>(&eval, model.problem.formulation, |e| newton.law_of(e).strain == Strain::Small);
             return Ok(Converged {
                 u,
                 history: eval.history,
@@ -1352,11 +1353,17 @@ where
     }
 }
 
-/// The Cauchy stress `sigma = P F^T / J` per cell in the formulation's Voigt order.
-fn cauchy_stresses<const S: usize>(eval: &Evaluation, formulation: Formulation) -> Vec<f64> {
+/// The Cauchy stress `sigma = P F^T / J` per cell in the formulation's Voigt
+/// order; a cell whose law is in small-strain kinematics (`small(e)`) returns
+/// its Cauchy stress itself.
+fn cauchy_stresses<const S: usize>(
+    eval: &Evaluation,
+    formulation: Formulation,
+    small: impl Fn(usize) -> bool,
+) -> Vec<f64> {
     let mut out = Vec::with_capacity(eval.cells.len() * S);
-    for c in &eval.cells {
-        let sigma = c.stress * c.f.transpose() / c.f.determinant();
+    for (e, c) in eval.cells.iter().enumerate() {
+        let sigma = if small(e) { c.stress } else { c.stress * c.f.transpose() / c.f.determinant() };
         let voigt: Vec<f64> = match (formulation, S) {
             (_, 6) => vec![sigma[(0, 0)], sigma[(1, 1)], sigma[(2, 2)], sigma[(0, 1)], sigma[(0, 2)], sigma[(1, 2)]],
             (Formulation::Axisymmetric, 4) => vec![sigma[(0, 0)], sigma[(1, 1)], sigma[(2, 2)], sigma[(0, 1)]],
