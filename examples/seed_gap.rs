@@ -1,6 +1,6 @@
 //! # The seed's own gap: material 1's two c3, diagnosed
 //!
-//! What it shows (issue 6, "The seed's own gap"): the seed paper needed two
+//! What it shows: the seed paper needed two
 //! parameter sets for material 1 (Table II: x_force with c3 = 29.7 MPa s for the
 //! force, x_shape with c3 = 1.50 MPa s for the final shape). Here synthetic
 //! material-1 trials in the seed's protocol (Table I: 58 x 59.5 x 12 mm, 2D plane
@@ -178,7 +178,7 @@ fn print_closure(bundles: &[Bundle], start: &BTreeMap<String, MaterialSpec>, d: 
 /// The swap study's designs (`--designs`).
 const DESIGNS: [&str; 3] = ["seed", "hold-speed", "long-hold"];
 
-const HELP: &str = "seed_gap: the seed's own gap, diagnosed (issue 6; module docs)
+const HELP: &str = "seed_gap: the seed's own gap, diagnosed (module docs)
   --quick          stop after step 3 (no swap study)
   --no-symptom     skip step 2 (the seed's three steps)
   --swap-only      steps 1 and 4 only

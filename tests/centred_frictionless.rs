@@ -1,6 +1,5 @@
-//! A specimen between frictionless plates expands about its centre (issue 26,
-//! "Symmetric frictionless specimens"; `fem_core::press`'s model module, "Free
-//! bodies"): the markers, the keep shape and the final shape of a homogeneous
+//! A specimen between frictionless plates expands about its centre
+//! (`fem_core::press`'s model module, "Free bodies"): the markers, the keep shape and the final shape of a homogeneous
 //! frictionless trial are the closed form's lateral stretch about the
 //! specimen's centre, `u_x = -nu e (x - x_c)`, `u_y = e y`, `u_z = -nu e (z - z_c)`
 //! with `e` the axial strain, in 2D and 3D, on structured meshes and on

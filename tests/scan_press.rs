@@ -1,4 +1,4 @@
-//! End to end (issue 4): a scanned pear cut into two layers, pressed by a sphere
+//! End to end: a scanned pear cut into two layers, pressed by a sphere
 //! and then, out of sync, by a plate, released, and written as glTF and VTU.
 //!
 //! The tests run the example's own pipeline (`examples/scan_press.rs`, included

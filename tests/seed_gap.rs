@@ -1,4 +1,4 @@
-//! The seed's own gap (issue 6): the generator of `examples/seed_gap.rs` makes
+//! The seed's own gap: the generator of `examples/seed_gap.rs` makes
 //! material-1 trials in the seed's protocol whose final shape needs the seed's
 //! second c3. These checks keep its physics honest and cheap (5 mm elements,
 //! fixed 0.25 s steps, a few seconds); the diagnosis of those trials is the

@@ -1,4 +1,4 @@
-//! The seed's own gap (issue 6, "The seed's own gap"): synthetic material-1
+//! The seed's own gap: synthetic material-1
 //! campaigns in the seed paper's protocol (its Table I) whose force curve the
 //! seed's force set `x_force` fits and whose final shape needs the shape set's
 //! c3 (`x_shape`, Table II), with a chosen cause behind the symptom.

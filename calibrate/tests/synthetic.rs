@@ -2,7 +2,7 @@
 //! "Verification"): data made by the engine from the seed's Table II parameters on
 //! a finer mesh and with a tighter step tolerance than the fit uses (no inverse
 //! crime), then fitted by the seed's procedure. A 3D frictionless block with
-//! markers on its front face (issue 26, "Symmetric frictionless specimens"):
+//! markers on its front face (symmetric frictionless specimens):
 //! its markers expand about the block's centre, as a real specimen's do, and
 //! the fit recovers nu from them.
 
@@ -161,7 +161,7 @@ const BLOCK: [f64; 3] = [50.0, 50.0, 11.0];
 const BLOCK_PUSH_S: f64 = 25.0;
 const BLOCK_RELEASE_S: f64 = 120.0;
 const BLOCK_END_S: f64 = 240.0;
-/// The truth: Table II's material 1 with the Poisson ratio of issue 26's trial.
+/// The truth: Table II's material 1 with the Poisson ratio of the frictionless trial.
 const BLOCK_POISSON: f64 = 0.335;
 
 /// Writes the 3D bundle of the frictionless block with a 5 x 5 grid of markers on
@@ -254,7 +254,7 @@ markers = "markers.csv"
 /// marker noise, data on a 5 mm mesh, fit on 12.5 mm): the seed procedure
 /// recovers nu within 3 %. (With the specimen pinned at a corner, so that it
 /// expanded away from it, the fit of markers about the centre gave nu = 0.063
-/// against 0.335: issue 26.)
+/// against 0.335.)
 #[test]
 fn frictionless_block_recovers_poisson_from_front_face_markers() {
     let dir = tempfile::tempdir().unwrap();

@@ -749,7 +749,7 @@ pub fn blind_json(
         "campaigns_requested": args.blind,
         "seed": args.seed,
         "scatter": if args.blind_ideal_samples { "ideal samples (no variability, no geometry errors)" }
-                   else { "issue 6: variability 3-10 %, geometry errors 0.5 %" },
+                   else { "variability 3-10 %, geometry errors 0.5 % (the blind set's generator)" },
         "diagnoser": {
             "size_mm": options.size_mm,
             "starts": options.starts,
@@ -821,7 +821,7 @@ fn print_blind(
         }
         writeln!(out)?;
     }
-    writeln!(out, "\ntargets (issue 6):")?;
+    writeln!(out, "\ntargets of the diagnosis:")?;
     for t in &s.targets {
         writeln!(
             out,

@@ -281,7 +281,7 @@ fn blind_self_check_writes_blind_json() {
     let row = &s["confusion"][c["truth"].as_str().unwrap()];
     assert_eq!(row[c["column"].as_str().unwrap()], 1, "{s:#}");
     let text = stdout(&o);
-    assert!(text.contains("confusion matrix") && text.contains("targets (issue 6)"), "{text}");
+    assert!(text.contains("confusion matrix") && text.contains("targets of the diagnosis:"), "{text}");
 
     let o = wagashi_in(cwd, ["diagnose", "--blind", "2", "--calibrate", "x", "-o", "c"]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));

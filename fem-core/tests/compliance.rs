@@ -1,5 +1,5 @@
 //! `machine-compliance` with contact tools and next to the material-point
-//! effects and the Mullins damage (issue 6): the deflection's scalar iteration
+//! effects and the Mullins damage: the deflection's scalar iteration
 //! (`press::stepper`, "Machine compliance") against independent references.
 //!
 //! - A flat plate tool (glued; frictionless on a frictionless trial) with the

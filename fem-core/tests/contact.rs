@@ -1,4 +1,4 @@
-//! Contact with rigid tools (issue 4): the plate as a contact tool reproduces the
+//! Contact with rigid tools: the plate as a contact tool reproduces the
 //! engine's constrained plate, frictionless and glued, in 2D, axisymmetric and 3D
 //! (1e-6 of the peak force); a double compression touches again where the
 //! specimen has recovered to; Hertz (axisymmetric, graded meshes) converges to

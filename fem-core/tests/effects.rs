@@ -1,4 +1,4 @@
-//! The effect library (issue 6): the registry, and each implemented effect at its
+//! The effect library: the registry, and each implemented effect at its
 //! null (bit for bit the baseline) and away from it (its physical signature and,
 //! where one exists, a closed form).
 

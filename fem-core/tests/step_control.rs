@@ -182,7 +182,7 @@ fn hold_steps_follow_the_force_and_stay_few() {
     assert!(a.steps.len() < 200, "{}", a.steps.len());
 }
 
-/// (d) Regression (issue 6: the diagnosis hung on a `bingham-dashpot` candidate,
+/// (d) Regression (the diagnosis hung on a `bingham-dashpot` candidate,
 /// and then took 117 s of CPU on it): Bingham below its threshold blocks `c3`,
 /// and with the chain's instantaneous viscosity `B2 = c1 c3/(c1 + c3)` at half of
 /// `c3` (here `c1 = c3`: `b = 1/2`) BDF2's parasitic root is -1 at constant steps
@@ -253,7 +253,7 @@ fn blocked_dashpot_against_a_large_instantaneous_viscosity_keeps_steps_and_close
     assert!((1.8..2.3).contains(&(ef1 / ef)), "{ef1} / {ef}");
 }
 
-/// (e) Regression (issue 6: the diagnosis hung on a `dual-viscosity` refit point,
+/// (e) Regression (the diagnosis hung on a `dual-viscosity` refit point,
 /// 1.6 million steps of 2.6e-12 s, each after one failed attempt): a step that
 /// fails at every length above a tiny one is retried at a quarter of its length
 /// only down to the least step `1e-10` of the trial (`press::stepper`,

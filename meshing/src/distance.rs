@@ -1,5 +1,5 @@
 //! The distance between a mesh's boundary and the solid its input surface
-//! defines: what the envelope mode is judged by (issue 3's "Hausdorff <= 1e-3
+//! defines: what the envelope mode is judged by (the "Hausdorff <= 1e-3
 //! of the diagonal"), reported by [`crate::quality::report`].
 //!
 //! The envelope approximates the solid `w > 1/2` of the input's generalized

@@ -493,7 +493,7 @@ fn defective_input_is_refused_with_the_defect_named() {
     assert!(err.to_string().contains("border") || err.to_string().contains("open"), "{err}");
 }
 
-/// Strict mode on the defect corpus (`bad_syn_*.obj`, issue 3): each file is
+/// Strict mode on the defect corpus (`bad_syn_*.obj`): each file is
 /// refused before any meshing with `ConformingError::Invalid`, whose defect is
 /// the file's (the first `meshing::validate` finds, with its count as in
 /// `tests/validate.rs`) and whose message names it and where it is (a vertex

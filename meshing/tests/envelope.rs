@@ -598,7 +598,7 @@ fn bunny_meets_the_angle_and_volume_targets() {
 }
 
 /// The layered bunny on the graded lattice (base 0.2 mm, 3 levels, as the
-/// bunny family): three regions, and issue 3's envelope gates on clean input:
+/// bunny family): three regions, and the envelope gates on clean input:
 /// every tet within [12°, 155°] (a tet of 10.06° at a region interface at
 /// these options is smoothed by the final guard, whose smoothing lets the
 /// region shells' nodes slide along them), the boundary
@@ -984,7 +984,7 @@ fn an_open_scans_rim_is_refined_on_the_graded_lattice() {
 
 /// Two unit boxes sharing a face given once (four edges in three faces): two
 /// regions, one per box, volume 1 each (within 1e-9), a conforming interface
-/// between them, and every envelope gate of issue 3.
+/// between them, and every envelope gate.
 #[test]
 fn boxes_sharing_a_face_become_two_regions() {
     if skip_without_shared_data("the mesh fixture layered_two_boxes.obj") {
@@ -993,7 +993,7 @@ fn boxes_sharing_a_face_become_two_regions() {
     let s = obj("layered_two_boxes.obj");
     let (out, q) = mesh_and_report(&s, 0.1);
     assert_proven_bounds(&out, &q);
-    // Issue 3's envelope gates (measured: dihedral [45, 90] deg, boundary figure 2.8e-16).
+    // The envelope gates (measured: dihedral [45, 90] deg, boundary figure 2.8e-16).
     assert_envelope_gates("layered_two_boxes.obj", &out, &q, 2.0, 1e-9);
     assert_eq!(out.mesh.region_names.len(), 2, "{:?}", out.mesh.region_names);
     for r in 0..2u16 {
@@ -1234,7 +1234,7 @@ fn the_bunny_cut_into_layers() {
     assert!(err.abs() < 1e-12);
 }
 
-// ---- the corpus: every envelope gate of issue 3, one run per file
+// ---- the corpus: every envelope gate, one run per file
 
 /// A corpus file as written (`common::read_obj` parses f64; `obj` above, with
 /// tobj's default f32, rounds the coordinates to 6e-8 relative: the thin fin's
@@ -1253,7 +1253,7 @@ fn bunny_graded() -> EnvelopeOptions {
     EnvelopeOptions { grade_levels: 3, ..EnvelopeOptions::new(0.2) }
 }
 
-/// Issue 3's envelope gates on a mesh of the corpus: no inverted tet, every
+/// The envelope gates on a mesh of the corpus: no inverted tet, every
 /// dihedral angle in [12, 155] deg (none under 10 deg), a conforming mesh with a
 /// closed boundary, the report's boundary figure (caps over holes apart, see
 /// `meshing::distance`) within 1e-3 of the diagonal, and the volume within

@@ -1,4 +1,4 @@
-//! Conforming mode against TetGen (issue 3's cross-check), on the shared models
+//! Conforming mode against TetGen (the cross-check), on the shared models
 //! (the Stanford bunny, the three-region layered bunny and two boxes sharing a
 //! face) and on CAD models from Debian packages (CGAL's fandisk from
 //! `libcgal-demo`'s `data.tar.gz`, Netgen's `hinge.stl` from `netgen-doc`,

@@ -1,4 +1,4 @@
-//! The blind self-check of the diagnosis (issue 6, "Blind self-check";
+//! The blind self-check of the diagnosis ("Blind self-check";
 //! diagnosis.md "Blind check"; diagnosis-details.md §7.4 and §7.6): synthetic
 //! campaigns with one withheld effect, diagnosed without being told, and scored.
 //!
@@ -184,7 +184,7 @@
 //! in-sample closure of the effect's share of the gap; `G_hat` the diagnoser's
 //! held-out one (each trial anchored on its sample scales, which removes the
 //! variability share): the two coincide when the effect acts alike on every
-//! trial. The targets are those of issue 6 ([`TARGETS`]).
+//! trial. The targets are the diagnosis's ([`TARGETS`]).
 //!
 //! **Determinism.** Campaign `i` of seed `S` draws everything from its own
 //! [`SplitMix64`] stream seeded by `S` and `i` ([`campaign_seed`]); the
@@ -254,7 +254,7 @@ pub const MAX_STRENGTH_EVALS: usize = 12;
 /// Accepted relative distance of the realised lambda_eff from its target.
 const STRENGTH_TOLERANCE: f64 = 0.2;
 
-/// The in-library strengths of issue 6.
+/// The in-library strengths of the blind set.
 pub const LAMBDAS: [f64; 3] = [12.0, 30.0, 100.0];
 /// The out-of-library strengths.
 pub const OUT_OF_LIBRARY_LAMBDAS: [f64; 3] = [30.0, 100.0, 300.0];
@@ -449,7 +449,7 @@ pub struct Scatter {
 }
 
 impl Scatter {
-    /// Issue 6's generator: variability 3 to 10 %, geometry errors 0.5 %.
+    /// The blind set's generator: variability 3 to 10 %, geometry errors 0.5 %.
     pub const ISSUE: Scatter = Scatter { variability: [0.03, 0.10], geometry_sd: 0.005 };
     /// Ideal samples: every sample the nominal material and geometry (the other
     /// differences from the diagnoser stay). The diagnoser has no per-sample
@@ -1116,7 +1116,7 @@ impl Rate {
     }
 }
 
-/// A target of issue 6 and whether it holds.
+/// A target of the diagnosis and whether it holds.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TargetCheck {
     /// What is measured.
@@ -1133,7 +1133,7 @@ pub struct TargetCheck {
     pub holds: bool,
 }
 
-/// The targets of issue 6: (metric, relation, threshold).
+/// The diagnosis's targets: (metric, relation, threshold).
 pub const TARGETS: [(&str, &str, f64); 5] = [
     ("top-1 attribution, lambda >= 30", ">=", 0.90),
     ("top-1 attribution, lambda = 12", ">=", 0.60),

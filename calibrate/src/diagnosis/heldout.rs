@@ -468,7 +468,7 @@ mod tests {
         }
     }
 
-    /// Issue 6: the runner-up's extra misfit (60 noise units squared, a
+    /// The runner-up's extra misfit (60 noise units squared, a
     /// relaxation-like decay) sits in one hold segment of one trial, the
     /// residuals are otherwise identical (paired, shared noise). The margin is
     /// `60 + N(0, 4 * 60)`, so `margin > 2 SE` should hold in about 97 % of
@@ -556,7 +556,7 @@ mod tests {
         }
     }
 
-    /// Issue 6, the real fungi steak's pattern (dual-viscosity with
+    /// The real fungi steak's pattern (dual-viscosity with
     /// `G = -0.52 [-1.33, 0.19]` stays eligible under the whole-segment SE): the baseline's held-out
     /// gap is a smooth misfit of 300 noise units squared in each of the six
     /// hold segments; the candidate halves it there (a gain of 225 each) but

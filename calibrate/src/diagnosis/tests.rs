@@ -266,7 +266,7 @@ fn a_mullins_campaign_is_generated_at_its_strength() {
 /// samples ([`super::blind::Scatter::IDEAL`], so that its figures in
 /// BENCHMARKS.md compare like with like). Checks that every campaign is
 /// generated at its strength (lambda_eff within 20 % of its target), that the
-/// scores add up, and the targets of issue 6 that hold on this set
+/// scores add up, and the diagnosis's targets that hold on this set
 /// ([`HOLDING`]); the others are printed with their values and reported as
 /// misses (not asserted, not loosened).
 ///
