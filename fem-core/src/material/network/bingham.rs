@@ -54,9 +54,7 @@ pub static KIND: PartKind = PartKind {
     meaning: "a Maxwell network that flows only above a yield stress (Bingham)",
     max_count: 1,
     parameters: &[
-        ParameterSpec::new("E_MPa", "the spring's Young's modulus", "MPa", (0.0, true), 1e4, None)
-            .fit(1e-5, 1e2, true)
-            .start(Start::OfModulus(0.25)),
+        super::part::SPRING_MODULUS,
         ParameterSpec::new("yield_MPa", "equivalent yield stress of the flow", "MPa", (0.0, true), 1e4, None)
             .fit(1e-6, 1e2, true)
             .start(Start::OfModulus(0.02)),

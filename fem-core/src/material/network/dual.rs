@@ -65,9 +65,7 @@ pub static KIND: PartKind = PartKind {
     meaning: "a Maxwell network relaxing at one time while its spring loads and another while it unloads",
     max_count: 2,
     parameters: &[
-        ParameterSpec::new("E_MPa", "the spring's Young's modulus", "MPa", (0.0, true), 1e4, None)
-            .fit(1e-5, 1e2, true)
-            .start(Start::OfModulus(0.25)),
+        super::part::SPRING_MODULUS,
         ParameterSpec::new(
             "tau_load_s",
             "relaxation time while the spring loads or holds",

@@ -54,9 +54,7 @@ pub static KIND: PartKind = PartKind {
     meaning: "a Maxwell network with power-law (Norton) flow of its shear",
     max_count: 2,
     parameters: &[
-        ParameterSpec::new("E_MPa", "the spring's Young's modulus", "MPa", (0.0, true), 1e4, None)
-            .fit(1e-5, 1e2, true)
-            .start(Start::OfModulus(0.25)),
+        super::part::SPRING_MODULUS,
         ParameterSpec::new(
             "stress_MPa",
             "equivalent stress flowing at a strain rate of 1/s",

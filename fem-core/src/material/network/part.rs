@@ -125,6 +125,13 @@ impl PartKind {
     }
 }
 
+/// The Young's modulus of a part's Hencky spring (`E_MPa`), as every part with
+/// one publishes it.
+pub(crate) const SPRING_MODULUS: ParameterSpec =
+    ParameterSpec::new("E_MPa", "the spring's Young's modulus", "MPa", (0.0, true), 1e4, None)
+        .fit(1e-5, 1e2, true)
+        .start(crate::material::law::Start::OfModulus(0.25));
+
 /// Every kind of part, in the order a network holds them (its history layout).
 pub static PARTS: &[&PartKind] = &[
     &super::viscous::KIND,

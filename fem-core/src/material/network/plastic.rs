@@ -98,9 +98,7 @@ pub static KIND: PartKind = PartKind {
     meaning: "a plastic network: the permanent set",
     max_count: 1,
     parameters: &[
-        ParameterSpec::new("E_MPa", "the spring's Young's modulus", "MPa", (0.0, true), 1e4, None)
-            .fit(1e-5, 1e2, true)
-            .start(Start::OfModulus(0.25)),
+        super::part::SPRING_MODULUS,
         // Yielding at a tenth of the apparent stress at 20 % strain.
         ParameterSpec::new("yield_MPa", "uniaxial yield stress", "MPa", (0.0, true), 1e4, None)
             .fit(1e-6, 1e2, true)

@@ -35,9 +35,7 @@ pub static KIND: PartKind = PartKind {
     meaning: "a Maxwell network: a Hencky spring and Newtonian flow",
     max_count: 4,
     parameters: &[
-        ParameterSpec::new("E_MPa", "the spring's Young's modulus", "MPa", (0.0, true), 1e4, None)
-            .fit(1e-5, 1e2, true)
-            .start(Start::OfModulus(0.25)),
+        super::part::SPRING_MODULUS,
         ParameterSpec::new("tau_s", "relaxation time", "s", (0.0, true), 1e9, None)
             .fit(1e-3, 1e5, true)
             .start(Start::Decades(1.0)),
