@@ -83,7 +83,7 @@ fn run_diagnosis(bundles: &[Bundle], start: &BTreeMap<String, MaterialSpec>) -> 
 /// The swap study's diagnosis: the four kappa > 1 candidates only (the question
 /// is whether they are told apart; the whole library's cost is section 3's).
 fn run_swap_diagnosis(bundles: &[Bundle], start: &BTreeMap<String, MaterialSpec>) -> Diagnosis {
-    let options = DiagnosisOptions { effects: Some(CANDIDATES.to_vec()), ..options() };
+    let options = DiagnosisOptions { effects: Some(CANDIDATES.iter().map(|&e| e.into()).collect()), ..options() };
     diagnose(bundles, &[], start, &options, &|_, _, _| {}).expect("diagnosis")
 }
 

@@ -17,9 +17,9 @@ use std::sync::Mutex;
 use std::time::Duration;
 
 use anyhow::bail;
+use calibrate::diagnosis::CandidateId;
 use calibrate::diagnosis::{diagnose, Diagnosis, DiagnosisOptions, Stage};
 use clap::Args;
-use fem_core::effects::EffectId;
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::{json, Map, Value};
 use wagashi_io::{read_bundle_with, read_materials_file, write_atomic, MaterialSpec};
@@ -37,9 +37,13 @@ Examples:
   # Start values (and freed parameters) from a materials file, cylinders by their section:
   wagashi diagnose --calibrate bundles/s1 bundles/s2 --materials start.toml --axisymmetric -o out/d
 
-Effect ids: plastic-slider, bingham-dashpot, stress-thinning, dual-viscosity, strain-stiffening,
-finite-strain, plate-friction, adhesion, machine-compliance, gravity, force-offset, ageing
-(those the engine does not simulate yet are listed in diagnosis.json as not evaluated).";
+Candidates of a chain campaign (the seed's five-element materials): plastic-slider, bingham-dashpot,
+stress-thinning, dual-viscosity, strain-stiffening, finite-strain, plate-friction, adhesion,
+machine-compliance, gravity, force-offset, ageing.
+Candidates of a network campaign (every material model = \"network\"): the network's components
+exponential-stiffening, plastic-set, mullins-softening, extra-viscous-network, power-law-flow,
+loading-unloading-viscosity, and plate-friction, adhesion, machine-compliance, gravity, force-offset,
+ageing. A candidate that cannot act on the campaign is listed in diagnosis.json as not evaluated.";
 
 /// `wagashi diagnose --calibrate BUNDLE... -o OUT`.
 #[derive(Debug, Args)]
@@ -117,18 +121,18 @@ pub struct DiagnoseArgs {
 }
 
 /// `--effects`: `all` or ids.
-fn parse_effects(text: &str) -> anyhow::Result<Option<Vec<EffectId>>> {
+fn parse_effects(text: &str) -> anyhow::Result<Option<Vec<CandidateId>>> {
     if text.trim() == "all" {
         return Ok(None);
     }
     let mut out = Vec::new();
     for id in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
-        match EffectId::from_id(id) {
+        match CandidateId::from_id(id) {
             Some(e) if !out.contains(&e) => out.push(e),
             Some(_) => {}
             None => bail!(
-                "--effects: unknown effect id `{id}` (known: all, {})",
-                EffectId::ALL.iter().map(|e| e.id()).collect::<Vec<_>>().join(", ")
+                "--effects: unknown candidate id `{id}` (known: all, {})",
+                CandidateId::all().iter().map(|e| e.id()).collect::<Vec<_>>().join(", ")
             ),
         }
     }
@@ -611,7 +615,12 @@ pub fn report_html(d: &Diagnosis) -> String {
 /// `OUT/blind.json` (every campaign: what it withheld, the realised strength,
 /// the generator's draws, the verdict, the gap closures, the timings; the
 /// scores, the targets and the confusion matrix) and the table on stdout.
-fn run_blind(args: &DiagnoseArgs, n: usize, effects: Option<Vec<EffectId>>, out: &mut dyn Write) -> anyhow::Result<()> {
+fn run_blind(
+    args: &DiagnoseArgs,
+    n: usize,
+    effects: Option<Vec<CandidateId>>,
+    out: &mut dyn Write,
+) -> anyhow::Result<()> {
     use calibrate::diagnosis::blind;
     let output = crate::press::prepare_output(&[], &args.output, args.force)?;
     let options = DiagnosisOptions {

@@ -1016,7 +1016,7 @@ pub struct Outcome {
     /// The verdict's label.
     pub label: String,
     /// The effects it named.
-    pub named: Vec<EffectId>,
+    pub named: Vec<crate::diagnosis::CandidateId>,
     /// The top-1 column of the confusion matrix: the first named effect's id
     /// (effect or `partial`), or the label (`tie`, `unexplained`, `none`).
     pub column: String,

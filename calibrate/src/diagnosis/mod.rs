@@ -56,9 +56,10 @@
 //!    the blind check measures against its quarter-size generator.
 //! 3. **WHERE** (step 2, [`cells`]): phase x channel x region cells, Legendre
 //!    smooth test, Holm at `alpha_where` (1e-3).
-//! 4. **WHICH** (step 3, [`which`]): for every effect that
-//!    [`EffectId::implemented`] says the engine simulates (others are listed as
-//!    not evaluated), in parallel (rayon; the result does not depend on the
+//! 4. **WHICH** (step 3, [`which`]): for every candidate of the campaign's
+//!    library ([`library`]: on network materials the network's components, on
+//!    chain materials the effects that [`EffectId::implemented`] says the
+//!    engine simulates; others are listed as not evaluated), in parallel (rayon; the result does not depend on the
 //!    number of threads): score test with projection and the one-sided rule;
 //!    refit with fallback to the null (the secant references and the refit's
 //!    extra starts of stress-valued parameters, a yield stress, a threshold, a
@@ -125,6 +126,7 @@
 pub mod blind;
 pub mod cells;
 pub mod heldout;
+pub mod library;
 pub mod model;
 pub mod stats;
 pub mod which;
@@ -133,6 +135,7 @@ use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use fem_core::effects::EffectId;
+pub use library::{CandidateId, Component};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use wagashi_io::{Bundle, MaterialSpec};
@@ -174,7 +177,7 @@ pub struct DiagnosisOptions {
     /// Seed of the starts and of the bootstrap.
     pub seed: u64,
     /// The candidates to evaluate (`None`: the whole library).
-    pub effects: Option<Vec<EffectId>>,
+    pub effects: Option<Vec<CandidateId>>,
     /// Family-wise level of the WHERE cells (Holm).
     pub alpha_where: f64,
     /// Family-wise level of the candidates' LR tests (Holm).
@@ -267,7 +270,7 @@ pub struct NumericalError {
     /// Largest `|e_num|` [noise units].
     pub max_abs_noise_units: f64,
     /// `LM_num` per evaluated candidate.
-    pub per_candidate: Vec<(EffectId, f64)>,
+    pub per_candidate: Vec<(CandidateId, f64)>,
     /// The mesh correction at the fit, `|d|^2` [noise units squared, whitened]
     /// (0 without; module docs, step 0).
     pub mesh_chi2: f64,
@@ -295,7 +298,7 @@ pub struct FittedParameter {
 #[derive(Debug, Clone, PartialEq)]
 pub struct CandidateReport {
     /// The effect.
-    pub effect: EffectId,
+    pub effect: CandidateId,
     /// `d_j`.
     pub dim: usize,
     /// Score (LM) statistic after the one-sided rule.
@@ -340,7 +343,7 @@ pub struct Verdict {
     /// `<effect id>`, `tie`, `partial: <effect id>`, `unexplained` or `none`.
     pub label: String,
     /// The effects named.
-    pub effects: Vec<EffectId>,
+    pub effects: Vec<CandidateId>,
     /// One sentence.
     pub sentence: String,
     /// For `tie` (and as advice otherwise): the experiment that would separate the leaders.
@@ -355,7 +358,7 @@ pub struct Verdict {
 #[derive(Debug, Clone, PartialEq)]
 pub struct TieTest {
     /// The runner-up.
-    pub runner_up: EffectId,
+    pub runner_up: CandidateId,
     /// `C_1 - C_2`.
     pub margin: f64,
     /// The standard error of the margin the rule used ([`DiagnosisOptions::tie_bootstrap`]).
@@ -429,7 +432,7 @@ pub struct Diagnosis {
     /// Step 3 and 4, in registry order.
     pub candidates: Vec<CandidateReport>,
     /// Candidates not evaluated, and why.
-    pub not_evaluated: Vec<(EffectId, String)>,
+    pub not_evaluated: Vec<(CandidateId, String)>,
     /// The decision.
     pub verdict: Verdict,
     /// Warnings in words.
@@ -449,7 +452,8 @@ pub struct Diagnosis {
 
 impl Diagnosis {
     /// The candidate report of `effect`, if evaluated.
-    pub fn candidate(&self, effect: EffectId) -> Option<&CandidateReport> {
+    pub fn candidate(&self, effect: impl Into<CandidateId>) -> Option<&CandidateReport> {
+        let effect = effect.into();
         self.candidates.iter().find(|c| c.effect == effect)
     }
 }
@@ -522,16 +526,40 @@ pub(super) fn diagnosis_model(
     Ok(model)
 }
 
+/// Whether every material of the model is a network (the library of
+/// [`library::library_for`]).
+fn all_networks(model: &Model) -> bool {
+    !model.table.is_empty() && model.table.values().all(|m| m.model == wagashi_io::bundle::Model::Network)
+}
+
 /// Why a candidate is not evaluated, if it is not.
-fn not_evaluable(model: &Model, effect: EffectId) -> Option<String> {
-    if !effect.implemented() {
-        Some("not implemented in the engine yet".into())
-    } else if model.bundles_set(effect) {
-        Some("set in the bundles' [effects]: part of the baseline".into())
-    } else if effect == EffectId::Ageing && !model.has_age() {
-        Some("no trial gives the covariate age_h, through which ageing acts".into())
-    } else {
-        None
+fn not_evaluable(model: &Model, candidate: CandidateId) -> Option<String> {
+    let networks = all_networks(model);
+    match candidate {
+        CandidateId::Effect(effect) => {
+            if !effect.implemented() {
+                Some("not implemented in the engine yet".into())
+            } else if model.bundles_set(effect) {
+                Some("set in the bundles' [effects]: part of the baseline".into())
+            } else if effect == EffectId::Ageing && !model.has_age() {
+                Some("no trial gives the covariate age_h, through which ageing acts".into())
+            } else if networks && effect.hook() == fem_core::effects::HookPoint::MaterialPoint {
+                Some("a material-point effect of the seed's chain; the materials are networks, whose components are tested instead".into())
+            } else {
+                None
+            }
+        }
+        CandidateId::Component(c) => {
+            if !networks {
+                return Some(
+                    "a component of the network model; the materials are not all networks (model = \"network\")".into(),
+                );
+            }
+            model.table.iter().find_map(|(name, spec)| match spec.to_network() {
+                Ok(net) => c.not_applicable(&net).map(|why| format!("material {name}: {why}")),
+                Err(_) => None,
+            })
+        }
     }
 }
 
@@ -637,10 +665,11 @@ pub fn diagnose(
     let samples = heldout::resamples(ho_segments.len(), options.bootstrap, options.seed);
 
     // Step 3.
-    let library: Vec<EffectId> = options.effects.clone().unwrap_or_else(|| EffectId::ALL.to_vec());
+    let library: Vec<CandidateId> =
+        options.effects.clone().unwrap_or_else(|| library::library_for(all_networks(&model)));
     let mut not_evaluated = Vec::new();
     let mut to_evaluate = Vec::new();
-    for effect in EffectId::ALL.into_iter().filter(|e| library.contains(e)) {
+    for effect in CandidateId::all().into_iter().filter(|e| library.contains(e)) {
         match not_evaluable(&model, effect) {
             Some(why) => not_evaluated.push((effect, why)),
             None => to_evaluate.push(effect),
@@ -809,7 +838,7 @@ struct AtBaseline<'a> {
 fn evaluate(
     model: &Model,
     vmodel: Option<&Model>,
-    effect: EffectId,
+    effect: CandidateId,
     at: &AtBaseline<'_>,
     segments: &[cells::Segment],
     options: &DiagnosisOptions,
@@ -1044,7 +1073,11 @@ pub fn is_tie(margin: f64, se: f64, cosine: f64) -> bool {
 }
 
 /// What data separates `effect` from others (diagnosis-details.md §4.2, last column).
-pub fn discriminator(effect: EffectId) -> &'static str {
+pub fn discriminator(candidate: CandidateId) -> &'static str {
+    let effect = match candidate {
+        CandidateId::Effect(e) => e,
+        CandidateId::Component(c) => return component_discriminator(c),
+    };
     match effect {
         EffectId::PlasticSlider => {
             "trials at two hold times and two speeds (the permanent set of a slider does not change)"
@@ -1063,11 +1096,31 @@ pub fn discriminator(effect: EffectId) -> &'static str {
     }
 }
 
+/// What data separates a network component from others.
+fn component_discriminator(component: Component) -> &'static str {
+    match component {
+        Component::Stiffening => "two strain levels at one aspect ratio (the tangent stiffness grows with strain)",
+        Component::PlasticSet => {
+            "the height after a long rest following the release (a permanent set does not recover)"
+        }
+        Component::Mullins => "a third stroke to the same depth after a rest (softening stays, relaxation recovers)",
+        Component::ExtraViscous => "a hold at least 10x longer than the longest relaxation time",
+        Component::PowerLawFlow => "holds at two strain levels (normalised relaxation curves that do not overlay)",
+        Component::LoadingUnloadingViscosity => "a longer post-release observation (the gap grows with recovery time)",
+    }
+}
+
 /// The experiment that separates two confusable effects (§4.3), or both discriminators.
-pub fn separating_experiment(a: EffectId, b: EffectId) -> String {
+pub fn separating_experiment(a: CandidateId, b: CandidateId) -> String {
     use EffectId::*;
-    let pair = |x: EffectId, y: EffectId| (a == x && b == y) || (a == y && b == x);
-    let specific = if pair(Gravity, ForceOffset) {
+    let pair = |x: EffectId, y: EffectId| {
+        let (x, y) = (CandidateId::Effect(x), CandidateId::Effect(y));
+        (a == x && b == y) || (a == y && b == x)
+    };
+    let set_or_softening = [Component::PlasticSet, Component::Mullins].map(CandidateId::Component);
+    let specific = if set_or_softening.contains(&a) && set_or_softening.contains(&b) {
+        Some("Reload a specimen after a rest of 10x its longest relaxation time: a permanent set stays (the height does not come back), Mullins softening lets the height come back but keeps the second stroke's force low.")
+    } else if pair(Gravity, ForceOffset) {
         Some("Record the force with nothing on the sensor and before contact, and track markers after release: an offset moves no material, gravity slumps it.")
     } else if pair(MachineCompliance, StrainStiffening) || pair(MachineCompliance, PlateFriction) {
         Some("Run a rigid block (compliance alone deflects), or compare the camera height with the commanded displacement.")

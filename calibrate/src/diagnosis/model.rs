@@ -40,7 +40,7 @@
 
 use std::collections::BTreeMap;
 
-use fem_core::effects::{EffectId, Effects, ParamSpec};
+use fem_core::effects::{Effects, ParamSpec};
 use fem_core::material::Material;
 use fem_core::press::{
     simulate_any, simulate_any_with_sensitivities, AnyPress, PressResult, SensitivityParameter, Settings,
@@ -53,6 +53,7 @@ use wagashi_io::{Bundle, MaterialSpec};
 use crate::lsq::{EvalError, Evaluation, LeastSquares, ParameterSpec};
 use crate::trial::{measured_force, model_position, region_names, sensitivity_parameter, set_parameter, Unknown};
 
+use super::library::CandidateId;
 use super::DiagnosisError;
 
 /// A phase of a trial (diagnosis.md, step 2).
@@ -159,7 +160,7 @@ pub const DEADBAND: f64 = 1e-4;
 pub struct Coord {
     /// The registry's specification.
     pub spec: ParamSpec,
-    /// The parameter's index in [`EffectId::params`].
+    /// The parameter's index in [`CandidateId::params`].
     pub index: usize,
     /// Fitted as `1/phi` (infinite null).
     pub inverse: bool,
@@ -222,26 +223,29 @@ impl Coord {
     }
 }
 
-/// A candidate effect with its fitted coordinates.
+/// A candidate (an engine effect or a network component) with its fitted
+/// coordinates.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Candidate {
-    /// The effect.
-    pub effect: EffectId,
+    /// The candidate.
+    pub effect: CandidateId,
     /// Its strength parameters (nuisance parameters stay at their defaults).
     pub coords: Vec<Coord>,
+    /// Every parameter's value when not fitted ([`CandidateId::defaults`]).
+    pub defaults: Vec<f64>,
 }
 
 impl Candidate {
     /// The candidate of `effect` with the registry's static references.
-    pub fn new(effect: EffectId) -> Self {
-        Self::at_stress(effect, None)
+    pub fn new(effect: impl Into<CandidateId>) -> Self {
+        Self::at_stress(effect.into(), None)
     }
 
     /// The candidate of `effect` on a campaign of peak nominal stress
     /// `sigma_peak_mpa` ([`peak_stress_mpa`]): stress-valued parameters take
     /// their references from it ([`ParamSpec::reference_at`]), the others (and
     /// all of them with `None`) the registry's static ones.
-    pub fn at_stress(effect: EffectId, sigma_peak_mpa: Option<f64>) -> Self {
+    pub fn at_stress(effect: CandidateId, sigma_peak_mpa: Option<f64>) -> Self {
         let coords = effect
             .params()
             .iter()
@@ -254,14 +258,14 @@ impl Candidate {
                 reference: spec.reference_at(sigma_peak_mpa),
             })
             .collect();
-        Self { effect, coords }
+        Self { effect, coords, defaults: effect.defaults(sigma_peak_mpa) }
     }
 
     /// [`Candidate::at_stress`] with the effect's nuisance parameters (the
     /// slider's hardening, the thinning exponent, the adhesion opening) as
     /// further coordinates after the strength ones, each fitted as itself from
     /// its registry default (module docs of `diagnosis`, "Nuisance parameters").
-    pub fn with_nuisance(effect: EffectId, sigma_peak_mpa: Option<f64>) -> Self {
+    pub fn with_nuisance(effect: CandidateId, sigma_peak_mpa: Option<f64>) -> Self {
         let mut c = Self::at_stress(effect, sigma_peak_mpa);
         c.coords.extend(effect.params().iter().enumerate().filter(|(_, p)| p.nuisance).map(|(index, &spec)| Coord {
             spec,
@@ -273,7 +277,7 @@ impl Candidate {
     }
 
     /// Whether the effect has nuisance parameters.
-    pub fn has_nuisance(effect: EffectId) -> bool {
+    pub fn has_nuisance(effect: CandidateId) -> bool {
         effect.params().iter().any(|p| p.nuisance)
     }
 
@@ -291,7 +295,7 @@ impl Candidate {
     /// coordinate closer to its null than [`DEADBAND`] of its reference distance
     /// is the null itself (module docs).
     pub fn values(&self, u: &[f64]) -> Vec<f64> {
-        let mut v = self.effect.null_values();
+        let mut v = self.defaults.clone();
         for (c, &ui) in self.coords.iter().zip(u) {
             let dead = c.one_sided() && (ui - c.null()).abs() < DEADBAND * (c.reference() - c.null()).abs();
             v[c.index] = c.value(if dead { c.null() } else { ui });
@@ -845,7 +849,7 @@ impl Model {
 
     /// Whether any trial's bundle sets `effect` itself (it is then part of the
     /// baseline, not a candidate).
-    pub fn bundles_set(&self, effect: EffectId) -> bool {
+    pub fn bundles_set(&self, effect: fem_core::effects::EffectId) -> bool {
         self.trials.iter().any(|t| t.problem.effects().is_set(effect))
     }
 
@@ -866,23 +870,32 @@ impl Model {
 
     /// Trial `k`'s problem at `theta` with the candidate effect `effect` (values in
     /// registry order) on top of the bundle's own effects.
-    fn problem(&self, k: usize, theta: &[f64], effect: Option<(EffectId, &[f64])>) -> Result<AnyPress, EvalError> {
+    fn problem(&self, k: usize, theta: &[f64], effect: Option<(CandidateId, &[f64])>) -> Result<AnyPress, EvalError> {
         let trial = &self.trials[k];
         let table = self.table_with(&self.trial_theta(k, theta));
+        let component = effect.and_then(|(c, values)| match c {
+            CandidateId::Component(c) => Some((c, values)),
+            CandidateId::Effect(_) => None,
+        });
         let materials: Vec<Material> = trial
             .region_material
             .iter()
             .map(|name| {
-                let m = table[name]
+                let mut m = table[name]
                     .to_material()
                     .map_err(|m| EvalError::new(format!("material {name} lacks {}", m.key)))?;
                 m.rheology.validate().map_err(|e| EvalError::new(format!("material {name}: {e}")))?;
+                if let (Some((c, values)), Some(net)) = (component, m.network.as_ref()) {
+                    let changed = c.apply(net, values);
+                    changed.validate().map_err(|e| EvalError::new(format!("material {name} with {}: {e}", c.id())))?;
+                    m.network = Some(changed);
+                }
                 Ok(m)
             })
             .collect::<Result<_, EvalError>>()?;
         let mut p = trial.problem.clone();
         let set = |effects: &mut Effects| -> Result<(), EvalError> {
-            if let Some((e, values)) = effect {
+            if let Some((CandidateId::Effect(e), values)) = effect {
                 effects.set(e, values).map_err(|err| EvalError::new(format!("trial {}: {err}", trial.name)))?;
             }
             Ok(())
@@ -998,7 +1011,7 @@ impl Model {
         &self,
         k: usize,
         theta: &[f64],
-        effect: Option<(EffectId, &[f64])>,
+        effect: Option<(CandidateId, &[f64])>,
         steps: Option<&[f64]>,
     ) -> Result<(Vec<f64>, Vec<f64>), EvalError> {
         let p = self.problem(k, theta, effect)?;
@@ -1012,7 +1025,7 @@ impl Model {
     pub fn residuals(
         &self,
         theta: &[f64],
-        effect: Option<(EffectId, &[f64])>,
+        effect: Option<(CandidateId, &[f64])>,
         steps: Option<&[Vec<f64>]>,
     ) -> Result<(Vec<f64>, Vec<Vec<f64>>), EvalError> {
         let parts: Vec<(Vec<f64>, Vec<f64>)> = (0..self.trials.len())
@@ -1060,9 +1073,12 @@ impl Model {
         let problem = self.problem(k, theta, effect)?;
         let p = self.unknowns.len();
         let d = candidate.map_or(0, |(c, _)| c.dim());
-        // Contact runs and damaged materials have no sensitivities: their columns
-        // come from differences.
-        let sens_ok = problem.effects().check_sensitivities().is_ok() && !problem.has_tools() && !problem.has_damage();
+        // Contact runs, damaged materials and networks have no sensitivities:
+        // their columns come from differences.
+        let sens_ok = problem.effects().check_sensitivities().is_ok()
+            && !problem.has_tools()
+            && !problem.has_damage()
+            && !problem.has_network();
         let acting = if theta_columns { self.sensitivity_parameters(k, &problem) } else { Vec::new() };
         let (r, mut columns, steps) = if sens_ok && !acting.is_empty() {
             let params: Vec<SensitivityParameter> = acting.iter().map(|a| a.1.clone()).collect();
@@ -1108,7 +1124,15 @@ impl Model {
                 let diff =
                     |plus: &[f64], h: f64| -> Vec<f64> { plus.iter().zip(&base).map(|(a, b)| (a - b) / h).collect() };
                 if need_fd_theta {
-                    let acting_cols: Vec<usize> = acting_all.iter().map(|a| a.0).collect();
+                    // Every unknown of a material the trial holds acts on it (a
+                    // network key has no engine sensitivity parameter).
+                    let trial = &self.trials[k];
+                    let acting_cols: Vec<usize> = (0..self.unknowns.len())
+                        .filter(|&i| {
+                            acting_all.iter().any(|a| a.0 == i)
+                                || trial.region_material.contains(&self.unknowns[i].material)
+                        })
+                        .collect();
                     for (i, u) in self.unknowns.iter().enumerate() {
                         if !acting_cols.contains(&i) {
                             out.push(Vec::new());
@@ -1478,14 +1502,14 @@ mod tests {
 
     #[test]
     fn infinite_nulls_are_fitted_by_their_inverse() {
-        let c = Candidate::new(EffectId::PlasticSlider);
+        let c = Candidate::new(fem_core::effects::EffectId::PlasticSlider);
         assert_eq!(c.dim(), 1);
         assert!(c.coords[0].inverse);
         assert_eq!(c.null(), vec![0.0]);
         assert_eq!(c.values(&[0.0])[0], f64::INFINITY);
         assert!((c.values(&[c.coords[0].reference()])[0] - 0.01).abs() < 1e-15);
         assert_eq!(c.coords[0].bounds(), [0.0, f64::INFINITY]);
-        let f = Candidate::new(EffectId::ForceOffset);
+        let f = Candidate::new(fem_core::effects::EffectId::ForceOffset);
         assert_eq!(f.dim(), 2);
         assert!(!f.coords[0].inverse && !f.coords[0].one_sided());
     }

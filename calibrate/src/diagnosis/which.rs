@@ -29,7 +29,9 @@
 //! iterations. The extension is nested, so a refit
 //! that ends above the baseline's objective falls back to the null (`LR = 0`).
 
-use fem_core::effects::{EffectId, HookPoint};
+use fem_core::effects::HookPoint;
+
+use super::library::CandidateId;
 use nalgebra::{DMatrix, DVector};
 
 use super::heldout::range_basis;
@@ -54,7 +56,7 @@ pub struct Score {
 
 /// Whether `effect`'s null is non-smooth (threshold or contact), so that its
 /// refit is multi-started.
-pub fn non_smooth(effect: EffectId) -> bool {
+pub fn non_smooth(effect: CandidateId) -> bool {
     match effect.hook() {
         HookPoint::Contact => true,
         HookPoint::MaterialPoint => effect.params().iter().any(|p| !p.nuisance && p.one_sided),
@@ -319,7 +321,7 @@ pub fn refine_nuisance(
     let problem = Fitting { model, candidate: Some(extended) };
     let specs = problem.specs();
     let mut x0 = x.to_vec();
-    let defaults = extended.effect.null_values();
+    let defaults = &extended.defaults;
     x0.extend(extended.coords.iter().filter(|c| c.spec.nuisance).map(|c| defaults[c.index]));
     let mut first = options.clone();
     if !extended.effect.has_sensitivities() {
