@@ -6,7 +6,7 @@
 //!
 //! | file             | what                                                                 |
 //! |------------------|----------------------------------------------------------------------|
-//! | `diagnosis.json` | `verdict` (label, effects, sentence, separating experiment), `where` (one entry per cell), `candidates` (per effect id: score, LR, p-value, held-out gain, gap closure with its 90 % interval, fitted effect parameters), `numerical_error` (noise units), `peak_stress_MPa` (the campaign's stress level, which the stress-valued effects' references follow), `marker_shapes` (per trial, the last photograph of the hold and of the recovery: measured, baseline and with the effect), the baseline, the candidates not evaluated and why, warnings |
+//! | `diagnosis.json` | `verdict` (label, effects, sentence, separating experiment), `selection` (the forward selection, one entry per step: the candidates included, the step's label, the candidate it names, its LR and gap closure with its 90 % interval, the step's candidates), `where` (one entry per cell), `candidates` (per effect id: score, LR, p-value, held-out gain, gap closure with its 90 % interval, fitted effect parameters), `numerical_error` (noise units), `peak_stress_MPa` (the campaign's stress level, which the stress-valued effects' references follow), `marker_shapes` (per trial, the last photograph of the hold and of the recovery: measured, baseline and with the effect), the baseline, the candidates not evaluated and why, warnings |
 //! | `report.html`    | one self-contained page (inline SVG, no network): the verdict, measured against simulated force per trial and phase before and after the named effect, the marker shapes before and after (misfits magnified, RMS in mm), the WHERE heat table, the candidates as a bar chart, the recommended next experiment |
 //! | `summary.json`   | a short summary (and the mark of a wagashi output folder for `--force`) |
 
@@ -319,6 +319,17 @@ pub fn diagnosis_json(d: &Diagnosis) -> Value {
             "remaining_cells": d.verdict.remaining_cells,
             "tie_test": d.verdict.tie_test.as_ref().map(tie_test_json),
         },
+        "selection": d.selection.iter().map(|s| json!({
+            "included": s.included.iter().map(|c| c.id()).collect::<Vec<_>>(),
+            "label": s.label,
+            "named": s.named.map(|c| c.id()),
+            "baseline_objective": s.baseline_objective,
+            "lr": s.lr,
+            "p_value": s.p_value,
+            "gap_closure": s.heldout.as_ref().map(|h| json!({"G": h.closure, "ci90": h.closure_ci90, "reportable": h.reportable})),
+            "remaining_cells": s.remaining_cells,
+            "candidates": s.candidates.iter().map(|c| json!({"id": c.effect.id(), "lr": c.lr, "p_value": c.p_value, "eligible": c.eligible, "combined": c.combined})).collect::<Vec<_>>(),
+        })).collect::<Vec<_>>(),
         "where": cells,
         "candidates": candidates,
         "not_evaluated": not_evaluated,

@@ -206,6 +206,9 @@ pub struct DiagnosisOptions {
     /// How the tie rule's SE of `C_1 - C_2` is resampled (module docs,
     /// "Verdict"; default: blocks inside segments).
     pub tie_bootstrap: TieBootstrap,
+    /// The most candidates the forward selection names (module docs,
+    /// "Composable verdicts"; 1: the single-candidate diagnosis).
+    pub max_components: usize,
 }
 
 impl Default for DiagnosisOptions {
@@ -225,6 +228,7 @@ impl Default for DiagnosisOptions {
             mesh_correction: true,
             fixed_dt_s: None,
             tie_bootstrap: TieBootstrap::Blocks,
+            max_components: 3,
         }
     }
 }
@@ -354,6 +358,36 @@ pub struct Verdict {
     pub tie_test: Option<TieTest>,
 }
 
+/// One step of the forward selection (module docs, "Composable verdicts").
+#[derive(Debug, Clone, PartialEq)]
+pub struct SelectionStep {
+    /// The candidates in the step's baseline (named by the earlier steps, at
+    /// their fitted values).
+    pub included: Vec<CandidateId>,
+    /// The step's verdict label on the candidates left (as [`Verdict::label`]).
+    pub label: String,
+    /// The WHERE cells still flagged after the step's verdict (as
+    /// [`Verdict::remaining_cells`]).
+    pub remaining_cells: Vec<String>,
+    /// The candidate the step adds (`None`: the selection stops here).
+    pub named: Option<CandidateId>,
+    /// The step's baseline objective `Phi0` (the earlier steps' candidates
+    /// included, the unknowns refitted).
+    pub baseline_objective: f64,
+    /// The WHERE cells flagged on the step's baseline.
+    pub flagged: Vec<String>,
+    /// The named candidate's LR against the step's baseline (0 without one).
+    pub lr: f64,
+    /// Its p-value (1 without one).
+    pub p_value: f64,
+    /// Its held-out comparison against the step's baseline (the gap closure
+    /// `G` of what the step's baseline leaves, with its 90 % interval).
+    pub heldout: Option<HeldOut>,
+    /// The step's candidate reports (the first step's are also
+    /// [`Diagnosis::candidates`]).
+    pub candidates: Vec<CandidateReport>,
+}
+
 /// The tie rule between the two best eligible candidates (module docs, "Verdict").
 #[derive(Debug, Clone, PartialEq)]
 pub struct TieTest {
@@ -433,8 +467,11 @@ pub struct Diagnosis {
     pub candidates: Vec<CandidateReport>,
     /// Candidates not evaluated, and why.
     pub not_evaluated: Vec<(CandidateId, String)>,
-    /// The decision.
+    /// The decision (the forward selection's: every named step).
     pub verdict: Verdict,
+    /// The forward selection, one entry per step (module docs, "Composable
+    /// verdicts"); the first is the single-candidate diagnosis.
+    pub selection: Vec<SelectionStep>,
     /// Warnings in words.
     pub warnings: Vec<String>,
     /// Forces for the report.
@@ -463,6 +500,8 @@ struct Evaluated {
     report: CandidateReport,
     residuals: Vec<f64>,
     heldout: Option<Vec<f64>>,
+    /// Every parameter's fitted value (registry order), for the next step.
+    values: Vec<f64>,
 }
 
 /// Step ends with every step halved.
@@ -708,22 +747,7 @@ pub fn diagnose(
     not_evaluated.sort_by_key(|(e, _)| *e);
 
     // Multiplicity, held-out, ranking.
-    let m = evaluated.len().max(1);
-    let p_values: Vec<f64> = evaluated.iter().map(|e| e.report.p_value).collect();
-    let significant = holm(&p_values, options.alpha_which);
-    for (e, sig) in evaluated.iter_mut().zip(significant) {
-        let d = e.report.dim;
-        let q = Candidate::new(e.report.effect).coords.iter().filter(|c| c.one_sided()).count();
-        e.report.lr_critical = critical_value(options.alpha_which / m as f64, |x| chibar2_sf(x, d, q));
-        e.report.significant = sig;
-        e.report.heldout = match (&h0, &e.heldout) {
-            (Some(a), Some(b)) => Some(heldout::compare(&ho_segments, a, b, &samples)),
-            _ => None,
-        };
-        let gain = e.report.heldout.as_ref().map_or(0.0, |h| h.gain);
-        e.report.eligible = sig && e.report.heldout.as_ref().is_none_or(HeldOut::non_inferior);
-        e.report.combined = e.report.lr + gain - 2.0 * d as f64;
-    }
+    rank(&mut evaluated, h0.as_deref(), &ho_segments, &samples, options);
 
     let (mesh_chi2, mesh_chi2_unabsorbed) = if mesh_d.is_empty() {
         (0.0, 0.0)
@@ -783,8 +807,32 @@ pub fn diagnose(
         ));
     }
     let named = verdict.effects.first().and_then(|id| evaluated.iter().find(|e| e.report.effect == *id));
-    let curves = force_curves(&model, &r0, named.map_or(&r0, |e| &e.residuals));
-    let shapes = marker_shapes(&model, &r0, named.map_or(&r0, |e| &e.residuals));
+    let mut after = named.map_or(r0.clone(), |e| e.residuals.clone());
+
+    // The forward selection (module docs, "Composable verdicts").
+    let mut selection = vec![selection_step(Vec::new(), &where_cells, &verdict, &evaluated, phi0)];
+    if options.max_components > 1 && selection[0].named.is_some() {
+        let ctx = SelectionContext {
+            to_evaluate: &to_evaluate,
+            peak_stress_mpa,
+            e_num: &e_num,
+            segments: &segments,
+            ho_segments: &ho_segments,
+            samples: &samples,
+        };
+        let mut vmodel = vmodel.clone();
+        let (more, last, notes) =
+            forward_selection(&mut model, &mut vmodel, (&verdict, &evaluated), &ctx, options, progress);
+        model.included.clear();
+        warnings.extend(notes);
+        selection.extend(more);
+        if let Some(r) = last {
+            after = r;
+        }
+        compose_verdict(&mut verdict, &selection);
+    }
+    let curves = force_curves(&model, &r0, &after);
+    let shapes = marker_shapes(&model, &r0, &after);
     Ok(Diagnosis {
         trials: model.trial_names(),
         validation_trials: vmodel.as_ref().map(Model::trial_names).unwrap_or_default(),
@@ -795,6 +843,7 @@ pub fn diagnose(
         candidates: evaluated.into_iter().map(|e| e.report).collect(),
         not_evaluated,
         verdict,
+        selection,
         warnings,
         curves,
         shapes,
@@ -921,7 +970,272 @@ fn evaluate(
         fell_back,
         refit_errors: refit.errors,
     };
-    Ok(Evaluated { report, residuals: r1, heldout })
+    Ok(Evaluated { report, residuals: r1, heldout, values })
+}
+
+/// Multiplicity, held-out comparison and ranking of one step's candidates
+/// (module docs, step 3): Holm at `alpha_which`, the Bonferroni critical value,
+/// the held-out gain against the step's baseline `h0`, eligibility and `C_j`.
+fn rank(
+    evaluated: &mut [Evaluated],
+    h0: Option<&[f64]>,
+    ho_segments: &[cells::Segment],
+    samples: &[Vec<usize>],
+    options: &DiagnosisOptions,
+) {
+    let m = evaluated.len().max(1);
+    let p_values: Vec<f64> = evaluated.iter().map(|e| e.report.p_value).collect();
+    let significant = holm(&p_values, options.alpha_which);
+    for (e, sig) in evaluated.iter_mut().zip(significant) {
+        let d = e.report.dim;
+        let q = Candidate::new(e.report.effect).coords.iter().filter(|c| c.one_sided()).count();
+        e.report.lr_critical = critical_value(options.alpha_which / m as f64, |x| chibar2_sf(x, d, q));
+        e.report.significant = sig;
+        e.report.heldout = match (h0, &e.heldout) {
+            (Some(a), Some(b)) => Some(heldout::compare(ho_segments, a, b, samples)),
+            _ => None,
+        };
+        let gain = e.report.heldout.as_ref().map_or(0.0, |h| h.gain);
+        e.report.eligible = sig && e.report.heldout.as_ref().is_none_or(HeldOut::non_inferior);
+        e.report.combined = e.report.lr + gain - 2.0 * d as f64;
+    }
+}
+
+/// The candidate a step names for the next one, if any: the verdict's first
+/// candidate when it is not a tie, is eligible and improves the held-out
+/// prediction (module docs, "Composable verdicts").
+fn step_named<'a>(verdict: &Verdict, evaluated: &'a [Evaluated]) -> Option<&'a Evaluated> {
+    if verdict.label == "tie" {
+        return None;
+    }
+    let id = *verdict.effects.first()?;
+    let e = evaluated.iter().find(|e| e.report.effect == id)?;
+    let improves = e.report.heldout.as_ref().is_none_or(|h| h.gain > 0.0);
+    (e.report.eligible && improves).then_some(e)
+}
+
+/// Whether `candidate` can join the candidates `included`: the chain's
+/// material-point effects act one at a time on its inelastic loop.
+fn composable(candidate: CandidateId, included: &[CandidateId]) -> bool {
+    let chain_point =
+        |c: &CandidateId| c.effect().is_some_and(|e| e.hook() == fem_core::effects::HookPoint::MaterialPoint);
+    if included.contains(&candidate) {
+        return false;
+    }
+    !(chain_point(&candidate) && included.iter().any(chain_point))
+}
+
+/// A step's entry from its verdict and candidates.
+fn selection_step(
+    included: Vec<CandidateId>,
+    where_cells: &[Cell],
+    verdict: &Verdict,
+    evaluated: &[Evaluated],
+    baseline_objective: f64,
+) -> SelectionStep {
+    let named = step_named(verdict, evaluated);
+    SelectionStep {
+        included,
+        label: verdict.label.clone(),
+        remaining_cells: verdict.remaining_cells.clone(),
+        named: named.map(|e| e.report.effect),
+        baseline_objective,
+        flagged: where_cells.iter().filter(|c| c.flagged).map(Cell::label).collect(),
+        lr: named.map_or(0.0, |e| e.report.lr),
+        p_value: named.map_or(1.0, |e| e.report.p_value),
+        heldout: named.and_then(|e| e.report.heldout.clone()),
+        candidates: evaluated.iter().map(|e| e.report.clone()).collect(),
+    }
+}
+
+/// A later step, what it names for the next (candidate, values, unknowns) and
+/// the residuals with its named candidate.
+type StepOutcome = (SelectionStep, Option<(CandidateId, Vec<f64>, Vec<f64>)>, Option<Vec<f64>>);
+
+/// What the forward selection's later steps share with the first.
+struct SelectionContext<'a> {
+    to_evaluate: &'a [CandidateId],
+    peak_stress_mpa: Option<f64>,
+    e_num: &'a [f64],
+    segments: &'a [cells::Segment],
+    ho_segments: &'a [cells::Segment],
+    samples: &'a [Vec<usize>],
+}
+
+/// The forward selection's steps after the first (module docs, "Composable
+/// verdicts"): while the last step names a candidate and fewer than
+/// `max_components` are named, the candidate joins the model at its fitted
+/// values, the earlier candidates are refitted beside it (one sweep of block
+/// coordinate descent, each with the unknowns), the unknowns are refitted, and
+/// the candidates left are tested against that baseline by the first step's
+/// rules. Returns the
+/// new steps, the residuals with the last named candidate (for the report's
+/// "after" curves) and warnings.
+fn forward_selection(
+    model: &mut Model,
+    vmodel: &mut Option<Model>,
+    first: (&Verdict, &[Evaluated]),
+    ctx: &SelectionContext<'_>,
+    options: &DiagnosisOptions,
+    progress: ProgressFn<'_>,
+) -> (Vec<SelectionStep>, Option<Vec<f64>>, Vec<String>) {
+    let mut steps = Vec::new();
+    let mut warnings = Vec::new();
+    let mut next = step_named(first.0, first.1).map(|e| (e.report.effect, e.values.clone(), e.report.theta.clone()));
+    let mut last = step_named(first.0, first.1).map(|e| e.residuals.clone());
+    let kinds = model.scale_kind();
+    while let Some((id, values, start)) = next.take() {
+        if model.included.len() + 1 >= options.max_components {
+            break;
+        }
+        model.included.push((id, values));
+        // The earlier candidates' values were fitted before the newest joined:
+        // one sweep of block coordinate descent refits each with the unknowns,
+        // the others held (the newest was just refitted with the unknowns).
+        let mut start = start;
+        for j in 0..model.included.len() - 1 {
+            let (cj, current) = model.included.remove(j);
+            let mut cand = Candidate::at_stress(cj, ctx.peak_stress_mpa);
+            cand.defaults = current.clone();
+            let mut x0 = start.clone();
+            x0.extend(cand.coords.iter().map(|c| match (c.inverse, current[c.index]) {
+                (true, v) if v.is_infinite() => 0.0,
+                (true, v) => 1.0 / v,
+                (false, v) => v,
+            }));
+            let mut lsq = options.lsq.clone();
+            if !cj.has_sensitivities() {
+                lsq.jacobian_with_trial = false;
+            }
+            let problem = model::Fitting { model, candidate: Some(&cand) };
+            let p = start.len();
+            let refit = crate::lsq::levenberg_marquardt(&problem, &problem.specs(), &x0, &lsq);
+            let values = match refit {
+                Ok(f) => {
+                    start = f.x[..p].to_vec();
+                    cand.values(&f.x[p..])
+                }
+                Err(e) => {
+                    warnings.push(format!(
+                        "forward selection: refitting {cj} beside the others failed: {}",
+                        error_chain(&e)
+                    ));
+                    current
+                }
+            };
+            model.included.insert(j, (cj, values));
+        }
+        if let Some(vm) = vmodel.as_mut() {
+            vm.included = model.included.clone();
+        }
+        let included: Vec<CandidateId> = model.included.iter().map(|(c, _)| *c).collect();
+        let names = included.iter().map(|c| c.id()).collect::<Vec<_>>().join(" + ");
+        let step = (|| -> Result<StepOutcome, String> {
+            let problem = model::Fitting { model, candidate: None };
+            let fit = crate::lsq::levenberg_marquardt(&problem, &problem.specs(), &start, &options.lsq)
+                .map_err(|e| error_chain(&e))?;
+            let theta = fit.x.clone();
+            let (r_adaptive, steps_t) = model.residuals(&theta, None, None).map_err(|e| error_chain(&e))?;
+            let (r_frozen, _) = model.residuals(&theta, None, Some(&steps_t)).map_err(|e| error_chain(&e))?;
+            let where_cells = cells::where_table(ctx.segments, &fit.residuals, options.alpha_where);
+            let h0 = match vmodel.as_ref() {
+                Some(vm) => Some(validation_heldout(vm, &theta, None).map_err(|e| error_chain(&e))?),
+                None => heldout::leave_one_out(&fit.residuals, &fit.jacobian, &model.offsets, &theta, &kinds),
+            };
+            let at = AtBaseline {
+                peak_stress_mpa: ctx.peak_stress_mpa,
+                theta: &theta,
+                r0: &fit.residuals,
+                j0: &fit.jacobian,
+                phi0: fit.objective,
+                steps: &steps_t,
+                r_frozen: &r_frozen,
+                r_adaptive: &r_adaptive,
+                e_num: ctx.e_num,
+            };
+            let remaining: Vec<CandidateId> =
+                ctx.to_evaluate.iter().copied().filter(|c| composable(*c, &included)).collect();
+            let done = AtomicUsize::new(0);
+            progress(Stage::Candidates, 0, remaining.len());
+            let m: &Model = model;
+            let mut evaluated: Vec<Evaluated> = remaining
+                .par_iter()
+                .map(|&c| {
+                    let out = evaluate(m, vmodel.as_ref(), c, &at, ctx.segments, options);
+                    progress(Stage::Candidates, done.fetch_add(1, Ordering::Relaxed) + 1, remaining.len());
+                    out
+                })
+                .collect::<Vec<_>>()
+                .into_iter()
+                .filter_map(Result::ok)
+                .collect();
+            rank(&mut evaluated, h0.as_deref(), ctx.ho_segments, ctx.samples, options);
+            let verdict =
+                decide(&where_cells, &evaluated, &fit.residuals, h0.as_deref(), ctx.segments, ctx.ho_segments, options);
+            let step = selection_step(included.clone(), &where_cells, &verdict, &evaluated, fit.objective);
+            let named = step_named(&verdict, &evaluated);
+            Ok((
+                step,
+                named.map(|e| (e.report.effect, e.values.clone(), e.report.theta.clone())),
+                named.map(|e| e.residuals.clone()),
+            ))
+        })();
+        match step {
+            Ok((step, n, residuals)) => {
+                steps.push(step);
+                if residuals.is_some() {
+                    last = residuals;
+                }
+                next = n;
+            }
+            Err(why) => {
+                warnings.push(format!("forward selection: the step with {names} included failed: {why}"));
+                break;
+            }
+        }
+    }
+    (steps, last, warnings)
+}
+
+/// The verdict of the forward selection (module docs, "Composable
+/// verdicts"): with two or more named steps, the label names the set (`a + b`,
+/// `partial: a + b` when a cell stays flagged with the whole set) and the
+/// sentence says what each later step added; with one, the first step's
+/// verdict, its sentence saying why the selection stopped.
+fn compose_verdict(verdict: &mut Verdict, selection: &[SelectionStep]) {
+    let named: Vec<&SelectionStep> = selection.iter().filter(|s| s.named.is_some()).collect();
+    let mut sentence = String::new();
+    for s in selection.iter().skip(1) {
+        let with = s.included.iter().map(|c| c.id()).collect::<Vec<_>>().join(" + ");
+        match (s.named, &s.heldout) {
+            (Some(c), Some(h)) => sentence.push_str(&format!(
+                " With {with} included, {c} is named next (LR {:.1}; it closes {:.2} [{:.2}, {:.2}] of the held-out gap \
+                 that remains).",
+                s.lr, h.closure, h.closure_ci90[0], h.closure_ci90[1]
+            )),
+            (Some(c), None) => sentence.push_str(&format!(" With {with} included, {c} is named next (LR {:.1}).", s.lr)),
+            (None, _) => sentence.push_str(&format!(
+                " With {with} included, no further candidate is named and improves the held-out prediction (step \
+                 verdict: {}).",
+                s.label
+            )),
+        }
+    }
+    if named.len() >= 2 {
+        let ids: Vec<CandidateId> = named.iter().filter_map(|s| s.named).collect();
+        let set = ids.iter().map(|c| c.id()).collect::<Vec<_>>().join(" + ");
+        // What stays flagged with the whole set: the WHERE cells of the step
+        // after the last named one (its baseline holds them all, refitted
+        // together), else the last named step's own remaining cells.
+        let remaining = match selection.last() {
+            Some(s) if s.named.is_none() => s.flagged.clone(),
+            _ => named.last().expect("two named steps").remaining_cells.clone(),
+        };
+        verdict.label = if remaining.is_empty() { set } else { format!("partial: {set}") };
+        verdict.effects = ids;
+        verdict.remaining_cells = remaining;
+    }
+    verdict.sentence.push_str(&sentence);
 }
 
 fn decide(

@@ -344,6 +344,10 @@ pub struct Model {
     /// Prior standard deviation of the per-sample log-scales (0: the calibration
     /// has none; module docs, "Per-sample scales").
     pub sample_scale_sd: f64,
+    /// Candidates already in the model, at fixed parameter values (registry
+    /// order): the forward selection's earlier steps (`diagnosis` module docs,
+    /// "Composable verdicts"). Every run carries them under the tested one.
+    pub included: Vec<(CandidateId, Vec<f64>)>,
 }
 
 /// Phase of a time inside the protocol (`t` within the segment `(t_i, t_i+1]`).
@@ -758,6 +762,7 @@ impl Model {
             observations,
             offsets,
             sample_scale_sd: 0.0,
+            included: Vec::new(),
         })
     }
 
@@ -873,10 +878,15 @@ impl Model {
     fn problem(&self, k: usize, theta: &[f64], effect: Option<(CandidateId, &[f64])>) -> Result<AnyPress, EvalError> {
         let trial = &self.trials[k];
         let table = self.table_with(&self.trial_theta(k, theta));
-        let component = effect.and_then(|(c, values)| match c {
-            CandidateId::Component(c) => Some((c, values)),
-            CandidateId::Effect(_) => None,
-        });
+        let applied: Vec<(CandidateId, &[f64])> =
+            self.included.iter().map(|(c, v)| (*c, v.as_slice())).chain(effect).collect();
+        let components: Vec<(super::library::Component, &[f64])> = applied
+            .iter()
+            .filter_map(|&(c, values)| match c {
+                CandidateId::Component(c) => Some((c, values)),
+                CandidateId::Effect(_) => None,
+            })
+            .collect();
         let materials: Vec<Material> = trial
             .region_material
             .iter()
@@ -885,18 +895,24 @@ impl Model {
                     .to_material()
                     .map_err(|m| EvalError::new(format!("material {name} lacks {}", m.key)))?;
                 m.rheology.validate().map_err(|e| EvalError::new(format!("material {name}: {e}")))?;
-                if let (Some((c, values)), Some(net)) = (component, m.network.as_ref()) {
-                    let changed = c.apply(net, values);
-                    changed.validate().map_err(|e| EvalError::new(format!("material {name} with {}: {e}", c.id())))?;
-                    m.network = Some(changed);
+                for &(c, values) in &components {
+                    if let Some(net) = m.network.as_ref() {
+                        let changed = c.apply(net, values);
+                        changed
+                            .validate()
+                            .map_err(|e| EvalError::new(format!("material {name} with {}: {e}", c.id())))?;
+                        m.network = Some(changed);
+                    }
                 }
                 Ok(m)
             })
             .collect::<Result<_, EvalError>>()?;
         let mut p = trial.problem.clone();
         let set = |effects: &mut Effects| -> Result<(), EvalError> {
-            if let Some((CandidateId::Effect(e), values)) = effect {
-                effects.set(e, values).map_err(|err| EvalError::new(format!("trial {}: {err}", trial.name)))?;
+            for &(c, values) in &applied {
+                if let CandidateId::Effect(e) = c {
+                    effects.set(e, values).map_err(|err| EvalError::new(format!("trial {}: {err}", trial.name)))?;
+                }
             }
             Ok(())
         };
