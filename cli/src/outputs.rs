@@ -3,7 +3,8 @@
 //!
 //! - **Inputs are never written**: no output (`-o`, `--report`, `--gltf`) may be
 //!   an input (a bundle, a materials file, a surface, the folder `export` reads),
-//!   lie inside one, or be a folder holding one ([`refuse_input_overlap`]).
+//!   lie inside one, or be a folder holding one ([`refuse_input_overlap`]). A
+//!   glTF input's buffers and images count as inputs.
 //! - **User files are never replaced without `--force`**: an existing output file
 //!   is replaced only when a wagashi writer made it
 //!   ([`wagashi_io::atomic::written_by_wagashi`]) or the user passed `--force`
@@ -17,7 +18,8 @@
 //!   `--pvd` or `--gltf` frames add to it.
 //! - **Interrupts**: Ctrl-C or SIGTERM ends the process with status 130 and one
 //!   line, after removing the temporary files and folders of the outputs being
-//!   written ([`install_interrupt_handler`]).
+//!   written ([`install_interrupt_handler`]). What a killed run left beside an
+//!   output is removed by the next run on the same output ([`sweep_stale`]).
 
 use std::path::Path;
 
@@ -61,6 +63,15 @@ pub fn refuse_foreign_file(flag: &str, path: &Path, force: bool) -> anyhow::Resu
         bail!("{}: {flag}: exists and was not written by wagashi; pass --force to replace it", path.display());
     }
     Ok(())
+}
+
+/// Removes the temporary files and folders that a killed run writing `path`
+/// left beside it (`.NAME.tmp-PID-*` of a process no longer running) and says
+/// so on stderr, one line each.
+pub fn sweep_stale(path: &Path) {
+    for stale in wagashi_io::atomic::remove_stale_temporaries(path) {
+        eprintln!("note: removed {}, left by an interrupted run", stale.display());
+    }
 }
 
 /// Peak memory of a 3D run per tetrahedron [bytes] at [`REFERENCE_TETS`]:

@@ -23,6 +23,7 @@
 //! | `contact_nodes.json` | with contact tools: the nodes touching each tool at the kept times |
 //! | `specimen/FILE`    | with `shape = "surface"` or `"mesh"`: a copy of the specimen's surface or mesh file(s), which the output's `experiment.toml` names |
 //! | `tools/NAME.EXT`   | with surface tools: a copy of each tool's surface file, which the output's `experiment.toml` names |
+//! | `*.bufferI.EXT`, `*.imageI.EXT` | beside a copied glTF file: the buffers and images it names by relative URIs, renamed (the copy's URIs name them), so that the copy reads back |
 //!
 //! Trials other than the seed's press (a sphere, a punch, a surface tool,
 //! friction, `[[protocol.tools]]`; `Bundle::has_contact_tools`) run with rigid
@@ -911,9 +912,7 @@ fn copy_tool_surfaces(
             if !required && !from.is_file() {
                 continue;
             }
-            let bytes = wagashi_io::input::read(&from).with_context(|| format!("{}: cannot read", from.display()))?;
-            write_atomic(dir.join(&to), &bytes)?;
-            written.push(to);
+            written.extend(copy_input_file(&from, dir, &to)?);
         }
         *file = relative;
     }
@@ -921,13 +920,10 @@ fn copy_tool_surfaces(
         let from = bundle.dir.join(file.as_str());
         let ext = Path::new(file.as_str()).extension().map(|e| format!(".{}", e.to_string_lossy())).unwrap_or_default();
         let relative = format!("{TOOL_SURFACES_DIR}/{tool}{ext}");
-        let bytes = wagashi_io::input::read(&from).with_context(|| format!("{}: cannot read", from.display()))?;
-        let to = dir.join(&relative);
         std::fs::create_dir_all(dir.join(TOOL_SURFACES_DIR))
             .with_context(|| format!("{}: cannot create", dir.join(TOOL_SURFACES_DIR).display()))?;
-        write_atomic(&to, &bytes)?;
-        *file = relative.clone();
-        written.push(relative);
+        written.extend(copy_input_file(&from, dir, &relative)?);
+        *file = relative;
         Ok(())
     };
     let p = &mut experiment.protocol;
@@ -940,6 +936,26 @@ fn copy_tool_surfaces(
         if let Some(file) = t.surface.as_mut() {
             copy(&t.name, file)?;
         }
+    }
+    Ok(written)
+}
+
+/// Copies the input file `from` to `dir/relative` and returns the names written
+/// (relative to `dir`): the file, and for a glTF or GLB file the buffers and
+/// images it names by relative URIs, beside the copy as `STEM.bufferI.EXT` and
+/// `STEM.imageI.EXT` with the copy's URIs renamed to match, so that the copy
+/// reads back ([`wagashi_io::surface::portable_gltf`]).
+fn copy_input_file(from: &Path, dir: &Path, relative: &str) -> anyhow::Result<Vec<String>> {
+    let to = Path::new(relative);
+    let stem = to.file_stem().map_or_else(|| "copy".into(), |s| s.to_string_lossy().into_owned());
+    let copy = wagashi_io::surface::portable_gltf(from, &stem)?;
+    write_atomic(dir.join(to), &copy.bytes)?;
+    let mut written = vec![relative.to_string()];
+    let folder = to.parent().unwrap_or(Path::new(""));
+    for (name, bytes) in &copy.companions {
+        let companion = folder.join(name);
+        write_atomic(dir.join(&companion), bytes)?;
+        written.push(companion.to_string_lossy().into_owned());
     }
     Ok(written)
 }
