@@ -18,10 +18,13 @@
 //!   `--pvd` or `--gltf` frames add to it.
 //! - **Interrupts**: Ctrl-C or SIGTERM ends the process with status 130 and one
 //!   line, after removing the temporary files and folders of the outputs being
-//!   written ([`install_interrupt_handler`]). What a killed run left beside an
+//!   written ([`install_interrupt_handler`]); a `press` simulation stops between
+//!   steps and the command unwinds ([`CancellableRun`]). What a killed run left beside an
 //!   output is removed by the next run on the same output ([`sweep_stale`]).
 
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
 
 use anyhow::bail;
 
@@ -192,21 +195,84 @@ fn refuse_if_too_large(volume_mm3: f64, size_mm: f64, size_flag: &str, available
 
 const GIB: f64 = 1024.0 * 1024.0 * 1024.0;
 
-static INTERRUPTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// Set by the interrupt handler: a run of [`fem_core::press::simulate_any_cancellable`]
+/// reading it stops after the step it is taking.
+static CANCEL: AtomicBool = AtomicBool::new(false);
+
+/// Whether a simulation that reads [`CANCEL`] is running ([`CancellableRun`]).
+static CANCELLABLE: AtomicBool = AtomicBool::new(false);
+
+/// Whether the interrupt handler or `main` has taken on ending the process.
+static EXIT_CLAIMED: AtomicBool = AtomicBool::new(false);
+
+/// How long the interrupt handler waits for a cancellable run to stop at the
+/// end of its step and the command to unwind, before it ends the process itself.
+const STOP_GRACE: Duration = Duration::from_secs(3);
 
 /// Whether an interrupt is being handled: the handler ends the process (status
 /// 130); an error the removal of the temporaries caused meanwhile is not reported.
 pub fn interrupted() -> bool {
-    INTERRUPTED.load(std::sync::atomic::Ordering::SeqCst)
+    INTERRUPTED.load(Ordering::SeqCst)
 }
 
-/// Installs the Ctrl-C / SIGTERM handler: it waits for a folder being moved
-/// into place, removes the temporary files and folders of the outputs being
-/// written, prints one line and exits with status 130 (128 + SIGINT), so that an
-/// interrupted run leaves neither a partial output nor a hidden temporary.
+/// The flag a simulation reads between its steps to stop on an interrupt.
+pub fn cancel_flag() -> &'static AtomicBool {
+    &CANCEL
+}
+
+/// Takes on ending the process after an interrupt; `false` when the interrupt
+/// handler or `main` already has (the caller then waits for it).
+pub fn claim_exit() -> bool {
+    !EXIT_CLAIMED.swap(true, Ordering::SeqCst)
+}
+
+/// Marks a simulation that reads [`cancel_flag`] as running, until dropped: an
+/// interrupt then stops it between steps, and the command unwinds (its
+/// temporary output removed as on any error) and exits with status 130.
+#[derive(Debug)]
+pub struct CancellableRun(());
+
+impl CancellableRun {
+    /// Marks the run as started.
+    pub fn start() -> Self {
+        CANCELLABLE.store(true, Ordering::SeqCst);
+        Self(())
+    }
+}
+
+impl Drop for CancellableRun {
+    fn drop(&mut self) {
+        CANCELLABLE.store(false, Ordering::SeqCst);
+    }
+}
+
+/// Installs the Ctrl-C / SIGTERM handler. During a cancellable simulation
+/// ([`CancellableRun`]) it sets [`cancel_flag`] and leaves the command
+/// [`STOP_GRACE`] to stop between steps and unwind (`main` then prints one line
+/// and exits with status 130). Otherwise, or when that takes longer, it waits
+/// for a folder being moved into place, removes the temporary files and folders
+/// of the outputs being written, prints one line and exits with status 130
+/// (128 + SIGINT), so that an interrupted run leaves neither a partial output
+/// nor a hidden temporary.
 pub fn install_interrupt_handler() {
     let installed = ctrlc::set_handler(|| {
-        INTERRUPTED.store(true, std::sync::atomic::Ordering::SeqCst);
+        INTERRUPTED.store(true, Ordering::SeqCst);
+        CANCEL.store(true, Ordering::SeqCst);
+        if CANCELLABLE.load(Ordering::SeqCst) {
+            // `main` ends the process once the run has stopped.
+            let clock = Instant::now();
+            while clock.elapsed() < STOP_GRACE {
+                std::thread::sleep(Duration::from_millis(20));
+            }
+        }
+        if !claim_exit() {
+            // `main` is ending the process.
+            loop {
+                std::thread::park();
+            }
+        }
         let removed = wagashi_io::atomic::remove_pending_for_exit();
         let what = match removed.len() {
             0 => "nothing was written".to_string(),

@@ -73,7 +73,8 @@ use anyhow::{bail, Context};
 use clap::{Args, ValueEnum};
 use fem_core::element::Formulation;
 use fem_core::press::{
-    simulate_any, AnyPress, Integrator, PressResult, Settings, Snapshot, Tool, ToolSample, ToolTrack, Volumetric,
+    simulate_any_cancellable, AnyPress, Integrator, PressResult, Settings, Snapshot, Tool, ToolSample, ToolTrack,
+    Volumetric,
 };
 use wagashi_io::vtu::{write_pvd, write_vtu, VtuFields};
 use wagashi_io::{
@@ -491,7 +492,11 @@ fn press_bundle_as(
     }
     let bar = SimulationBar::new(end_s);
     let sim_clock = Instant::now();
-    let result = simulate_any(&problem, &settings, &mut |p| bar.update(p));
+    let result = {
+        // An interrupt stops the run between steps (`crate::outputs`).
+        let _cancellable = crate::outputs::CancellableRun::start();
+        simulate_any_cancellable(&problem, &settings, crate::outputs::cancel_flag(), &mut |p| bar.update(p))
+    };
     bar.finish();
     let result = result.with_context(|| format!("simulating {}", bundle.experiment_file().display()))?;
     let wall_time_s = sim_clock.elapsed().as_secs_f64();
