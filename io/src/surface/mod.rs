@@ -75,5 +75,5 @@ pub mod stl;
 pub use error::{Location, SurfaceError};
 pub use gltf_companions::{gltf_companions, portable_gltf, PortableGltf};
 pub use options::{LengthUnit, SurfaceFormat, SurfaceOptions, UnknownUnit};
-pub use read::{read_surface, ImportedSurface};
+pub use read::{read_surface, ImportedSurface, MAX_COORDINATE_MM};
 pub use stl::{write_stl, StlEncoding};
