@@ -420,28 +420,6 @@ fn press_bundle_as(
         // and line, before the size is used.
         (None, None) => (1.0, "default"),
     };
-    let surface_mesh_mode = bundle.surface_path().map(|_| how.surface_mesh.as_str());
-    // A `shape = "mesh"` specimen has the cells of its file, whatever the size.
-    let mesh_file = bundle.mesh_path();
-    if bundle.experiment.dimension == 3 && !how.axisymmetric && mesh_file.is_none() {
-        if let Some(volume) = bundle.volume_mm3() {
-            crate::outputs::check_memory(volume, size_mm, options.size_origin, options.allow_large)?;
-        }
-    }
-    let mut problem = if how.axisymmetric {
-        bundle.to_press_axisymmetric(size_mm)?
-    } else {
-        bundle.to_press_meshed(size_mm, how.surface_mesh)?
-    };
-    let tool_names: Vec<String> = problem_tools(&problem).iter().map(|t| t.name.clone()).collect();
-    if !tool_names.is_empty() && options.integrator != IntegratorArg::Implicit {
-        bail!(
-            "--integrator {}: {} runs with rigid contact tools ({}), which need --integrator implicit",
-            options.integrator.as_str(),
-            bundle.experiment_file().display(),
-            tool_names.join(", ")
-        );
-    }
     let pvd_times: Vec<f64> = match options.pvd {
         Some(n) => (0..=n).map(|i| if i == n { end_s } else { end_s * f64::from(i) / f64::from(n) }).collect(),
         None => Vec::new(),
@@ -460,6 +438,30 @@ fn press_bundle_as(
     snapshot_times.extend(strokes.iter().flat_map(|&(peak, after)| [peak, after]));
     snapshot_times.sort_by(f64::total_cmp);
     snapshot_times.dedup();
+    let surface_mesh_mode = bundle.surface_path().map(|_| how.surface_mesh.as_str());
+    // A `shape = "mesh"` specimen has the cells of its file, whatever the size.
+    let mesh_file = bundle.mesh_path();
+    if bundle.experiment.dimension == 3 && !how.axisymmetric && mesh_file.is_none() {
+        if let Some(volume) = bundle.volume_mm3() {
+            // The kept shapes: the frames, the stroke shapes, the release and the end.
+            let kept = snapshot_times.len() + crate::outputs::DEFAULT_SNAPSHOTS;
+            crate::outputs::check_memory(volume, size_mm, kept, options.size_origin, options.allow_large)?;
+        }
+    }
+    let mut problem = if how.axisymmetric {
+        bundle.to_press_axisymmetric(size_mm)?
+    } else {
+        bundle.to_press_meshed(size_mm, how.surface_mesh)?
+    };
+    let tool_names: Vec<String> = problem_tools(&problem).iter().map(|t| t.name.clone()).collect();
+    if !tool_names.is_empty() && options.integrator != IntegratorArg::Implicit {
+        bail!(
+            "--integrator {}: {} runs with rigid contact tools ({}), which need --integrator implicit",
+            options.integrator.as_str(),
+            bundle.experiment_file().display(),
+            tool_names.join(", ")
+        );
+    }
     set_snapshot_times(&mut problem, &snapshot_times);
     let mesh = MeshInfo::of(&problem)?;
     let model = match (&problem, surface_mesh_mode) {
