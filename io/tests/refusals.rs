@@ -787,3 +787,33 @@ fn a_vertex_far_out_names_its_line() {
     std::fs::write(&path, obj(&MAX_COORDINATE_MM.to_string())).unwrap();
     assert!(read_surface(&path, &SurfaceOptions::default()).is_ok());
 }
+
+// ---- meshes --------------------------------------------------------------------
+
+/// An empty or comment-only mesh file ends before its first record: the
+/// refusal names line 1 at least (lines count from 1), never line 0.
+#[test]
+fn an_empty_mesh_file_names_a_line_from_1() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [(&str, &str, &str); 4] = [
+        ("a.node", "", ":1: "),
+        ("b.node", "# only a comment\n", ":1: "),
+        ("c.msh", "", ":1: "),
+        ("d.msh", "\n\n", ":1: "),
+    ];
+    for (name, text, want) in cases {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).unwrap();
+        if name.ends_with(".node") {
+            std::fs::write(path.with_extension("ele"), "1 4 0\n1 1 2 3 4\n").unwrap();
+        }
+        let msg = wagashi_io::tetmesh::read_tetmesh(&path).unwrap_err().to_string();
+        let file = path.display().to_string();
+        assert!(msg.starts_with(&format!("{file}{want}")), "{name}: {msg}");
+    }
+    // A binary byte on line 2 of a .msh: that line, not line 0.
+    let path = dir.path().join("e.msh");
+    std::fs::write(&path, b"$MeshFormat\n4.1 0 \xff\n$EndMeshFormat\n").unwrap();
+    let msg = wagashi_io::tetmesh::read_tetmesh(&path).unwrap_err().to_string();
+    assert!(msg.starts_with(&format!("{}:2: $MeshFormat: not ASCII text", path.display())), "{msg}");
+}
