@@ -359,6 +359,7 @@ impl GltfTarget {
             }
         }
         let resolved = crate::press::resolve(path)?;
+        crate::outputs::sweep_stale(path);
         let inside_output = match output {
             Some(out) => resolved.strip_prefix(crate::press::resolve(out)?).ok().map(Path::to_path_buf),
             None => None,

@@ -49,7 +49,7 @@ use std::io::Write;
 
 use clap::{Parser, Subcommand};
 
-pub use outputs::{install_interrupt_handler, interrupted};
+pub use outputs::{claim_exit, install_interrupt_handler, interrupted};
 
 /// The `wagashi` command line.
 #[derive(Debug, Parser)]

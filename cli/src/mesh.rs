@@ -294,19 +294,26 @@ fn mesh_files(output: &Path, format: TetMeshFormat) -> Vec<PathBuf> {
     }
 }
 
-/// Every output must stay off the input surface, and an existing file is
+/// Every output must stay off the input surface (and a glTF's buffers and
+/// images), killed writes' temporaries beside an output are removed, and an existing file is
 /// replaced only when wagashi wrote it or with `--force`; the report may not
 /// be one of the mesh files.
 fn check_outputs(args: &MeshArgs, format: TetMeshFormat) -> anyhow::Result<()> {
-    let inputs = [("surface", args.surface.as_path())];
+    // A glTF surface's buffers and images are inputs too; a URI the reader
+    // refuses is reported when the surface is read.
+    let companions = wagashi_io::surface::gltf_companions(&args.surface).unwrap_or_default();
+    let mut inputs = vec![("surface", args.surface.as_path())];
+    inputs.extend(companions.iter().map(|c| ("file of the glTF surface", c.as_path())));
     let meshes = mesh_files(&args.output, format);
     for file in &meshes {
         crate::outputs::refuse_input_overlap("-o", file, &inputs)?;
         crate::outputs::refuse_foreign_file("-o", file, args.force)?;
+        crate::outputs::sweep_stale(file);
     }
     if let Some(report) = &args.report {
         crate::outputs::refuse_input_overlap("--report", report, &inputs)?;
         crate::outputs::refuse_foreign_file("--report", report, args.force)?;
+        crate::outputs::sweep_stale(report);
         let resolved = crate::press::resolve(report)?;
         for file in &meshes {
             if crate::press::resolve(file)? == resolved {

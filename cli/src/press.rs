@@ -23,6 +23,7 @@
 //! | `contact_nodes.json` | with contact tools: the nodes touching each tool at the kept times |
 //! | `specimen/FILE`    | with `shape = "surface"` or `"mesh"`: a copy of the specimen's surface or mesh file(s), which the output's `experiment.toml` names |
 //! | `tools/NAME.EXT`   | with surface tools: a copy of each tool's surface file, which the output's `experiment.toml` names |
+//! | `*.bufferI.EXT`, `*.imageI.EXT` | beside a copied glTF file: the buffers and images it names by relative URIs, renamed (the copy's URIs name them), so that the copy reads back |
 //!
 //! Trials other than the seed's press (a sphere, a punch, a surface tool,
 //! friction, `[[protocol.tools]]`; `Bundle::has_contact_tools`) run with rigid
@@ -72,7 +73,8 @@ use anyhow::{bail, Context};
 use clap::{Args, ValueEnum};
 use fem_core::element::Formulation;
 use fem_core::press::{
-    simulate_any, AnyPress, Integrator, PressResult, Settings, Snapshot, Tool, ToolSample, ToolTrack, Volumetric,
+    simulate_any_cancellable, AnyPress, Integrator, PressResult, Settings, Snapshot, Tool, ToolSample, ToolTrack,
+    Volumetric,
 };
 use wagashi_io::vtu::{write_pvd, write_vtu, VtuFields};
 use wagashi_io::{
@@ -418,28 +420,6 @@ fn press_bundle_as(
         // and line, before the size is used.
         (None, None) => (1.0, "default"),
     };
-    let surface_mesh_mode = bundle.surface_path().map(|_| how.surface_mesh.as_str());
-    // A `shape = "mesh"` specimen has the cells of its file, whatever the size.
-    let mesh_file = bundle.mesh_path();
-    if bundle.experiment.dimension == 3 && !how.axisymmetric && mesh_file.is_none() {
-        if let Some(volume) = bundle.volume_mm3() {
-            crate::outputs::check_memory(volume, size_mm, options.size_origin, options.allow_large)?;
-        }
-    }
-    let mut problem = if how.axisymmetric {
-        bundle.to_press_axisymmetric(size_mm)?
-    } else {
-        bundle.to_press_meshed(size_mm, how.surface_mesh)?
-    };
-    let tool_names: Vec<String> = problem_tools(&problem).iter().map(|t| t.name.clone()).collect();
-    if !tool_names.is_empty() && options.integrator != IntegratorArg::Implicit {
-        bail!(
-            "--integrator {}: {} runs with rigid contact tools ({}), which need --integrator implicit",
-            options.integrator.as_str(),
-            bundle.experiment_file().display(),
-            tool_names.join(", ")
-        );
-    }
     let pvd_times: Vec<f64> = match options.pvd {
         Some(n) => (0..=n).map(|i| if i == n { end_s } else { end_s * f64::from(i) / f64::from(n) }).collect(),
         None => Vec::new(),
@@ -458,6 +438,30 @@ fn press_bundle_as(
     snapshot_times.extend(strokes.iter().flat_map(|&(peak, after)| [peak, after]));
     snapshot_times.sort_by(f64::total_cmp);
     snapshot_times.dedup();
+    let surface_mesh_mode = bundle.surface_path().map(|_| how.surface_mesh.as_str());
+    // A `shape = "mesh"` specimen has the cells of its file, whatever the size.
+    let mesh_file = bundle.mesh_path();
+    if bundle.experiment.dimension == 3 && !how.axisymmetric && mesh_file.is_none() {
+        if let Some(volume) = bundle.volume_mm3() {
+            // The kept shapes: the frames, the stroke shapes, the release and the end.
+            let kept = snapshot_times.len() + crate::outputs::DEFAULT_SNAPSHOTS;
+            crate::outputs::check_memory(volume, size_mm, kept, options.size_origin, options.allow_large)?;
+        }
+    }
+    let mut problem = if how.axisymmetric {
+        bundle.to_press_axisymmetric(size_mm)?
+    } else {
+        bundle.to_press_meshed(size_mm, how.surface_mesh)?
+    };
+    let tool_names: Vec<String> = problem_tools(&problem).iter().map(|t| t.name.clone()).collect();
+    if !tool_names.is_empty() && options.integrator != IntegratorArg::Implicit {
+        bail!(
+            "--integrator {}: {} runs with rigid contact tools ({}), which need --integrator implicit",
+            options.integrator.as_str(),
+            bundle.experiment_file().display(),
+            tool_names.join(", ")
+        );
+    }
     set_snapshot_times(&mut problem, &snapshot_times);
     let mesh = MeshInfo::of(&problem)?;
     let model = match (&problem, surface_mesh_mode) {
@@ -490,7 +494,11 @@ fn press_bundle_as(
     }
     let bar = SimulationBar::new(end_s);
     let sim_clock = Instant::now();
-    let result = simulate_any(&problem, &settings, &mut |p| bar.update(p));
+    let result = {
+        // An interrupt stops the run between steps (`crate::outputs`).
+        let _cancellable = crate::outputs::CancellableRun::start();
+        simulate_any_cancellable(&problem, &settings, crate::outputs::cancel_flag(), &mut |p| bar.update(p))
+    };
     bar.finish();
     let result = result.with_context(|| format!("simulating {}", bundle.experiment_file().display()))?;
     let wall_time_s = sim_clock.elapsed().as_secs_f64();
@@ -911,9 +919,7 @@ fn copy_tool_surfaces(
             if !required && !from.is_file() {
                 continue;
             }
-            let bytes = wagashi_io::input::read(&from).with_context(|| format!("{}: cannot read", from.display()))?;
-            write_atomic(dir.join(&to), &bytes)?;
-            written.push(to);
+            written.extend(copy_input_file(&from, dir, &to)?);
         }
         *file = relative;
     }
@@ -921,13 +927,10 @@ fn copy_tool_surfaces(
         let from = bundle.dir.join(file.as_str());
         let ext = Path::new(file.as_str()).extension().map(|e| format!(".{}", e.to_string_lossy())).unwrap_or_default();
         let relative = format!("{TOOL_SURFACES_DIR}/{tool}{ext}");
-        let bytes = wagashi_io::input::read(&from).with_context(|| format!("{}: cannot read", from.display()))?;
-        let to = dir.join(&relative);
         std::fs::create_dir_all(dir.join(TOOL_SURFACES_DIR))
             .with_context(|| format!("{}: cannot create", dir.join(TOOL_SURFACES_DIR).display()))?;
-        write_atomic(&to, &bytes)?;
-        *file = relative.clone();
-        written.push(relative);
+        written.extend(copy_input_file(&from, dir, &relative)?);
+        *file = relative;
         Ok(())
     };
     let p = &mut experiment.protocol;
@@ -940,6 +943,26 @@ fn copy_tool_surfaces(
         if let Some(file) = t.surface.as_mut() {
             copy(&t.name, file)?;
         }
+    }
+    Ok(written)
+}
+
+/// Copies the input file `from` to `dir/relative` and returns the names written
+/// (relative to `dir`): the file, and for a glTF or GLB file the buffers and
+/// images it names by relative URIs, beside the copy as `STEM.bufferI.EXT` and
+/// `STEM.imageI.EXT` with the copy's URIs renamed to match, so that the copy
+/// reads back ([`wagashi_io::surface::portable_gltf`]).
+fn copy_input_file(from: &Path, dir: &Path, relative: &str) -> anyhow::Result<Vec<String>> {
+    let to = Path::new(relative);
+    let stem = to.file_stem().map_or_else(|| "copy".into(), |s| s.to_string_lossy().into_owned());
+    let copy = wagashi_io::surface::portable_gltf(from, &stem)?;
+    write_atomic(dir.join(to), &copy.bytes)?;
+    let mut written = vec![relative.to_string()];
+    let folder = to.parent().unwrap_or(Path::new(""));
+    for (name, bytes) in &copy.companions {
+        let companion = folder.join(name);
+        write_atomic(dir.join(&companion), bytes)?;
+        written.push(companion.to_string_lossy().into_owned());
     }
     Ok(written)
 }

@@ -572,3 +572,127 @@ fn the_next_run_removes_a_killed_runs_temporary_folder() {
     let left: Vec<_> = std::fs::read_dir(tmp.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
     assert_eq!(left, vec![std::ffi::OsString::from("out")]);
 }
+
+// ---- glTF files with external buffers ------------------------------------------
+
+/// A closed box from `lo` to `hi` (outward triangles) as a glTF file whose
+/// positions and indices live in the external buffer `bin_name`: the JSON text
+/// and the buffer's bytes.
+fn box_gltf(lo: [f64; 3], hi: [f64; 3], bin_name: &str) -> (String, Vec<u8>) {
+    let mut bin = Vec::new();
+    for i in 0..8 {
+        for k in 0..3 {
+            let x = if i >> (2 - k) & 1 == 1 { hi[k] } else { lo[k] };
+            bin.extend_from_slice(&(x as f32).to_le_bytes());
+        }
+    }
+    let quads = [[5, 7, 8, 6], [1, 2, 4, 3], [3, 4, 8, 7], [1, 5, 6, 2], [2, 6, 8, 4], [1, 3, 7, 5]];
+    for f in quads {
+        for v in [f[0], f[1], f[2], f[0], f[2], f[3]] {
+            bin.extend_from_slice(&(v as u16 - 1).to_le_bytes());
+        }
+    }
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+"meshes":[{{"name":"box","primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":8,"type":"VEC3","min":[{},{},{}],"max":[{},{},{}]}},
+{{"bufferView":1,"componentType":5123,"count":36,"type":"SCALAR"}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":96}},{{"buffer":0,"byteOffset":96,"byteLength":72}}],
+"buffers":[{{"uri":"{bin_name}","byteLength":168}}]}}"#,
+        lo[0] as f32, lo[1] as f32, lo[2] as f32, hi[0] as f32, hi[1] as f32, hi[2] as f32
+    );
+    (json, bin)
+}
+
+/// `mesh scene.gltf --report scene.bin` would replace the glTF's buffer: the
+/// files a glTF input names are inputs too, refused even with --force.
+#[test]
+fn mesh_outputs_may_not_be_a_gltf_inputs_buffer() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (json, bin) = box_gltf([0.0; 3], [0.004; 3], "scene.bin");
+    std::fs::write(tmp.path().join("scene.gltf"), &json).unwrap();
+    std::fs::write(tmp.path().join("scene.bin"), &bin).unwrap();
+    let before = contents(tmp.path());
+    for args in [
+        ["mesh", "scene.gltf", "-o", "x.vtu", "--size-mm", "1", "--report", "scene.bin", "--force"],
+        ["mesh", "scene.gltf", "-o", "x.vtu", "--size-mm", "1", "--report", "./scene.bin", "--force"],
+    ] {
+        let line = assert_one_line_error(&wagashi_in(tmp.path(), args));
+        assert!(line.contains("scene.bin") && line.contains("file of the glTF surface"), "{args:?}: {line}");
+        assert_eq!(contents(tmp.path()), before, "{args:?}");
+    }
+    assert_success(&wagashi_in(tmp.path(), ["mesh", "scene.gltf", "-o", "x.vtu", "--size-mm", "1"]));
+}
+
+/// A `.gltf` tool surface whose data lie in an external buffer is copied into
+/// the output with that buffer (renamed beside it), so the output reads back
+/// as a bundle.
+#[test]
+fn a_gltf_tool_travels_with_its_buffer() {
+    let tmp = tempfile::tempdir().unwrap();
+    let bundle = tmp.path().join("lid");
+    std::fs::create_dir_all(bundle.join("shapes")).unwrap();
+    let (json, bin) = box_gltf([-30.0, 10.0, -40.0], [50.0, 50.0, 40.0], "lid%20data.bin");
+    std::fs::write(bundle.join("shapes/lid.gltf"), json).unwrap();
+    std::fs::write(bundle.join("shapes/lid data.bin"), &bin).unwrap();
+    let toml = r#"format = "wagashi-experiment/1"
+name = "lid"
+dimension = 2
+
+[specimen]
+shape = "block"
+size_mm = [20.0, 10.0, 8.0]
+material = "gel"
+
+[materials.gel]
+model = "elastic"
+poisson = 0.45
+E_MPa = 0.05
+
+[protocol]
+tool = "surface"
+tool_surface = "shapes/lid.gltf"
+tool_surface_units = "mm"
+tool_contact = "frictionless"
+support = "glued"
+waypoints = [[0.0, 0.0], [10.0, 1.0]]
+release_s = 10.0
+end_s = 10.0
+"#;
+    std::fs::write(bundle.join("experiment.toml"), toml).unwrap();
+    let out = tmp.path().join("out");
+    assert_success(&press_in(tmp.path(), &bundle, &out, &["--size-mm", "2"]));
+    assert_eq!(std::fs::read(out.join("tools/surface.buffer0.bin")).unwrap(), bin);
+    let listed = read_summary(&out)["files"].clone();
+    let listed: Vec<&str> = listed.as_array().unwrap().iter().map(|f| f.as_str().unwrap()).collect();
+    assert!(listed.contains(&"tools/surface.gltf") && listed.contains(&"tools/surface.buffer0.bin"), "{listed:?}");
+    let copy: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("tools/surface.gltf")).unwrap()).unwrap();
+    assert_eq!(copy["buffers"][0]["uri"], "surface.buffer0.bin");
+    // The output is a bundle that reads back, its tool included.
+    assert_success(&press_in(tmp.path(), &out, &tmp.path().join("again"), &["--size-mm", "2"]));
+}
+
+/// A single-file write killed outright leaves `.NAME.tmp-PID-*` beside the
+/// file; the next run writing that file removes it and says so.
+#[test]
+fn the_next_run_removes_a_killed_single_file_writes_temporary() {
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::write(tmp.path().join("cube.obj"), CUBE_OBJ).unwrap();
+    // Above Linux's largest process id (2^22): no running process has it.
+    let stale = [tmp.path().join(".x.vtu.tmp-4999999-Ab12Cd"), tmp.path().join(".r.json.tmp-4999999-Ef34Gh")];
+    for s in &stale {
+        std::fs::write(s, "partial").unwrap();
+    }
+    let o = wagashi_in(tmp.path(), ["mesh", "cube.obj", "-o", "x.vtu", "--size-mm", "1", "--report", "r.json"]);
+    assert_success(&o);
+    for s in &stale {
+        let name = s.file_name().unwrap().to_string_lossy();
+        let note = format!("{name}, left by an interrupted run");
+        assert!(stderr(&o).contains(&note), "{note}: {}", stderr(&o));
+        assert!(!s.exists());
+    }
+    let mut left: Vec<_> = std::fs::read_dir(tmp.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    left.sort();
+    assert_eq!(left, ["cube.obj", "r.json", "x.vtu"].map(std::ffi::OsString::from));
+}

@@ -186,3 +186,26 @@ fn a_killed_runs_temporary_folder_is_removed_by_the_next_run() {
     std::fs::remove_dir(&live).unwrap();
     assert_eq!(entries(root.path()), vec![".other.tmp-4999999-abc123"]);
 }
+
+/// A killed single-file write leaves `.NAME.tmp-PID-*` beside the file: the
+/// next run on the same file removes it (a dead PID only; a live process's,
+/// another file's, and a link of that name are left alone).
+#[cfg(target_os = "linux")]
+#[test]
+fn a_killed_single_file_writes_temporary_is_removed_by_the_next_run() {
+    let root = tempfile::tempdir().unwrap();
+    let target = root.path().join("x.vtu");
+    let stale = root.path().join(".x.vtu.tmp-4999999-Ab3dE9");
+    std::fs::write(&stale, b"partial").unwrap();
+    let live = root.path().join(format!(".x.vtu.tmp-{}-zzz999", std::process::id()));
+    std::fs::write(&live, b"being written").unwrap();
+    let other = root.path().join(".y.vtu.tmp-4999999-Ab3dE9");
+    std::fs::write(&other, b"partial").unwrap();
+    let link = root.path().join(".x.vtu.tmp-4999998-Ab3dE9");
+    std::os::unix::fs::symlink(&other, &link).unwrap();
+    let removed = wagashi_io::atomic::remove_stale_temporaries(&target);
+    assert_eq!(removed, vec![stale.clone()]);
+    assert!(!stale.exists() && live.exists() && other.exists());
+    assert!(std::fs::symlink_metadata(&link).is_ok());
+    assert!(wagashi_io::atomic::remove_stale_temporaries(&target).is_empty());
+}

@@ -244,6 +244,21 @@ fn negative_waypoint_time() {
     refused_toml(&toml, "waypoints", "protocol.waypoints[0]");
 }
 
+/// E = 1e308 MPa would overflow the first step ("non-finite displacement in
+/// element 1"): refused at read time, naming the file, the line, the key and why.
+#[test]
+fn a_modulus_too_large_to_compute_with() {
+    for (from, to, key) in
+        [("E1_MPa = 0.0349", "E1_MPa = 1e308", "E1_MPa"), ("c3_MPa_s = ", "c3_MPa_s = 1e101 # ", "c3_MPa_s")]
+    {
+        let toml = edit(EXPERIMENT, from, to);
+        let msg = refused_toml(&toml, key, &format!("materials.mat1.{key}"));
+        assert!(msg.contains("is larger than the 1e100") && msg.contains("overflow"), "{msg}");
+    }
+    let toml = edit(EXPERIMENT, "E1_MPa = 0.0349", "E1_MPa = 1e100");
+    assert!(read_bundle(&with_experiment(&toml).dir).is_ok());
+}
+
 #[test]
 fn zero_modulus() {
     let toml = edit(EXPERIMENT, "E1_MPa = 0.0349", "E1_MPa = 0.0");
@@ -744,4 +759,61 @@ fn a_specimen_surface_outside_the_bundle_folder_is_refused() {
     for to in ["surface = \"../gel.obj\"", "surface = \"/etc/passwd\"", "surface = \"./a/../../gel.obj\""] {
         refused_outside(&surface, "surface = \"gel.obj\"", to, "specimen.surface", outside);
     }
+}
+
+// ---- surfaces ------------------------------------------------------------------
+
+/// A vertex at 1e300 mm (a typo) would leave every triangle degenerate next to
+/// the surface's size ("the surface has no triangles" from the mesher): refused
+/// at read time, naming the file, the line and the coordinates. The same in
+/// another unit: 2e4 m is 2e7 mm. A 10 km shape in mm passes.
+#[test]
+fn a_vertex_far_out_names_its_line() {
+    use wagashi_io::surface::{read_surface, LengthUnit, SurfaceOptions, MAX_COORDINATE_MM};
+    let dir = tempfile::tempdir().unwrap();
+    let obj = |far: &str| format!("v 0 0 0\nv {far} 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+    let path = dir.path().join("big.obj");
+    std::fs::write(&path, obj("1e300")).unwrap();
+    let msg = read_surface(&path, &SurfaceOptions::default()).unwrap_err().to_string();
+    let want = format!("{}:2: coordinates [1e300, 0.0, 0.0] (mm) lie 1.000e300 mm from the origin", path.display());
+    assert!(msg.starts_with(&want) && msg.contains("the wrong unit"), "{msg}");
+    std::fs::write(&path, obj("2e4")).unwrap();
+    let metres = SurfaceOptions { units: Some(LengthUnit::M), ..Default::default() };
+    let msg = read_surface(&path, &metres).unwrap_err().to_string();
+    assert!(
+        msg.starts_with(&format!("{}:2: coordinates [20000.0, 0.0, 0.0] (m) lie 2.000e7 mm", path.display())),
+        "{msg}"
+    );
+    std::fs::write(&path, obj(&MAX_COORDINATE_MM.to_string())).unwrap();
+    assert!(read_surface(&path, &SurfaceOptions::default()).is_ok());
+}
+
+// ---- meshes --------------------------------------------------------------------
+
+/// An empty or comment-only mesh file ends before its first record: the
+/// refusal names line 1 at least (lines count from 1), never line 0.
+#[test]
+fn an_empty_mesh_file_names_a_line_from_1() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [(&str, &str, &str); 4] = [
+        ("a.node", "", ":1: "),
+        ("b.node", "# only a comment\n", ":1: "),
+        ("c.msh", "", ":1: "),
+        ("d.msh", "\n\n", ":1: "),
+    ];
+    for (name, text, want) in cases {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).unwrap();
+        if name.ends_with(".node") {
+            std::fs::write(path.with_extension("ele"), "1 4 0\n1 1 2 3 4\n").unwrap();
+        }
+        let msg = wagashi_io::tetmesh::read_tetmesh(&path).unwrap_err().to_string();
+        let file = path.display().to_string();
+        assert!(msg.starts_with(&format!("{file}{want}")), "{name}: {msg}");
+    }
+    // A binary byte on line 2 of a .msh: that line, not line 0.
+    let path = dir.path().join("e.msh");
+    std::fs::write(&path, b"$MeshFormat\n4.1 0 \xff\n$EndMeshFormat\n").unwrap();
+    let msg = wagashi_io::tetmesh::read_tetmesh(&path).unwrap_err().to_string();
+    assert!(msg.starts_with(&format!("{}:2: $MeshFormat: not ASCII text", path.display())), "{msg}");
 }

@@ -28,6 +28,8 @@
 //! dynamics, constraint stabilisation with psi = 2000, explicit Runge-Kutta), kept
 //! as a reference.
 
+use std::sync::atomic::AtomicBool;
+
 mod contact;
 mod fbar;
 mod inelastic;
@@ -68,6 +70,37 @@ pub fn simulate<const D: usize, const N: usize, const S: usize>(
 where
     crate::element::Simplex<D, N>: crate::element::ReferenceSimplex<D, N>,
 {
+    run_press(problem, settings, None, progress)
+}
+
+/// [`simulate`] that a caller (an interrupt handler) can stop: once `cancel`
+/// is set, the run ends after the step being taken with
+/// [`PressError::Cancelled`], naming that step and its end time, and returns
+/// no result. The quasi-static and dynamic schemes read the flag after each
+/// accepted step, and only there, so a run whose flag stays clear takes the
+/// same steps as [`simulate`], bit for bit. Network materials and the seed's
+/// scheme do not read it: they run to their end.
+pub fn simulate_cancellable<const D: usize, const N: usize, const S: usize>(
+    problem: &PressProblem<D, N, S>,
+    settings: &Settings,
+    cancel: &AtomicBool,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<PressResult, PressError>
+where
+    crate::element::Simplex<D, N>: crate::element::ReferenceSimplex<D, N>,
+{
+    run_press(problem, settings, Some(cancel), progress)
+}
+
+fn run_press<const D: usize, const N: usize, const S: usize>(
+    problem: &PressProblem<D, N, S>,
+    settings: &Settings,
+    cancel: Option<&AtomicBool>,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<PressResult, PressError>
+where
+    crate::element::Simplex<D, N>: crate::element::ReferenceSimplex<D, N>,
+{
     problem.validate_effects()?;
     if network::applies(problem) {
         return network::run(problem, settings, progress);
@@ -80,7 +113,9 @@ where
     let effective = effects_applied(problem)?;
     let problem = effective.as_ref();
     let mut result = match settings.integrator {
-        Integrator::QuasiStatic | Integrator::Dynamic => stepper::run(problem, settings, &[], progress).map(|r| r.0),
+        Integrator::QuasiStatic | Integrator::Dynamic => {
+            stepper::run(problem, settings, &[], cancel, progress).map(|r| r.0)
+        }
         Integrator::Seed if !problem.tools.is_empty() => {
             Err(PressError::BadSettings("contact tools need the quasi-static integrator".into()))
         }
@@ -169,6 +204,20 @@ pub fn simulate_any(
     }
 }
 
+/// [`simulate_cancellable`] for any formulation.
+pub fn simulate_any_cancellable(
+    problem: &AnyPress,
+    settings: &Settings,
+    cancel: &AtomicBool,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<PressResult, PressError> {
+    match problem {
+        AnyPress::Plane(p) => simulate_cancellable(p, settings, cancel, progress),
+        AnyPress::Solid(p) => simulate_cancellable(p, settings, cancel, progress),
+        AnyPress::Axisymmetric(p) => simulate_cancellable(p, settings, cancel, progress),
+    }
+}
+
 /// Runs a press problem with the quasi-static scheme and differentiates its
 /// reactions and marker positions by `parameters` (forward sensitivities: at most
 /// one extra solve per parameter and step with the step's own factorization, all
@@ -187,7 +236,7 @@ where
     }
     problem.validate_effects()?;
     problem.effects.check_sensitivities()?;
-    let (mut result, sensitivities) = stepper::run(problem, settings, parameters, progress)?;
+    let (mut result, sensitivities) = stepper::run(problem, settings, parameters, None, progress)?;
     if let Some(offset) = problem.effects.force_offset() {
         result.observe_force_offset(offset);
     }

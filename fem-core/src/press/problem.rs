@@ -374,6 +374,10 @@ pub enum PressError {
     /// Effect values refused, or an effect that does not fit the problem.
     #[error("effects: {0}")]
     Effect(EffectError),
+    /// The caller's cancel flag was set: the run stopped after step `step`
+    /// (accepted, ending at `time_s` [s]) and returned nothing.
+    #[error("step {step} at t = {time_s:.6} s: cancelled between steps")]
+    Cancelled { step: usize, time_s: f64 },
 }
 
 // The wrapped errors are printed in the message and not exposed as sources

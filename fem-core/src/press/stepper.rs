@@ -163,6 +163,7 @@
 //! Bingham chain at `b = 1/2` was not tested).
 
 use std::cell::{Cell, RefCell};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use crate::parallel::map_collect;
@@ -319,6 +320,7 @@ pub(crate) fn run<const D: usize, const N: usize, const S: usize>(
     problem: &PressProblem<D, N, S>,
     settings: &Settings,
     parameters: &[SensitivityParameter],
+    cancel: Option<&AtomicBool>,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<(PressResult, Option<Sensitivities>), PressError>
 where
@@ -982,6 +984,10 @@ where
             back.truncate(2);
         }
         progress(Progress { t_s: state.t, end_s: end, steps: step_index });
+        // Read only between steps: a run never cancelled takes the same steps.
+        if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+            return Err(PressError::Cancelled { step: step_index, time_s: state.t });
+        }
     }
 
     Ok((
@@ -1576,5 +1582,65 @@ pub(crate) fn emit_markers<const D: usize, const N: usize, const S: usize>(
             tracks[m].samples.push((t, pos));
             next[m] += 1;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::atomic::{AtomicBool, Ordering};
+
+    use crate::material::{Material, Rheology};
+    use crate::mesh;
+    use crate::press::{self, PlanePress, PressError, PressResult, Protocol, Settings};
+
+    /// A 20 x 15 mm plane-stress block (10 mm thick, 5 mm elements) of a
+    /// three-element chain, pushed 1.5 mm in 10 s and held to 60 s.
+    fn block() -> PlanePress {
+        let chain = Rheology::ThreeElement { e1_mpa: 0.05, c1_mpa_s: 0.2, c3_mpa_s: 20.0 };
+        let protocol = Protocol::ramp_hold_release(0.15, 10.0, 60.0, 60.0);
+        PlanePress::new_2d(
+            mesh::rectangle(20.0, 15.0, 5.0, "m").unwrap(),
+            10.0,
+            vec![Material::new(chain, 0.3).unwrap()],
+            protocol,
+        )
+        .unwrap()
+    }
+
+    /// The steps' times, lengths and forces and the snapshots, as bits.
+    fn fingerprint(r: &PressResult) -> Vec<u64> {
+        let steps = r.steps.iter().flat_map(|s| [s.t_s, s.dt_s, s.bottom_force_n, s.plate_force_n]);
+        let shapes = r.snapshots.iter().flat_map(|s| s.displacement.iter().chain(&s.cell_stress).copied());
+        steps.chain(shapes).map(f64::to_bits).collect()
+    }
+
+    /// A flag set during step 3 ends the run after that step, naming it and its
+    /// end time; a flag never set changes nothing, bit for bit.
+    #[test]
+    fn a_cancel_flag_stops_the_run_between_steps() {
+        let p = block();
+        let settings = Settings::default();
+        let full = press::simulate(&p, &settings, &mut |_| {}).unwrap();
+        assert!(full.steps.len() > 5, "{} steps", full.steps.len());
+        let cancel = AtomicBool::new(false);
+        let kept = press::simulate_cancellable(&p, &settings, &cancel, &mut |_| {}).unwrap();
+        assert_eq!(fingerprint(&kept), fingerprint(&full));
+        let mut seen = 0;
+        let err = press::simulate_cancellable(&p, &settings, &cancel, &mut |progress| {
+            seen = progress.steps;
+            if progress.steps == 3 {
+                cancel.store(true, Ordering::Relaxed);
+            }
+        })
+        .unwrap_err();
+        assert_eq!(seen, 3, "no step after the cancel");
+        match err {
+            PressError::Cancelled { step, time_s } => {
+                assert_eq!(step, 3);
+                assert_eq!(time_s.to_bits(), full.steps[2].t_s.to_bits());
+            }
+            other => panic!("expected Cancelled, got {other}"),
+        }
+        assert!(err.to_string().starts_with("step 3 at t = ") && err.to_string().ends_with("cancelled between steps"));
     }
 }

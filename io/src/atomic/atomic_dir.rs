@@ -78,10 +78,12 @@ fn sibling_prefix(target: &Path, kind: &str) -> String {
     format!(".{}.{kind}-{}-", name_of(target), std::process::id())
 }
 
-/// Removes the hidden temporary folders `.NAME.tmp-PID-*` and `.NAME.old-PID-*`
-/// beside `target` whose process PID no longer runs (killed runs); returns them.
-/// Where running processes cannot be listed (no `/proc`), nothing is removed.
-fn remove_stale_siblings(target: &Path) -> Vec<PathBuf> {
+/// Removes the hidden temporaries `.NAME.tmp-PID-*` and `.NAME.old-PID-*`
+/// beside `target` whose process PID no longer runs (killed runs): the
+/// folders of [`AtomicDir`] and the files of [`super::write_atomic`] (regular
+/// files only; a link is left alone). Returns what it removed. Where running
+/// processes cannot be listed (no `/proc`), nothing is removed.
+pub fn remove_stale_temporaries(target: &Path) -> Vec<PathBuf> {
     let proc = Path::new("/proc");
     if !proc.join("self").exists() {
         return Vec::new();
@@ -100,8 +102,15 @@ fn remove_stale_siblings(target: &Path) -> Vec<PathBuf> {
         let Some(pid) = rest.split_once('-').and_then(|(pid, _)| pid.parse::<u32>().ok()) else {
             continue;
         };
-        let is_dir = entry.file_type().is_ok_and(|t| t.is_dir());
-        if is_dir && !proc.join(pid.to_string()).exists() && std::fs::remove_dir_all(entry.path()).is_ok() {
+        if proc.join(pid.to_string()).exists() {
+            continue;
+        }
+        let gone = match entry.file_type() {
+            Ok(t) if t.is_dir() => std::fs::remove_dir_all(entry.path()).is_ok(),
+            Ok(t) if t.is_file() => std::fs::remove_file(entry.path()).is_ok(),
+            _ => false,
+        };
+        if gone {
             removed.push(entry.path());
         }
     }
@@ -154,7 +163,7 @@ impl AtomicDir {
         check_replaceable(&target)?;
         let parent = parent_of(&target);
         std::fs::create_dir_all(parent).map_err(|e| WriteError::io(parent, e))?;
-        let stale_removed = remove_stale_siblings(&target);
+        let stale_removed = remove_stale_temporaries(&target);
         let temp = {
             let mut registry = pending::lock();
             let temp = tempfile::Builder::new()

@@ -7,7 +7,8 @@
 //!   `.NAME.tmp-PID-*` and put in place by [`AtomicDir::commit`], which writes its
 //!   manifest ([`MANIFEST_FILE`]: the files wagashi wrote); dropped without a
 //!   commit, the temporary folder is removed, and one a killed run left is
-//!   removed by the next run on the same target. An existing target is replaced
+//!   removed by the next run on the same target ([`remove_stale_temporaries`],
+//!   which also removes the temporary files of a killed [`write_atomic`]). An existing target is replaced
 //!   only when it is empty or is a previous wagashi output holding only the files
 //!   its manifest lists ([`is_previous_output`]); only those files are removed, and
 //!   links are never followed.
@@ -22,7 +23,7 @@ mod pending;
 mod write_atomic;
 mod written_by;
 
-pub use atomic_dir::{is_previous_output, AtomicDir, OUTPUT_MARKER_FILE};
+pub use atomic_dir::{is_previous_output, remove_stale_temporaries, AtomicDir, OUTPUT_MARKER_FILE};
 pub use manifest::{Manifest, MANIFEST_FILE, MANIFEST_FORMAT};
 pub use pending::remove_pending_for_exit;
 pub use write_atomic::write_atomic;

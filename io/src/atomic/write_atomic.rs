@@ -3,10 +3,11 @@ use std::path::Path;
 
 use crate::error::WriteError;
 
-/// Writes `bytes` to `path` atomically: into a temporary file in the same folder,
-/// synced, then renamed over `path`. The folder must exist. The file gets the
-/// mode any new file gets (`0666` less the umask: normally `0644`), not the
-/// owner-only mode of a temporary file.
+/// Writes `bytes` to `path` atomically: into a temporary file in the same folder
+/// (`.NAME.tmp-PID-*`, so that the next run can tell a killed run's from a live
+/// one's: [`super::remove_stale_temporaries`]), synced, then renamed over `path`.
+/// The folder must exist. The file gets the mode any new file gets (`0666` less
+/// the umask: normally `0644`), not the owner-only mode of a temporary file.
 pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<(), WriteError> {
     let path = path.as_ref();
     let parent = match path.parent() {
@@ -15,7 +16,7 @@ pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<(), WriteErr
     };
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let io = |e: std::io::Error| WriteError::io(path, e);
-    let prefix = format!(".{name}.tmp-");
+    let prefix = format!(".{name}.tmp-{}-", std::process::id());
     let mut builder = tempfile::Builder::new();
     builder.prefix(&prefix);
     #[cfg(unix)]

@@ -665,7 +665,8 @@ impl MaterialSpec {
     }
 
     /// Refuses keys outside the model's set, non-positive or non-finite
-    /// parameters and a Poisson ratio outside (-1, 0.5). `name` is the table's
+    /// parameters, parameters above [`MAX_CHAIN_PARAMETER`] and a Poisson
+    /// ratio outside (-1, 0.5). `name` is the table's
     /// name; `fallback` locates the error when the table's origin is unknown.
     pub(crate) fn validate(&self, name: &str, fallback: &SourceMap, fallback_field: &str) -> Result<(), BundleError> {
         let err = |key: &str, cause: String| match &self.origin {
@@ -740,9 +741,18 @@ impl MaterialSpec {
                     ),
                 ));
             }
+            let what = if key.starts_with('E') { "a modulus" } else { "a viscosity" };
             if !(v.is_finite() && v > 0.0) {
-                let what = if key.starts_with('E') { "a modulus" } else { "a viscosity" };
                 return Err(err(key, format!("{v} is not {what} > 0")));
+            }
+            if v > MAX_CHAIN_PARAMETER {
+                return Err(err(
+                    key,
+                    format!(
+                        "{v:e} is larger than the {MAX_CHAIN_PARAMETER:e} {what} may be: the solver's squared norms of \
+                         such a stiffness overflow double precision"
+                    ),
+                ));
             }
         }
         if let Some(nu) = self.poisson {
@@ -764,6 +774,14 @@ impl MaterialSpec {
         Ok(())
     }
 }
+
+/// The largest modulus [MPa] or viscosity [MPa s] of a chain model (elastic,
+/// three-, four- and five-element) that a run can carry: a step's residual and
+/// energy norms square the stiffness times the displacement, and double
+/// precision ends at 1.8e308 (a block run with E1 = 1e150 MPa still ends
+/// finite; with 1e200 MPa the first step overflows). Any food is 90 orders of
+/// magnitude below it.
+pub const MAX_CHAIN_PARAMETER: f64 = 1e100;
 
 /// The default of a network key ([`network_keys`]) from the law's tables, if it has one.
 fn network_default(key: &str) -> Option<f64> {

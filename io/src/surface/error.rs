@@ -71,6 +71,21 @@ pub enum SurfaceError {
         /// The coordinates as read (in the file's unit).
         coordinates: [f64; 3],
     },
+    /// A vertex farther from the origin than [`crate::surface::MAX_COORDINATE_MM`].
+    #[error("{}{at}: coordinates {coordinates:?} ({unit}) lie {reach_mm:.3e} mm from the origin, beyond the {:.0e} mm a surface may reach: a typo, or the wrong unit?",
+        path.display(), crate::surface::MAX_COORDINATE_MM)]
+    TooFar {
+        /// The file.
+        path: PathBuf,
+        /// Where.
+        at: Location,
+        /// The coordinates as read (in the file's unit).
+        coordinates: [f64; 3],
+        /// The unit they were taken in.
+        unit: super::LengthUnit,
+        /// The largest coordinate magnitude in mm.
+        reach_mm: f64,
+    },
     /// A face names a vertex that does not exist.
     #[error("{}{at}: vertex index {index} out of range ({num_vertices} vertices{})", path.display(),
         if *relative { "; negative indices count back from the last vertex so far" } else { "" })]

@@ -139,7 +139,7 @@ fn read_primitive(
         if !p.iter().all(|x| x.is_finite()) {
             return Err(SurfaceError::NonFinite { path: owned(path), at: at.clone(), coordinates: p });
         }
-        local_to_global.push(b.vertex(apply(world, p)));
+        local_to_global.push(b.vertex(apply(world, p), || at.clone()));
     }
     let indices: Vec<u32> = match reader.read_indices() {
         Some(read) => read.into_u32().collect(),

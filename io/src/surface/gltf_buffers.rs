@@ -63,7 +63,7 @@ pub(crate) fn load_buffers(folder: &Path, document: &Document, blob: Option<Vec<
 
 /// What a URI that passed refers to.
 #[derive(Debug, PartialEq)]
-enum Resolved {
+pub(crate) enum Resolved {
     /// The decoded content of a `data:` URI.
     Data(Vec<u8>),
     /// A file, by its name relative to the glTF file's folder (decoded).
@@ -71,7 +71,7 @@ enum Resolved {
 }
 
 /// Judges `uri` (module docs).
-fn check(folder: &Path, uri: &str) -> Result<Resolved, String> {
+pub(crate) fn check(folder: &Path, uri: &str) -> Result<Resolved, String> {
     if let Some(rest) = uri.strip_prefix("data:") {
         let (_, content) = rest
             .split_once(";base64,")
@@ -122,7 +122,7 @@ fn percent_decode(s: &str) -> Result<String, String> {
 }
 
 /// `s` quoted for a message, cut to [`QUOTED_CHARS`] characters.
-fn quote(s: &str) -> String {
+pub(crate) fn quote(s: &str) -> String {
     if s.chars().count() <= QUOTED_CHARS {
         format!("{s:?}")
     } else {

@@ -65,6 +65,7 @@
 mod error;
 pub mod gltf;
 mod gltf_buffers;
+mod gltf_companions;
 pub mod obj;
 pub mod off;
 mod options;
@@ -72,6 +73,7 @@ mod read;
 pub mod stl;
 
 pub use error::{Location, SurfaceError};
+pub use gltf_companions::{gltf_companions, portable_gltf, PortableGltf};
 pub use options::{LengthUnit, SurfaceFormat, SurfaceOptions, UnknownUnit};
-pub use read::{read_surface, ImportedSurface};
+pub use read::{read_surface, ImportedSurface, MAX_COORDINATE_MM};
 pub use stl::{write_stl, StlEncoding};

@@ -65,7 +65,7 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Raw, SurfaceError> {
                         coordinates: p,
                     });
                 }
-                b.vertex(p);
+                b.vertex(p, || Location::Line(line_no));
             }
             "f" | "fo" => {
                 corners.clear();

@@ -103,7 +103,7 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Raw, SurfaceError> {
         if !p.iter().all(|x| x.is_finite()) {
             return Err(SurfaceError::NonFinite { path: owned(path), at: Location::Line(line), coordinates: p });
         }
-        b.vertex(p);
+        b.vertex(p, || Location::Line(line));
     }
     let mut corners = Vec::new();
     for k in 0..num_faces {

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use meshing::Surface;
 
-use super::error::SurfaceError;
+use super::error::{Location, SurfaceError};
 use super::options::{LengthUnit, SurfaceFormat, SurfaceOptions};
 
 /// A surface read from a file, in mm.
@@ -26,13 +26,20 @@ pub struct ImportedSurface {
     pub warnings: Vec<String>,
 }
 
+/// The largest coordinate magnitude a surface may have once in mm: 10 km, far
+/// beyond any specimen or tool. A larger one is a typo or a wrong unit; meshed,
+/// it would make every other triangle degenerate next to the surface's size,
+/// or a lattice too large to count, instead of an error naming the vertex.
+pub const MAX_COORDINATE_MM: f64 = 1e7;
+
 /// Reads the surface in `path` (OBJ, STL binary or ASCII, glTF or GLB, OFF) into mm.
 ///
 /// The format is [`SurfaceOptions::format`], else told by the extension
 /// (`.obj`, `.stl`, `.gltf`, `.glb`, `.off`, any case), else by the content (GLB's
 /// magic, binary STL's size, ASCII STL's `solid`, OFF's keyword). Coordinates are multiplied by the
 /// unit's mm (the format's default unit unless [`SurfaceOptions::units`] says)
-/// and by [`SurfaceOptions::scale`]. The file is never modified.
+/// and by [`SurfaceOptions::scale`]. A coordinate beyond [`MAX_COORDINATE_MM`]
+/// in mm is refused, naming where it is. The file is never modified.
 pub fn read_surface(path: impl AsRef<Path>, options: &SurfaceOptions) -> Result<ImportedSurface, SurfaceError> {
     let path = path.as_ref();
     if !(options.scale.is_finite() && options.scale > 0.0) {
@@ -54,6 +61,12 @@ pub fn read_surface(path: impl AsRef<Path>, options: &SurfaceOptions) -> Result<
     }
     let unit = options.units.unwrap_or(format.default_unit());
     let to_mm = unit.to_mm() * options.scale;
+    if let Some((magnitude, at, coordinates)) = raw.farthest {
+        let reach_mm = magnitude * to_mm;
+        if reach_mm > MAX_COORDINATE_MM {
+            return Err(SurfaceError::TooFar { path: path.to_path_buf(), at, coordinates, unit, reach_mm });
+        }
+    }
     let mut surface = raw.surface;
     for p in &mut surface.vertices {
         *p = p.map(|x| x * to_mm);
@@ -91,6 +104,9 @@ fn detect(path: &Path, bytes: &[u8]) -> Result<SurfaceFormat, SurfaceError> {
 pub(crate) struct Raw {
     pub surface: Surface,
     pub warnings: Vec<String>,
+    /// The vertex farthest from the origin (largest coordinate magnitude, in
+    /// the file's unit): that magnitude, where it is, and its coordinates.
+    pub farthest: Option<(f64, Location, [f64; 3])>,
 }
 
 /// Collects vertices, triangles and regions while a file is parsed.
@@ -99,13 +115,20 @@ pub(crate) struct Builder {
     region_index: HashMap<String, u32>,
     /// Exact positions already seen, for formats that weld (`None`: keep indices).
     welded: Option<HashMap<[u64; 3], u32>>,
+    /// [`Raw::farthest`] so far.
+    farthest: Option<(f64, Location, [f64; 3])>,
 }
 
 impl Builder {
     /// `weld`: merge vertices at bit-identical positions (STL and glTF, which
     /// repeat a vertex for every triangle or every primitive that uses it).
     pub(crate) fn new(weld: bool) -> Builder {
-        Builder { surface: Surface::default(), region_index: HashMap::new(), welded: weld.then(HashMap::new) }
+        Builder {
+            surface: Surface::default(),
+            region_index: HashMap::new(),
+            welded: weld.then(HashMap::new),
+            farthest: None,
+        }
     }
 
     /// The index of the region called `name`, created if new.
@@ -119,8 +142,14 @@ impl Builder {
         r
     }
 
-    /// Adds a vertex (welded to an identical one when welding), returns its index.
-    pub(crate) fn vertex(&mut self, p: [f64; 3]) -> u32 {
+    /// Adds a vertex (welded to an identical one when welding), returns its
+    /// index; `at` tells where it is in the file, asked for only when it is the
+    /// farthest from the origin so far.
+    pub(crate) fn vertex(&mut self, p: [f64; 3], at: impl FnOnce() -> Location) -> u32 {
+        let magnitude = p.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+        if self.farthest.as_ref().is_none_or(|f| magnitude > f.0) {
+            self.farthest = Some((magnitude, at(), p));
+        }
         let next = self.surface.vertices.len() as u32;
         if let Some(seen) = &mut self.welded {
             let key = p.map(|x| (x + 0.0).to_bits());
@@ -150,7 +179,7 @@ impl Builder {
     }
 
     pub(crate) fn finish(self, warnings: Vec<String>) -> Raw {
-        Raw { surface: self.surface, warnings }
+        Raw { surface: self.surface, warnings, farthest: self.farthest }
     }
 }
 

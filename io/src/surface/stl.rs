@@ -84,7 +84,7 @@ fn parse_binary(path: &Path, bytes: &[u8]) -> Result<Raw, SurfaceError> {
             if !p.iter().all(|x| x.is_finite()) {
                 return Err(SurfaceError::NonFinite { path: owned(path), at: Location::Triangle(t), coordinates: p });
             }
-            *corner = b.vertex(p);
+            *corner = b.vertex(p, || Location::Triangle(t));
         }
         b.triangle(tri, region);
     }
@@ -154,7 +154,7 @@ fn parse_ascii(path: &Path, bytes: &[u8]) -> Result<Raw, SurfaceError> {
                         coordinates: p,
                     });
                 }
-                loop_corners.push(b.vertex(p));
+                loop_corners.push(b.vertex(p, || Location::Line(line_no)));
             }
             (State::InLoop, "endloop") => {
                 if loop_corners.len() < 3 {

@@ -52,7 +52,7 @@ impl<'a> Reader<'a> {
             .lines
             .get(self.pos)
             .copied()
-            .ok_or_else(|| self.err(self.lines.last().map_or(0, |l| l.0), what, "the file ends here"))?;
+            .ok_or_else(|| self.err(self.lines.last().map_or(1, |l| l.0), what, "the file ends here"))?;
         self.pos += 1;
         Ok(l)
     }
@@ -89,10 +89,12 @@ impl<'a> Reader<'a> {
 pub fn read_gmsh(path: impl AsRef<Path>) -> Result<TetMesh, TetMeshError> {
     let path = path.as_ref();
     let bytes = crate::input::read(path).map_err(|source| TetMeshError::Read { file: path.to_path_buf(), source })?;
-    let text = String::from_utf8(bytes).map_err(|_| {
+    let text = String::from_utf8(bytes).map_err(|e| {
+        // The line of the first byte that is not UTF-8.
+        let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
         TetMeshError::invalid(
             path,
-            0,
+            1 + valid.iter().filter(|&&b| b == b'\n').count(),
             "$MeshFormat",
             "not ASCII text (a binary .msh?): re-save it from Gmsh as Version 4 ASCII",
         )

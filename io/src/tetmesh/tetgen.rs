@@ -61,7 +61,7 @@ impl<'a> Lines<'a> {
 
     fn next(&mut self, what: &str) -> Result<(usize, Vec<&'a str>), TetMeshError> {
         let item = self.items.get(self.pos).cloned().ok_or_else(|| {
-            TetMeshError::invalid(&self.file, self.items.last().map_or(0, |l| l.0), what, "the file ends here")
+            TetMeshError::invalid(&self.file, self.items.last().map_or(1, |l| l.0), what, "the file ends here")
         })?;
         self.pos += 1;
         Ok(item)
