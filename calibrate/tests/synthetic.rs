@@ -686,9 +686,39 @@ fn generated_campaign_bundles_carry_the_truth_and_the_noise() {
     let noise = support::bundles::Noise { force_sigma_n: 3e-3, force_rho: 0.5, marker_sigma_mm: 0.03 };
     let quiet = support::bundles::Noise { force_sigma_n: 0.0, force_rho: 0.5, marker_sigma_mm: 0.0 };
     let offset = 0.01;
-    let noisy = support::bundles::campaign(&truth, &baseline, &specimen, &noise, offset, 5).unwrap();
-    let again = support::bundles::campaign(&truth, &baseline, &specimen, &noise, offset, 5).unwrap();
-    let clean = support::bundles::campaign(&truth, &baseline, &specimen, &quiet, 0.0, 5).unwrap();
+    let noisy = support::bundles::campaign(
+        &truth,
+        &baseline.toml("gel"),
+        false,
+        &specimen,
+        &support::bundles::DESIGN,
+        &noise,
+        offset,
+        5,
+    )
+    .unwrap();
+    let again = support::bundles::campaign(
+        &truth,
+        &baseline.toml("gel"),
+        false,
+        &specimen,
+        &support::bundles::DESIGN,
+        &noise,
+        offset,
+        5,
+    )
+    .unwrap();
+    let clean = support::bundles::campaign(
+        &truth,
+        &baseline.toml("gel"),
+        false,
+        &specimen,
+        &support::bundles::DESIGN,
+        &quiet,
+        0.0,
+        5,
+    )
+    .unwrap();
     eprintln!("three campaigns generated in {:.2} s", clock.elapsed().as_secs_f64());
     assert_eq!((noisy.calibration.len(), noisy.validation.len()), (4, 2));
     let all = |c: &support::bundles::Campaign| c.calibration.iter().chain(&c.validation).cloned().collect::<Vec<_>>();
@@ -772,4 +802,78 @@ fn generator_matches_the_engine_double_compression_with_a_contact_plate() {
     eprintln!("contact at 3, 4, 5.5 s: {:?}; stretch at 4 s {:?}", trace.contact, trace.stretch[1]);
     assert_eq!(trace.contact, [false, false, true], "the plate leaves and touches again");
     verify_on("double compression", &m, 3, [Order::Located, Order::Rate(1.0)], 0.05, &protocol);
+}
+
+/// The three-element chain `E1 || c1` in series with `c3` (`E1` [MPa], `c1`,
+/// `c3` [MPa s]) as a small-strain network: its relaxation function
+/// `B2 delta(t) + a exp(-t / tau)` is a damper `B2 = c1 c3 / (c1 + c3)` beside a
+/// viscous network `a = E1 (c3 / (c1 + c3))^2`, `tau = (c1 + c3) / E1`.
+fn three_element_network(e1: f64, c1: f64, c3: f64, poisson: f64) -> generator::Material {
+    let s = c1 + c3;
+    generator::Material {
+        poisson,
+        kinematics: Kinematics::Small,
+        equilibrium: None,
+        components: vec![
+            Component::Damper { c_mpa_s: c1 * c3 / s },
+            Component::Viscous { e_mpa: e1 * (c3 / s).powi(2), tau_s: s / e1 },
+        ],
+    }
+}
+
+/// The diagnosis on campaigns the engine did not make: six plane-stress
+/// trials of a 20 x 20 x 10 mm frictionless block of the three-element gel
+/// (`E1` = 0.05 MPa, `c1` = 0.05 MPa s, `c3` = 5 MPa s, `nu` = 0.3; the
+/// diagnoser is told the model and `nu`), single strokes of 10 to 25 %, force
+/// noise 3 mN (AR(1), rho 0.5), markers 0.03 mm. The null campaign (truth =
+/// the baseline) must come out `none`; the same campaign with a 30 mN force
+/// offset (about 10 sigma on every sample) must name `force-offset`, alone or
+/// in a tie. Measured: `none` (largest LR 2.0, machine-compliance, against
+/// 9.5), and `tie` between `force-offset` (LR 29118) and `gravity` (LR 28177):
+/// the 2 s pre-contact record cannot tell a constant offset from the
+/// specimen's weight on the sensor. About 12 s wall for both campaigns.
+#[test]
+fn diagnosis_on_generated_campaigns_names_none_and_a_force_offset() {
+    use calibrate::diagnosis::{blind, diagnose};
+    let (e1, c1, c3, nu) = (0.05, 0.05, 5.0, 0.3);
+    let truth = three_element_network(e1, c1, c3, nu);
+    // Told the model and nu, not the values (they are calibrated).
+    let baseline = format!("[materials.gel]\nmodel = \"three-element\"\npoisson = {nu}\n");
+    let specimen = generator::Specimen { dimension: 3, size_mm: [20.0, 20.0, 10.0] };
+    let noise = support::bundles::Noise { force_sigma_n: 3e-3, force_rho: 0.5, marker_sigma_mm: 0.03 };
+    let mut options = blind::default_options(17);
+    options.marker_sigma_mm = noise.marker_sigma_mm;
+    for (offset, want) in [(0.0, "none"), (0.03, "force-offset")] {
+        let clock = std::time::Instant::now();
+        let c = support::bundles::campaign(
+            &truth,
+            &baseline,
+            true,
+            &specimen,
+            &support::bundles::SINGLE_STROKES,
+            &noise,
+            offset,
+            23,
+        )
+        .unwrap();
+        let d = diagnose(&c.calibration, &c.validation, &BTreeMap::new(), &options, &|_, _, _| {}).unwrap();
+        eprintln!("offset {offset} N: verdict {}; {:.1} s wall", d.verdict.label, clock.elapsed().as_secs_f64());
+        for c in &d.candidates {
+            eprintln!(
+                "  {}: LR {:.1} (critical {:.1}), significant {}",
+                c.effect.id(),
+                c.lr,
+                c.lr_critical,
+                c.significant
+            );
+        }
+        let ids: Vec<&str> = d.verdict.effects.iter().map(|e| e.id()).collect();
+        eprintln!("  named {ids:?}");
+        if want == "none" {
+            assert_eq!(d.verdict.label, "none", "null campaign: verdict {} {ids:?}", d.verdict.label);
+        } else {
+            let named = d.verdict.label == want || (d.verdict.label == "tie" && ids.contains(&want));
+            assert!(named, "offset {offset} N: verdict {} {ids:?}, expected {want}", d.verdict.label);
+        }
+    }
 }

@@ -91,7 +91,7 @@ impl Design {
 }
 
 /// The experiment text of a trial (no `[data]`: the series are set in memory).
-fn experiment_toml(name: &str, specimen: &Specimen, baseline: &Material, protocol: &Protocol) -> String {
+fn experiment_toml(name: &str, dimension: usize, specimen: &Specimen, baseline: &str, protocol: &Protocol) -> String {
     let [w, h, t] = specimen.size_mm;
     let mut waypoints = String::new();
     for (i, p) in protocol.waypoints.iter().enumerate() {
@@ -105,6 +105,7 @@ dimension = {dim}
 [specimen]
 shape = "block"
 size_mm = [{w}, {h}, {t}]
+density_g_cm3 = 1.1
 material = "gel"
 
 {material}
@@ -116,8 +117,8 @@ waypoints = [{waypoints}]
 release_s = {release}
 end_s = {end}
 "#,
-        dim = specimen.dimension,
-        material = baseline.toml("gel"),
+        dim = dimension,
+        material = baseline,
         release = protocol.release_s,
         end = protocol.end_s,
     )
@@ -144,19 +145,28 @@ fn marker_times(protocol: &Protocol) -> Vec<f64> {
 }
 
 /// A generated trial as an in-memory bundle named `name`: the diagnoser is
-/// told `baseline`; the data come from `truth` (module docs), plus
-/// `force_offset_n` [N] on every force sample, with `noise` drawn from `seed`.
+/// told `baseline` (a `[materials.gel]` table, e.g. [`Material::toml`]); the
+/// data come from `truth` (module docs), plus `force_offset_n` [N] on every
+/// force sample, with `noise` drawn from `seed`. The bundle's dimension is
+/// the specimen's, except that a 3D specimen may be written as a 2D
+/// (plane-stress) bundle with `plane_stress`: homogeneous uniaxial stress is
+/// the same state, and the markers are given by their `(x, y)`.
 #[allow(clippy::too_many_arguments)]
 pub fn trial_bundle(
     name: &str,
     truth: &Material,
-    baseline: &Material,
+    baseline: &str,
+    plane_stress: bool,
     specimen: &Specimen,
     design: &Design,
     noise: &Noise,
     force_offset_n: f64,
     seed: u64,
 ) -> Result<Bundle, GeneratorError> {
+    if plane_stress && specimen.dimension != 3 {
+        return Err(GeneratorError(format!("{name}: a plane-stress bundle needs a 3D generator specimen")));
+    }
+    let dimension = if plane_stress { 2 } else { specimen.dimension };
     let protocol = design.protocol(specimen.size_mm[1]);
     let num_force = (protocol.end_s * FORCE_RATE_HZ).round() as usize + 1;
     let force_times: Vec<f64> = (0..num_force).map(|i| i as f64 / FORCE_RATE_HZ).collect();
@@ -169,7 +179,7 @@ pub fn trial_bundle(
     let mut rng = SplitMix64::new(seed);
     let mut bundle = read_bundle_from_str(
         "/nonexistent/generated",
-        &experiment_toml(name, specimen, baseline, &protocol),
+        &experiment_toml(name, dimension, specimen, baseline, &protocol),
         &BTreeMap::new(),
     )
     .map_err(|e| GeneratorError(format!("{name}: {e}")))?;
@@ -187,11 +197,11 @@ pub fn trial_bundle(
         .collect();
     bundle.force = Some(ForceSeries { samples });
     let [w, h, t] = specimen.size_mm;
-    bundle.markers = marker_places(specimen.dimension)
+    bundle.markers = marker_places(dimension)
         .iter()
         .enumerate()
         .map(|(m, &[fx, fy])| {
-            let p: Vec<f64> = if specimen.dimension == 3 { vec![fx * w, fy * h, t] } else { vec![fx * w, fy * h] };
+            let p: Vec<f64> = if dimension == 3 { vec![fx * w, fy * h, t] } else { vec![fx * w, fy * h] };
             let samples = marker_t
                 .iter()
                 .map(|&time| {
@@ -213,9 +223,9 @@ pub struct Campaign {
     pub validation: Vec<Bundle>,
 }
 
-/// The campaign's six trials (calibrate on the first four, validate on the
-/// last two): depths of 10 to 25 %, pushes of 4 to 16 s, holds of 5 to 20 s,
-/// two double compressions (one of each set).
+/// Six trials (calibrate on the first four, validate on the last two):
+/// depths of 10 to 25 %, pushes of 4 to 16 s, holds of 5 to 20 s, two double
+/// compressions (one of each set).
 pub const DESIGN: [Design; 6] = [
     Design { strain: 0.10, push_s: 4.0, hold_s: 10.0, double: false },
     Design { strain: 0.20, push_s: 4.0, hold_s: 5.0, double: false },
@@ -225,26 +235,43 @@ pub const DESIGN: [Design; 6] = [
     Design { strain: 0.15, push_s: 3.0, hold_s: 8.0, double: true },
 ];
 
-/// Builds the six-trial campaign of [`DESIGN`] on `specimen`: the diagnoser is
-/// told `baseline`, the data come from `truth` (the baseline with components
-/// added or changed), with `force_offset_n` on every force sample and `noise`;
-/// trial `k` draws from `SplitMix64::new(seed)`'s `k`-th output.
+/// [`DESIGN`] with single strokes only (the double compressions pushed once):
+/// trials the constrained plate runs, without contact tools.
+pub const SINGLE_STROKES: [Design; 6] = [
+    DESIGN[0],
+    DESIGN[1],
+    DESIGN[2],
+    Design { double: false, ..DESIGN[3] },
+    DESIGN[4],
+    Design { double: false, ..DESIGN[5] },
+];
+
+/// Builds the campaign of `designs` (e.g. [`DESIGN`]; the last two validate,
+/// the others calibrate) on `specimen`: the diagnoser is
+/// told `baseline` (as in [`trial_bundle`]), the data come from `truth` (the
+/// baseline with components added or changed), with `force_offset_n` on every
+/// force sample and `noise`; trial `k` draws from `SplitMix64::new(seed)`'s
+/// `k`-th output.
+#[allow(clippy::too_many_arguments)]
 pub fn campaign(
     truth: &Material,
-    baseline: &Material,
+    baseline: &str,
+    plane_stress: bool,
     specimen: &Specimen,
+    designs: &[Design],
     noise: &Noise,
     force_offset_n: f64,
     seed: u64,
 ) -> Result<Campaign, GeneratorError> {
     let mut seeds = SplitMix64::new(seed);
     let mut bundles = Vec::new();
-    for (k, design) in DESIGN.iter().enumerate() {
+    for (k, design) in designs.iter().enumerate() {
         let trial_seed = seeds.next_u64();
         bundles.push(trial_bundle(
             &format!("trial{k}"),
             truth,
             baseline,
+            plane_stress,
             specimen,
             design,
             noise,
@@ -252,6 +279,6 @@ pub fn campaign(
             trial_seed,
         )?);
     }
-    let validation = bundles.split_off(4);
+    let validation = bundles.split_off(designs.len().saturating_sub(2));
     Ok(Campaign { calibration: bundles, validation })
 }
