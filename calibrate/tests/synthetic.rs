@@ -378,6 +378,7 @@ fn engine_block(
         pr.markers = vec![MarkerRequest { name: "corner".into(), position: vec![w, h], times: times.clone() }];
         press::simulate(&pr, &settings, &mut |_| {}).unwrap()
     };
+    // GEN_DEBUG=1 prints the engine's forces (bottom, plate, plate tool) every 0.25 s.
     if std::env::var("GEN_DEBUG").is_ok() {
         for s in r.steps.iter().filter(|s| (s.t_s * 4.0 - (s.t_s * 4.0).round()).abs() < 1e-9) {
             let tool = r.tools.first().and_then(|k| k.samples.iter().find(|x| (x.t_s - s.t_s).abs() < 1e-9));
@@ -466,6 +467,7 @@ fn verify_on(
         })
         .collect();
     let observed: Vec<Vec<[f64; 3]>> = (0..3).map(observe).collect();
+    // GEN_DEBUG=1 prints each run's signed force and marker errors at every time.
     if std::env::var("GEN_DEBUG").is_ok() {
         for (i, t) in times.iter().enumerate() {
             let d: Vec<String> = (0..3).map(|k| format!("{:+.2e}", observed[k][i][0] - want[i][0])).collect();
