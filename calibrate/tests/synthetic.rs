@@ -693,8 +693,20 @@ fn generated_campaign_bundles_carry_the_truth_and_the_noise() {
     truth.kinematics = Kinematics::Finite;
     truth.components.push(Component::Plastic { e_mpa: 0.02, yield_mpa: 1e-3, hardening_mpa: 0.0, kinematic_mpa: 0.0 });
     let specimen = generator::Specimen { dimension: 3, size_mm: [20.0, 20.0, 10.0] };
-    let noise = support::bundles::Noise { force_sigma_n: 3e-3, force_rho: 0.5, marker_sigma_mm: 0.03 };
-    let quiet = support::bundles::Noise { force_sigma_n: 0.0, force_rho: 0.5, marker_sigma_mm: 0.0 };
+    let noise = support::bundles::Noise {
+        force_sigma_n: 3e-3,
+        force_rho: 0.5,
+        marker_sigma_mm: 0.03,
+        force_quantum_n: 1e-3,
+        marker_quantum_mm: 0.01,
+    };
+    let quiet = support::bundles::Noise {
+        force_sigma_n: 0.0,
+        force_rho: 0.5,
+        marker_sigma_mm: 0.0,
+        force_quantum_n: 0.0,
+        marker_quantum_mm: 0.0,
+    };
     let offset = 0.01;
     let noisy = support::bundles::campaign(
         &truth,
@@ -850,7 +862,13 @@ fn diagnosis_on_generated_campaigns_names_none_and_a_force_offset() {
     // Told the model and nu, not the values (they are calibrated).
     let baseline = format!("[materials.gel]\nmodel = \"three-element\"\npoisson = {nu}\n");
     let specimen = generator::Specimen { dimension: 3, size_mm: [20.0, 20.0, 10.0] };
-    let noise = support::bundles::Noise { force_sigma_n: 3e-3, force_rho: 0.5, marker_sigma_mm: 0.03 };
+    let noise = support::bundles::Noise {
+        force_sigma_n: 3e-3,
+        force_rho: 0.5,
+        marker_sigma_mm: 0.03,
+        force_quantum_n: 1e-3,
+        marker_quantum_mm: 0.01,
+    };
     let mut options = blind::default_options(17);
     options.marker_sigma_mm = noise.marker_sigma_mm;
     for (offset, want) in [(0.0, "none"), (0.03, "force-offset")] {

@@ -19,6 +19,9 @@
 //!   `marker_sigma_mm` (the `t = 0` row too: the diagnoser starts every track
 //!   at the measured position).
 //!
+//! Both may be rounded to the instrument's resolution (blind.rs's 1 mN and
+//! 0.01 mm), [`Noise`].
+//!
 //! Random draws come from the crate's [`calibrate::rng::SplitMix64`], one stream
 //! per trial from the campaign's seed, so a campaign is fixed by its seed.
 
@@ -48,6 +51,19 @@ pub struct Noise {
     pub force_rho: f64,
     /// Marker noise standard deviation per coordinate [mm].
     pub marker_sigma_mm: f64,
+    /// Force resolution [N]: samples are rounded to it (0: not rounded).
+    pub force_quantum_n: f64,
+    /// Marker resolution [mm] (0: not rounded).
+    pub marker_quantum_mm: f64,
+}
+
+/// `x` rounded to a multiple of `q` (unchanged for `q = 0`).
+fn quantise(x: f64, q: f64) -> f64 {
+    if q > 0.0 {
+        (x / q).round() * q
+    } else {
+        x
+    }
 }
 
 /// One trial's plate protocol, from first touch.
@@ -192,7 +208,8 @@ pub fn trial_bundle(
             if i > 0 {
                 e = noise.force_rho * e + innovation * rng.next_gaussian();
             }
-            ForceSample { t_s: t, force_n: trace.force_n[index(t)] + force_offset_n + e }
+            let force_n = quantise(trace.force_n[index(t)] + force_offset_n + e, noise.force_quantum_n);
+            ForceSample { t_s: t, force_n }
         })
         .collect();
     bundle.force = Some(ForceSeries { samples });
@@ -206,7 +223,10 @@ pub fn trial_bundle(
                 .iter()
                 .map(|&time| {
                     let q = trace.position(specimen, index(time), &p);
-                    let position_mm = q.iter().map(|x| x + noise.marker_sigma_mm * rng.next_gaussian()).collect();
+                    let position_mm = q
+                        .iter()
+                        .map(|x| quantise(x + noise.marker_sigma_mm * rng.next_gaussian(), noise.marker_quantum_mm))
+                        .collect();
                     MarkerSample { t_s: time, position_mm }
                 })
                 .collect();
