@@ -905,3 +905,44 @@ fn diagnosis_on_generated_campaigns_names_none_and_a_force_offset() {
         }
     }
 }
+
+/// A generator material written as a bundle's `[materials.NAME]` table
+/// (`Material::toml`) reads back as the engine's network of the same
+/// parameters: every component's keys and units as the bundle format names them.
+#[test]
+fn a_generator_material_reads_back_as_the_engines_network() {
+    let mullins = Some(Mullins { r: 2.5, m_mpa: 2e-3, beta: 0.1 });
+    let full = generator::Material {
+        poisson: 0.35,
+        kinematics: Kinematics::Finite,
+        equilibrium: Some(Equilibrium { energy: Energy::Exponential { stiffening: 1.5 }, e_mpa: 0.02, mullins }),
+        components: vec![
+            Component::Viscous { e_mpa: 0.015, tau_s: 2.0 },
+            Component::Plastic { e_mpa: 0.04, yield_mpa: 1e-3, hardening_mpa: 5e-3, kinematic_mpa: 8e-3 },
+            Component::Flow { e_mpa: 0.01, stress_mpa: 3e-3, exponent: 2.5 },
+            Component::Bingham { e_mpa: 0.02, yield_mpa: 5e-4, viscosity_mpa_s: 2e-3 },
+            Component::Damper { c_mpa_s: 5e-3 },
+            Component::Dual { e_mpa: 0.012, tau_load_s: 5.0, tau_unload_s: 0.8 },
+        ],
+    };
+    let specimen = generator::Specimen { dimension: 3, size_mm: CHECK_BLOCK };
+    let noise = support::bundles::Noise {
+        force_sigma_n: 0.0,
+        force_rho: 0.0,
+        marker_sigma_mm: 0.0,
+        force_quantum_n: 0.0,
+        marker_quantum_mm: 0.0,
+    };
+    let design = support::bundles::DESIGN[0];
+    let b = support::bundles::trial_bundle("full", &full, &full.toml("gel"), false, &specimen, &design, &noise, 0.0, 1)
+        .unwrap();
+    let read = b.experiment.materials["gel"].to_network().unwrap();
+    let want = engine_network(&full);
+    assert_eq!((read.poisson, read.strain, read.equilibrium), (want.poisson, want.strain, want.equilibrium));
+    let parts = |n: &engine::Network| {
+        let mut v: Vec<(&str, Vec<f64>)> = n.parts.iter().map(|p| (p.kind().table, p.values())).collect();
+        v.sort_by(|a, b| a.0.cmp(b.0));
+        v
+    };
+    assert_eq!(parts(&read), parts(&want));
+}
