@@ -1,0 +1,6 @@
+//! Test support for the calibrate crate's integration tests: the independent
+//! trial generator ([`generator`]) and the bundles and campaigns made from it
+//! ([`bundles`]).
+
+pub mod bundles;
+pub mod generator;
