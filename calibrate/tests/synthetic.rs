@@ -708,39 +708,22 @@ fn generated_campaign_bundles_carry_the_truth_and_the_noise() {
         marker_quantum_mm: 0.0,
     };
     let offset = 0.01;
-    let noisy = support::bundles::campaign(
-        &truth,
-        &baseline.toml("gel"),
-        false,
-        &specimen,
-        &support::bundles::DESIGN,
-        &noise,
-        offset,
-        5,
-    )
-    .unwrap();
-    let again = support::bundles::campaign(
-        &truth,
-        &baseline.toml("gel"),
-        false,
-        &specimen,
-        &support::bundles::DESIGN,
-        &noise,
-        offset,
-        5,
-    )
-    .unwrap();
-    let clean = support::bundles::campaign(
-        &truth,
-        &baseline.toml("gel"),
-        false,
-        &specimen,
-        &support::bundles::DESIGN,
-        &quiet,
-        0.0,
-        5,
-    )
-    .unwrap();
+    let make = |noise: &support::bundles::Noise, offset: f64| {
+        support::bundles::campaign(
+            &truth,
+            &baseline.toml("gel"),
+            false,
+            &specimen,
+            &support::bundles::DESIGN,
+            noise,
+            offset,
+            5,
+        )
+        .unwrap()
+    };
+    let noisy = make(&noise, offset);
+    let again = make(&noise, offset);
+    let clean = make(&quiet, 0.0);
     eprintln!("three campaigns generated in {:.2} s", clock.elapsed().as_secs_f64());
     assert_eq!((noisy.calibration.len(), noisy.validation.len()), (4, 2));
     let all = |c: &support::bundles::Campaign| c.calibration.iter().chain(&c.validation).cloned().collect::<Vec<_>>();

@@ -579,17 +579,20 @@ pub fn report_html(d: &Diagnosis) -> String {
     let lr_max = d.candidates.iter().map(|c| c.lr).fold(1.0, f64::max);
     let bar_h = 22.0;
     let total_h = bar_h * d.candidates.len() as f64 + 10.0;
-    html.push_str(&format!(r#"<svg xmlns="http://www.w3.org/2000/svg" width="620" height="{total_h}">"#));
+    // The label column fits the longest id (12 px text, about 7 px a character).
+    let label_w = d.candidates.iter().map(|c| c.effect.id().len()).max().unwrap_or(0) as f64 * 7.0 + 10.0;
+    let width = label_w + 400.0 + 120.0;
+    html.push_str(&format!(r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0}" height="{total_h}">"#));
     for (i, c) in d.candidates.iter().enumerate() {
         let wbar = 400.0 * (c.lr / lr_max).max(0.0);
         let y = 5.0 + i as f64 * bar_h;
         let colour = if d.verdict.effects.contains(&c.effect) { "#2471a3" } else { "#aab7c4" };
         html.push_str(&format!(
-            r#"<text x="0" y="{:.1}" font-size="12">{}</text><rect x="150" y="{y:.1}" width="{wbar:.1}" height="{:.1}" fill="{colour}"/><text x="{:.1}" y="{:.1}" font-size="11">LR {:.1}{}</text>"#,
+            r#"<text x="0" y="{:.1}" font-size="12">{}</text><rect x="{label_w:.1}" y="{y:.1}" width="{wbar:.1}" height="{:.1}" fill="{colour}"/><text x="{:.1}" y="{:.1}" font-size="11">LR {:.1}{}</text>"#,
             y + 14.0,
             c.effect.id(),
             bar_h - 6.0,
-            155.0 + wbar,
+            label_w + 5.0 + wbar,
             y + 14.0,
             c.lr,
             if c.significant { " *" } else { "" }
@@ -601,6 +604,34 @@ pub fn report_html(d: &Diagnosis) -> String {
         let list: Vec<String> = d.not_evaluated.iter().map(|(e, why)| format!("{} ({})", e.id(), esc(why))).collect();
         html.push_str(&list.join("; "));
         html.push_str("</p>");
+    }
+    if d.selection.len() > 1 {
+        html.push_str(
+            "<h2>Forward selection</h2><p>Each step tests the candidates left with the ones named before it \
+             included (their values refitted), by the same rules; it stops when none is named and improves the \
+             held-out prediction.</p><table><tr><th>step</th><th>included</th><th>step verdict</th><th>named</th>\
+             <th>LR</th><th>gap closure G [90 % interval]</th></tr>",
+        );
+        for (i, s) in d.selection.iter().enumerate() {
+            let included = if s.included.is_empty() {
+                "(baseline)".to_string()
+            } else {
+                s.included.iter().map(|c| c.id()).collect::<Vec<_>>().join(" + ")
+            };
+            let closure = s.heldout.as_ref().map_or(String::new(), |h| {
+                format!("{:.2} [{:.2}, {:.2}]", h.closure, h.closure_ci90[0], h.closure_ci90[1])
+            });
+            html.push_str(&format!(
+                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+                i + 1,
+                esc(&included),
+                esc(&s.label),
+                s.named.map_or("", |c| c.id()),
+                if s.named.is_some() { format!("{:.1}", s.lr) } else { String::new() },
+                closure
+            ));
+        }
+        html.push_str("</table>");
     }
     html.push_str("<h2>Recommended next experiment</h2><p>");
     let next = match (&d.verdict.separating_experiment, d.verdict.effects.first()) {

@@ -112,10 +112,31 @@
 //! of 0.95; on seed 101 it turned one correct attribution into a tie and
 //! resolved none.)
 //!
+//! **Composable verdicts** (forward selection, [`SelectionStep`]). When the
+//! verdict names a candidate that is eligible and improves the held-out
+//! prediction (a positive held-out gain), it joins the model at its fitted
+//! values ([`Model::included`]) and the next step tests the candidates left
+//! against that baseline by the same rules (score, refit, LR with Holm over
+//! the step's candidates, held-out veto, ranking, tie rule). Before each step
+//! the candidates named earlier are refitted beside the newest, one sweep of
+//! block coordinate descent, each with the unknowns, the others held: a value
+//! fitted alone may have absorbed part of the next candidate's signature
+//! (measured in the tests: a force offset fitted before the compliance left
+//! cells flagged until it was refitted beside it). The selection stops when a
+//! step names nothing that improves the held-out prediction, at a tie, or at
+//! [`DiagnosisOptions::max_components`] (3). The verdict then names the set,
+//! `a + b` (`partial: a + b` when a WHERE cell stays flagged on the baseline
+//! that holds them all), and its sentence gives each later step's LR and gap
+//! closure of what the step's baseline left, with the interval. Two of the
+//! chain's material-point effects never join one model (its inelastic loop
+//! runs one); the network's components compose with each other and with the
+//! load-path effects.
+//!
 //! **Not done here** (reported, not hidden): an estimate of `Omega` from
 //! replicates (it is fixed by `sample_scale_sd`), replicate ANOVA, the
-//! simulator-free checks, the parameter-inconsistency map and a greedy second
-//! effect; the held-out refits are one Gauss-Newton step of case deletion
+//! simulator-free checks and the parameter-inconsistency map; the forward
+//! selection's joint refit is one coordinate-descent sweep, not a joint
+//! fit of every named candidate; the held-out refits are one Gauss-Newton step of case deletion
 //! rather than full refits ([`heldout`]); the mesh budget is a two-level
 //! correction, not a three-mesh GCI.
 //!

@@ -70,15 +70,36 @@ fn campaign_on(
     seed: u64,
     settings: &Settings,
 ) -> Vec<Bundle> {
+    let text = |name: &str, push: f64, hold: f64, measured: bool| {
+        if measured {
+            experiment(name, push, hold, "", "")
+        } else {
+            experiment(name, push, hold, truth, effects)
+        }
+    };
+    campaign_from(design, &text, sigma_n, seed, settings)
+}
+
+/// The campaign of the trials `design`, each trial's experiment text from
+/// `text(name, push_s, hold_s, measured)`: the truth's (`measured` false),
+/// simulated with `settings` and sampled at 10 Hz with force noise `sigma_n`
+/// from `seed`, and the measured bundle's (`measured` true), which carries
+/// the samples.
+fn campaign_from(
+    design: &[(f64, f64)],
+    text: &dyn Fn(&str, f64, f64, bool) -> String,
+    sigma_n: f64,
+    seed: u64,
+    settings: &Settings,
+) -> Vec<Bundle> {
     let mut rng = SplitMix64::new(seed);
     design
         .iter()
         .enumerate()
         .map(|(k, &(push, hold))| {
             let name = format!("trial{k}");
-            let truth =
-                read_bundle_from_str("/nonexistent", &experiment(&name, push, hold, truth, effects), &BTreeMap::new())
-                    .expect("a valid truth");
+            let truth = read_bundle_from_str("/nonexistent", &text(&name, push, hold, false), &BTreeMap::new())
+                .expect("a valid truth");
             let problem = truth.to_press(5.0).expect("a press problem");
             let result = simulate_any(&problem, settings, &mut |_| {}).expect("the truth runs");
             let end = truth.experiment.protocol.end_s;
@@ -88,9 +109,8 @@ fn campaign_on(
                     ForceSample { t_s: t, force_n: result.bottom_force_at(t) + sigma_n * rng.next_gaussian() }
                 })
                 .collect();
-            let mut measured =
-                read_bundle_from_str("/nonexistent", &experiment(&name, push, hold, "", ""), &BTreeMap::new())
-                    .expect("a valid measured bundle");
+            let mut measured = read_bundle_from_str("/nonexistent", &text(&name, push, hold, true), &BTreeMap::new())
+                .expect("a valid measured bundle");
             measured.force = Some(ForceSeries { samples });
             measured
         })
@@ -631,35 +651,10 @@ fn network_experiment(name: &str, push_s: f64, hold_s: f64, tables: &str) -> Str
 /// `truth` (sub-tables), force noise `sigma_n` from `seed`; the returned
 /// bundles give the material as `skeleton` (its absent keys are the unknowns).
 fn network_campaign(truth: &str, skeleton: &str, sigma_n: f64, seed: u64) -> Vec<Bundle> {
-    let mut rng = SplitMix64::new(seed);
-    DESIGN
-        .iter()
-        .enumerate()
-        .map(|(k, &(push, hold))| {
-            let name = format!("trial{k}");
-            let truth =
-                read_bundle_from_str("/nonexistent", &network_experiment(&name, push, hold, truth), &BTreeMap::new())
-                    .expect("a valid truth");
-            let result =
-                simulate_any(&truth.to_press(5.0).expect("a press problem"), &Settings::default(), &mut |_| {})
-                    .expect("the truth runs");
-            let end = truth.experiment.protocol.end_s;
-            let samples = (0..=(end * 10.0).round() as usize)
-                .map(|i| {
-                    let t = i as f64 * 0.1;
-                    ForceSample { t_s: t, force_n: result.bottom_force_at(t) + sigma_n * rng.next_gaussian() }
-                })
-                .collect();
-            let mut measured = read_bundle_from_str(
-                "/nonexistent",
-                &network_experiment(&name, push, hold, skeleton),
-                &BTreeMap::new(),
-            )
-            .expect("a valid measured bundle");
-            measured.force = Some(ForceSeries { samples });
-            measured
-        })
-        .collect()
+    let text = |name: &str, push: f64, hold: f64, measured: bool| {
+        network_experiment(name, push, hold, if measured { skeleton } else { truth })
+    };
+    campaign_from(&DESIGN, &text, sigma_n, seed, &Settings::default())
 }
 
 const NETWORK_BASE: &str = "[materials.gel.equilibrium]\nenergy = \"neo-hookean\"\nE_MPa = 0.02\n\
