@@ -85,7 +85,7 @@ use super::{
 };
 use crate::assembly::{assemble_blocks, assemble_vector, CsrPattern};
 use crate::element::{CellGeometry, Formulation, ReferenceSimplex, Simplex};
-use crate::material::law::{LawFailure, PointLaw};
+use crate::material::law::{LawFailure, PointLaw, PointResponse, Tangent};
 use crate::material::network::{Network, Strain};
 use crate::solve::{Factor, ReducedSystem};
 
@@ -203,6 +203,8 @@ struct Evaluation {
     /// error of a unit roundoff in every displacement moves `internal` by up to
     /// this, the floor of the residual.
     magnitude: Vec<f64>,
+    /// Whether the cells' (or patches') tangents were evaluated.
+    with_tangent: bool,
 }
 
 /// A failed evaluation: the cell and why.
@@ -241,8 +243,12 @@ where
         self.patches.as_ref().map_or(&self.model.node_order, |p| &p.node_order)
     }
 
-    /// Every cell's stress and tangent at `u` after a step of `dt` from `history`.
+    /// Every cell's stress and, when `with_tangent`, tangent at `u` after a
+    /// step of `dt` from `history` (the stress, history and internal force are
+    /// the same to the bit either way; without the tangent the laws skip it,
+    /// [`Network::stress`]).
     fn evaluate(&self, u: &[f64], dt: f64, history: &[f64], with_tangent: bool) -> Result<Evaluation, CellFailure> {
+        crate::material::network::count_evaluations(self.model.problem.mesh.num_cells(), with_tangent);
         if let Some(patches) = &self.patches {
             return self.evaluate_patches(patches, u, dt, history, with_tangent);
         }
@@ -263,17 +269,24 @@ where
                 let h = Matrix3::from_fn(|i, j| grad[3 * i + j]);
                 let f = Matrix3::identity() + h;
                 let old = &history[self.offsets[e]..self.offsets[e + 1]];
-                let response =
-                    self.law_of(e).update(&h, dt, old, new).map_err(|failure| CellFailure { element: e, failure })?;
-                let p = DVector::from_iterator(9, (0..9).map(|r| response.stress[(r / 3, r % 3)]));
-                let force = op.tr_mul(&p) * g.weight;
-                let stiffness = if with_tangent {
-                    let a = DMatrix::from_iterator(9, 9, response.tangent.iter().copied());
-                    op.tr_mul(&(a * op)) * g.weight
+                let law = self.law_of(e);
+                let fail = |failure| CellFailure { element: e, failure };
+                let (stress, tangent) = if with_tangent {
+                    let r = law.update(&h, dt, old, new).map_err(fail)?;
+                    (r.stress, Some(r.tangent))
                 } else {
-                    DMatrix::zeros(0, 0)
+                    (law.stress(&h, dt, old, new).map_err(fail)?, None)
                 };
-                Ok(CellResponse { force, stiffness, stress: response.stress, f })
+                let p = DVector::from_iterator(9, (0..9).map(|r| stress[(r / 3, r % 3)]));
+                let force = op.tr_mul(&p) * g.weight;
+                let stiffness = match tangent {
+                    Some(t) => {
+                        let a = DMatrix::from_iterator(9, 9, t.iter().copied());
+                        op.tr_mul(&(a * op)) * g.weight
+                    }
+                    None => DMatrix::zeros(0, 0),
+                };
+                Ok(CellResponse { force, stiffness, stress, f })
             })
             .collect::<Result<Vec<_>, CellFailure>>()?;
         let per_cell: Vec<[SVector<f64, D>; N]> = cells
@@ -304,7 +317,7 @@ where
             .collect();
         let mut magnitude = vec![0.0; u.len()];
         assemble_vector::<D, N>(&self.model.topology, &per_cell_abs, &mut magnitude);
-        Ok(Evaluation { cells, patch_stiffness: Vec::new(), history: new_history, internal, magnitude })
+        Ok(Evaluation { cells, patch_stiffness: Vec::new(), history: new_history, internal, magnitude, with_tangent })
     }
 
     /// [`Self::evaluate`] on F-bar patches ([`fbar`]).
@@ -342,7 +355,13 @@ where
                 let mut update = |i: usize, h: &Matrix3<f64>| {
                     let e = group[i] as usize;
                     let old = &history[self.offsets[e]..self.offsets[e + 1]];
-                    self.law_of(e).update(h, dt, old, &mut new[i])
+                    if with_tangent {
+                        self.law_of(e).update(h, dt, old, &mut new[i])
+                    } else {
+                        // The patch reads no tangent without one.
+                        let stress = self.law_of(e).stress(h, dt, old, &mut new[i])?;
+                        Ok(PointResponse { stress, tangent: Tangent::zeros() })
+                    }
                 };
                 let plane_strain = matches!(self.model.problem.formulation, Formulation::PlaneStrain { .. });
                 let response =
@@ -391,7 +410,7 @@ where
         let mut magnitude = vec![0.0; u.len()];
         patches.assemble_vector::<D>(&forces_abs, &mut magnitude);
         let cells = cells.into_iter().map(|c| c.expect("every cell is in a patch")).collect();
-        Ok(Evaluation { cells, patch_stiffness, history: new_history, internal, magnitude })
+        Ok(Evaluation { cells, patch_stiffness, history: new_history, internal, magnitude, with_tangent })
     }
 
     fn tangent(&self, eval: &Evaluation) -> Vec<f64> {
@@ -1045,7 +1064,17 @@ where
     for iteration in 0..MAX_ITERATIONS {
         norms.push(norm / scale);
         let rounding = penalty.map_or(0.0, |p| p.rounding(newton.diagonal_positions(), &u));
-        if norm <= TOLERANCE * scale || (iteration > 0 && at_floor(&eval, &r)) || norm <= rounding {
+        let mut converged = norm <= TOLERANCE * scale || norm <= rounding;
+        if !converged {
+            // An iterate evaluated without its tangent (a trial expected to
+            // converge) gets it now: the next Newton step and the rounding
+            // floor need it. Its stress, history and forces are the same bits.
+            if !eval.with_tangent {
+                eval = newton.evaluate(&u, dt, history, true).map_err(law_err)?;
+            }
+            converged = iteration > 0 && at_floor(&eval, &r);
+        }
+        if converged {
             let stress =
                 cauchy_stresses::<S>(&eval, model.problem.formulation, |e| newton.law_of(e).strain == Strain::Small);
             return Ok(Converged {
@@ -1065,7 +1094,17 @@ where
         }
         let mut du = r.clone();
         factorizations += solve_tangent(step, newton, &k, &mut du, LINEAR_TOLERANCE * TOLERANCE * scale)?;
-        // Backtracking line search on the residual's norm.
+        // Whether the full step is expected to converge: Newton's quadratic
+        // rate predicts the next norm as `n_k^3 / n_(k-1)^2`. Such a trial is
+        // evaluated without its tangent (the converged iterate's tangent is not
+        // used); a wrong guess costs the tangent's evaluation afterwards, never
+        // a different iterate.
+        let expect_converged = iteration > 0 && {
+            let (last, before) = (norms[iteration], norms[iteration - 1]);
+            last * last * last <= TOLERANCE * before * before
+        };
+        // Backtracking line search on the residual's norm; a shortened trial,
+        // often refused, is evaluated without its tangent.
         let mut alpha = 1.0;
         let mut accepted = None;
         for _ in 0..=LINE_SEARCH_HALVINGS {
@@ -1073,7 +1112,8 @@ where
             for (i, &d) in system.dof_of_free.iter().enumerate() {
                 trial[d as usize] += alpha * du[i];
             }
-            if let Ok(e) = newton.evaluate(&trial, dt, history, true) {
+            let with_tangent = alpha == 1.0 && !expect_converged;
+            if let Ok(e) = newton.evaluate(&trial, dt, history, with_tangent) {
                 let (r1, n1, h1) = residual_of(&e, &trial);
                 if n1 < (1.0 - 1e-4 * alpha) * norm || alpha < 1e-3 {
                     accepted = Some((trial, e, r1, n1, h1));
