@@ -1164,16 +1164,25 @@ where
     Simplex<D, N>: ReferenceSimplex<D, N>,
 {
     let system = step.system;
+    let norm = rhs.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let tolerance = (PCG_RELATIVE * norm).max(floor);
+    let budget = pcg_budget(system);
     if let Some(factor) = step.kept.and_then(|k| k.try_borrow().ok()).as_ref().and_then(|k| k.as_ref()) {
-        let norm = rhs.iter().map(|x| x * x).sum::<f64>().sqrt();
-        let tolerance = (PCG_RELATIVE * norm).max(floor);
-        if let Some(x) = pcg(system, newton.pattern(), k, step.cut, factor, rhs, tolerance, pcg_budget(system)) {
+        if let Some(x) = minres(system, newton.pattern(), k, step.cut, factor, rhs, tolerance, budget) {
             rhs.copy_from_slice(&x);
             return Ok(0);
         }
     }
     let (factor, n) = factor_shifted(system, k, newton.diagonal_positions(), step.cut)?;
-    factor.solve_in_place(rhs);
+    // A shifted factor (the tangent is not positive definite) preconditions
+    // the exact solve: Newton's step stays the current tangent's, and with it
+    // the quadratic rate. Its own solve, a descent direction still, if not.
+    let exact =
+        if n > 1 { minres(system, newton.pattern(), k, step.cut, &factor, rhs, tolerance, budget) } else { None };
+    match exact {
+        Some(x) => rhs.copy_from_slice(&x),
+        None => factor.solve_in_place(rhs),
+    }
     if let Some(kept) = step.kept {
         *kept.borrow_mut() = Some(factor);
     }
@@ -1198,15 +1207,19 @@ fn pcg_budget(system: &ReducedSystem) -> usize {
     (system.factor_nonzeros() / n / 4).clamp(4, 40)
 }
 
-/// Conjugate gradients on `k` restricted to the free, uncut dofs, preconditioned
-/// by `factor` (a factorization of an earlier tangent, with its own cut set;
-/// projected onto the uncut dofs). Returns the solution when the residual's
-/// norm falls below `tolerance` within `budget` iterations, `None` when it does
-/// not or when the tangent shows a direction of non-positive curvature (the
-/// caller then factors, shifting if it must). Sums run in a fixed order: the
+/// Preconditioned MINRES (Paige & Saunders 1975) on `k` restricted to the
+/// free, uncut dofs, preconditioned by `factor` (a factorization of an earlier
+/// tangent, or of this one shifted, with its own cut set; projected onto the
+/// uncut dofs). The tangent may be indefinite (compressive stresses soften its
+/// geometric part; the viscous networks' step potential is not convex), the
+/// preconditioner must be positive definite. The residual `rhs - k x` is
+/// carried along (`k w` by the same recurrence as the search directions `w`)
+/// and checked against a true product at the end. Returns the solution when
+/// the residual's norm falls below `tolerance` within `budget` iterations,
+/// `None` otherwise (the caller then factors). Sums run in a fixed order: the
 /// result does not depend on the thread count.
 #[allow(clippy::too_many_arguments)]
-fn pcg(
+fn minres(
     system: &ReducedSystem,
     pattern: &CsrPattern,
     k: &[f64],
@@ -1235,29 +1248,73 @@ fn pcg(
         factor.solve_in_place(z);
         z.iter_mut().zip(&uncut).for_each(|(v, &u)| *v = if u { *v } else { 0.0 });
     };
-    let mut r: Vec<f64> = rhs.iter().zip(&uncut).map(|(&v, &u)| if u { v } else { 0.0 }).collect();
+    let b: Vec<f64> = rhs.iter().zip(&uncut).map(|(&v, &u)| if u { v } else { 0.0 }).collect();
     let mut x = vec![0.0; n];
-    if dot(&r, &r).sqrt() <= tolerance {
+    let mut residual = b.clone();
+    if dot(&residual, &residual).sqrt() <= tolerance {
         return Some(x);
     }
-    let mut z = vec![0.0; n];
-    precondition(&r, &mut z);
-    let mut p = z.clone();
-    let mut rz = dot(&r, &z);
-    let mut q = vec![0.0; n];
-    for _ in 0..budget {
-        apply(&p, &mut q);
-        let curvature = dot(&p, &q);
-        if !(curvature > 0.0 && rz > 0.0) {
+    let mut r1 = b.clone();
+    let mut r2 = b;
+    let mut y = vec![0.0; n];
+    precondition(&r1, &mut y);
+    let beta1 = dot(&r1, &y);
+    if !(beta1 > 0.0) {
+        return None;
+    }
+    let (mut beta, mut old_beta) = (beta1.sqrt(), 0.0);
+    let (mut dbar, mut epsln, mut phibar) = (0.0, 0.0, beta);
+    let (mut cs, mut sn) = (-1.0, 0.0);
+    let (mut v, mut kv) = (vec![0.0; n], vec![0.0; n]);
+    let (mut w, mut w1, mut w2) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let (mut kw, mut kw1, mut kw2) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    for iteration in 0..budget {
+        v.iter_mut().zip(&y).for_each(|(v, y)| *v = y / beta);
+        apply(&v, &mut kv);
+        y.copy_from_slice(&kv);
+        if iteration > 0 {
+            let c = beta / old_beta;
+            y.iter_mut().zip(&r1).for_each(|(y, r)| *y -= c * r);
+        }
+        let alpha = dot(&v, &y);
+        let c = alpha / beta;
+        y.iter_mut().zip(&r2).for_each(|(y, r)| *y -= c * r);
+        std::mem::swap(&mut r1, &mut r2);
+        r2.copy_from_slice(&y);
+        precondition(&r2, &mut y);
+        old_beta = beta;
+        let beta2 = dot(&r2, &y);
+        if !(beta2 >= 0.0) {
             return None;
         }
-        let alpha = rz / curvature;
-        x.iter_mut().zip(&p).for_each(|(x, p)| *x += alpha * p);
-        r.iter_mut().zip(&q).for_each(|(r, q)| *r -= alpha * q);
-        if dot(&r, &r).sqrt() <= tolerance {
+        beta = beta2.sqrt();
+        let old_eps = epsln;
+        let delta = cs * dbar + sn * alpha;
+        let gbar = sn * dbar - cs * alpha;
+        epsln = sn * beta;
+        dbar = -cs * beta;
+        let gamma = gbar.hypot(beta);
+        if !(gamma > 0.0) {
+            return None;
+        }
+        cs = gbar / gamma;
+        sn = beta / gamma;
+        let phi = cs * phibar;
+        phibar *= sn;
+        std::mem::swap(&mut w1, &mut w2);
+        std::mem::swap(&mut w2, &mut w);
+        std::mem::swap(&mut kw1, &mut kw2);
+        std::mem::swap(&mut kw2, &mut kw);
+        for i in 0..n {
+            w[i] = (v[i] - old_eps * w1[i] - delta * w2[i]) / gamma;
+            kw[i] = (kv[i] - old_eps * kw1[i] - delta * kw2[i]) / gamma;
+            x[i] += phi * w[i];
+            residual[i] -= phi * kw[i];
+        }
+        if dot(&residual, &residual).sqrt() <= tolerance {
             // The recurrence's residual drifts from the true one: check it.
-            apply(&x, &mut q);
-            let true_norm = q
+            apply(&x, &mut kv);
+            let true_norm = kv
                 .iter()
                 .zip(rhs)
                 .zip(&uncut)
@@ -1266,11 +1323,9 @@ fn pcg(
                 .sqrt();
             return (true_norm <= 2.0 * tolerance && x.iter().all(|v| v.is_finite())).then_some(x);
         }
-        precondition(&r, &mut z);
-        let rz_next = dot(&r, &z);
-        let beta = rz_next / rz;
-        rz = rz_next;
-        p.iter_mut().zip(&z).for_each(|(p, z)| *p = z + beta * *p);
+        if beta == 0.0 {
+            return None;
+        }
     }
     None
 }
