@@ -47,11 +47,16 @@
 //! velocity, with the held dofs at the step's prescribed values, until the
 //! free rows' out-of-balance force is below [`TOLERANCE`] of the force scale
 //! (the largest reaction so far, at least that of the current iterate). Each
-//! Newton step solves the current tangent: by conjugate gradients
-//! preconditioned with the last numeric factorization while they reach the
-//! solve's tolerance within a few iterations, else by a new factorization,
-//! which is then kept ([`solve_tangent`]); the contact tools' solves factor
-//! every time (their penalties change the tangent from solve to solve). A step
+//! Newton step solves the current tangent, which may be indefinite: by MINRES
+//! preconditioned with the last numeric factorization while it reaches the
+//! solve's tolerance within a few iterations, else by a new factorization
+//! (shifted where the tangent is not positive definite, and then the
+//! preconditioner of MINRES on the tangent itself), which is kept
+//! ([`solve_tangent`]); the contact tools' solves factor every time (their
+//! penalties change the tangent from solve to solve). Iterates whose tangent
+//! is not used (line-search trials expected to converge, shortened trials) are
+//! evaluated without it ([`crate::material::network::Network::stress`]) and
+//! get it only if they go on. A step
 //! that does not converge in [`MAX_ITERATIONS`], or whose law fails (an inverted
 //! cell), is retried at a quarter of its length; below [`MIN_STEP_FRACTION`] of
 //! the trial the run ends with an error naming the step, the time, the element
@@ -1144,14 +1149,14 @@ where
 }
 
 /// Solves the tangent system `k du = rhs` on the free dofs (the dofs marked in
-/// `step.cut` stay at zero): by conjugate gradients preconditioned with the
-/// last numeric factorization on the system ([`pcg`]) while that reaches
-/// `max(PCG_RELATIVE |rhs|, floor)` within [`pcg_budget`] iterations, otherwise
-/// by a new factorization ([`factor_shifted`]), which is kept for the next
-/// solves. Over a step and from step to step the tangent changes little, so
+/// `step.cut` stay at zero): by MINRES preconditioned with the last numeric
+/// factorization on the system ([`minres`]) while that reaches
+/// `max(KRYLOV_RELATIVE |rhs|, floor)` within [`krylov_budget`] iterations,
+/// otherwise by a new factorization ([`factor_shifted`]), which is kept for
+/// the next solves; a shifted one preconditions MINRES on the tangent itself. Over a step and from step to step the tangent changes little, so
 /// the factor of an earlier tangent is a close preconditioner and a few
 /// triangular solves replace a factorization; Newton's steps stay those of the
-/// current tangent (to `PCG_RELATIVE`), so its convergence does not change.
+/// current tangent (to `KRYLOV_RELATIVE`), so its convergence does not change.
 /// Returns the factorizations made.
 fn solve_tangent<const D: usize, const N: usize, const S: usize>(
     step: &StepSystem<'_, '_>,
@@ -1165,8 +1170,8 @@ where
 {
     let system = step.system;
     let norm = rhs.iter().map(|x| x * x).sum::<f64>().sqrt();
-    let tolerance = (PCG_RELATIVE * norm).max(floor);
-    let budget = pcg_budget(system);
+    let tolerance = (KRYLOV_RELATIVE * norm).max(floor);
+    let budget = krylov_budget(system);
     if let Some(factor) = step.kept.and_then(|k| k.try_borrow().ok()).as_ref().and_then(|k| k.as_ref()) {
         if let Some(x) = minres(system, newton.pattern(), k, step.cut, factor, rhs, tolerance, budget) {
             rhs.copy_from_slice(&x);
@@ -1191,18 +1196,18 @@ where
 
 /// The linear residual the preconditioned solves reach, relative to the
 /// right-hand side's norm.
-const PCG_RELATIVE: f64 = 1e-10;
+const KRYLOV_RELATIVE: f64 = 1e-10;
 /// Or below this share of Newton's own tolerance (absolute, as a force): the
 /// linear error then adds at most this share of [`TOLERANCE`] to the next
 /// iterate's out-of-balance force.
 const LINEAR_TOLERANCE: f64 = 1e-3;
 
-/// The most conjugate-gradient iterations before refactoring: about the
+/// The most MINRES iterations before refactoring: about the
 /// number of triangular-solve pairs a factorization costs. A factorization
 /// takes about `sum_j c_j^2` flops (`c_j` the factor's column counts, here
 /// their mean `nnz(L) / n`), an iteration `4 nnz(L)` for its two triangular
 /// solves and the tangent's product; a quarter of the mean column count.
-fn pcg_budget(system: &ReducedSystem) -> usize {
+fn krylov_budget(system: &ReducedSystem) -> usize {
     let n = system.num_free().max(1);
     (system.factor_nonzeros() / n / 4).clamp(4, 40)
 }
