@@ -4,13 +4,15 @@
 //! structure at the fungi fit's values (VALIDATION.md) and with the seed's
 //! five-element chain. Prints the wall time, the process's CPU time (user and
 //! system, every thread; Linux), steps, Newton iterations and factorizations
-//! of each; with `fbar` after the size, the network with F-bar patches too.
+//! of each, and the network's evaluations of its cells' laws (with their
+//! tangent and of the stress alone) per cell; with `fbar` after the size, the
+//! network with F-bar patches too.
 //!
 //! `cargo run --release -p wagashi-workspace-tests --example network_cost -- SIZE_MM [fbar]`
 
 use std::time::Instant;
 
-use fem_core::material::network::{Damper, Energy, Equilibrium, Mullins, Network, ViscousNetwork};
+use fem_core::material::network::{evaluation_counts, Damper, Energy, Equilibrium, Mullins, Network, ViscousNetwork};
 use fem_core::material::Material;
 use fem_core::mesh;
 use fem_core::press::{self, Attachment, Protocol, Settings, SolidPress, Tool, ToolContact, Volumetric};
@@ -71,6 +73,7 @@ fn main() {
         )];
         let clock = Instant::now();
         let cpu0 = cpu_seconds();
+        let counts0 = evaluation_counts();
         let settings = Settings { volumetric, ..Settings::default() };
         let result = press::simulate(&problem, &settings, &mut |_| {}).unwrap();
         let wall = clock.elapsed().as_secs_f64();
@@ -78,12 +81,17 @@ fn main() {
             (Some(a), Some(b)) => format!("{:.1} s CPU", b - a),
             _ => "CPU time n/a".to_string(),
         };
+        let counts = evaluation_counts();
         let steps = result.steps.len();
         let iterations: usize = result.steps.iter().map(|s| s.newton_iterations).sum();
+        let per_cell = |n: u64, n0: u64| (n - n0) as f64 / m.cells.len() as f64;
         println!(
-            "{name}: {wall:.1} s wall, {cpu}, {steps} steps, {:.2} Newton iterations and {:.2} factorizations per step, peak {:.4} N",
+            "{name}: {wall:.1} s wall, {cpu}, {steps} steps, {:.2} Newton iterations and {:.2} factorizations per step, \
+             {:.0} law evaluations with tangent and {:.0} of the stress alone per cell, peak {:.6} N",
             iterations as f64 / steps as f64,
             result.num_factorizations as f64 / steps as f64,
+            per_cell(counts.with_tangent, counts0.with_tangent),
+            per_cell(counts.stress_only, counts0.stress_only),
             result.peak_force()
         );
     }

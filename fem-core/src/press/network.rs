@@ -47,11 +47,16 @@
 //! velocity, with the held dofs at the step's prescribed values, until the
 //! free rows' out-of-balance force is below [`TOLERANCE`] of the force scale
 //! (the largest reaction so far, at least that of the current iterate). Each
-//! Newton step solves the current tangent: by conjugate gradients
-//! preconditioned with the last numeric factorization while they reach the
-//! solve's tolerance within a few iterations, else by a new factorization,
-//! which is then kept ([`solve_tangent`]); the contact tools' solves factor
-//! every time (their penalties change the tangent from solve to solve). A step
+//! Newton step solves the current tangent, which may be indefinite: by MINRES
+//! preconditioned with the last numeric factorization while it reaches the
+//! solve's tolerance within a few iterations, else by a new factorization
+//! (shifted where the tangent is not positive definite, and then the
+//! preconditioner of MINRES on the tangent itself), which is kept
+//! ([`solve_tangent`]); the contact tools' solves factor every time (their
+//! penalties change the tangent from solve to solve). Iterates whose tangent
+//! is not used (line-search trials expected to converge, shortened trials) are
+//! evaluated without it ([`crate::material::network::Network::stress`]) and
+//! get it only if they go on. A step
 //! that does not converge in [`MAX_ITERATIONS`], or whose law fails (an inverted
 //! cell), is retried at a quarter of its length; below [`MIN_STEP_FRACTION`] of
 //! the trial the run ends with an error naming the step, the time, the element
@@ -85,7 +90,7 @@ use super::{
 };
 use crate::assembly::{assemble_blocks, assemble_vector, CsrPattern};
 use crate::element::{CellGeometry, Formulation, ReferenceSimplex, Simplex};
-use crate::material::law::{LawFailure, PointLaw};
+use crate::material::law::{LawFailure, PointLaw, PointResponse, Tangent};
 use crate::material::network::{Network, Strain};
 use crate::solve::{Factor, ReducedSystem};
 
@@ -203,6 +208,8 @@ struct Evaluation {
     /// error of a unit roundoff in every displacement moves `internal` by up to
     /// this, the floor of the residual.
     magnitude: Vec<f64>,
+    /// Whether the cells' (or patches') tangents were evaluated.
+    with_tangent: bool,
 }
 
 /// A failed evaluation: the cell and why.
@@ -241,8 +248,12 @@ where
         self.patches.as_ref().map_or(&self.model.node_order, |p| &p.node_order)
     }
 
-    /// Every cell's stress and tangent at `u` after a step of `dt` from `history`.
+    /// Every cell's stress and, when `with_tangent`, tangent at `u` after a
+    /// step of `dt` from `history` (the stress, history and internal force are
+    /// the same to the bit either way; without the tangent the laws skip it,
+    /// [`Network::stress`]).
     fn evaluate(&self, u: &[f64], dt: f64, history: &[f64], with_tangent: bool) -> Result<Evaluation, CellFailure> {
+        crate::material::network::count_evaluations(self.model.problem.mesh.num_cells(), with_tangent);
         if let Some(patches) = &self.patches {
             return self.evaluate_patches(patches, u, dt, history, with_tangent);
         }
@@ -263,17 +274,24 @@ where
                 let h = Matrix3::from_fn(|i, j| grad[3 * i + j]);
                 let f = Matrix3::identity() + h;
                 let old = &history[self.offsets[e]..self.offsets[e + 1]];
-                let response =
-                    self.law_of(e).update(&h, dt, old, new).map_err(|failure| CellFailure { element: e, failure })?;
-                let p = DVector::from_iterator(9, (0..9).map(|r| response.stress[(r / 3, r % 3)]));
-                let force = op.tr_mul(&p) * g.weight;
-                let stiffness = if with_tangent {
-                    let a = DMatrix::from_iterator(9, 9, response.tangent.iter().copied());
-                    op.tr_mul(&(a * op)) * g.weight
+                let law = self.law_of(e);
+                let fail = |failure| CellFailure { element: e, failure };
+                let (stress, tangent) = if with_tangent {
+                    let r = law.update(&h, dt, old, new).map_err(fail)?;
+                    (r.stress, Some(r.tangent))
                 } else {
-                    DMatrix::zeros(0, 0)
+                    (law.stress(&h, dt, old, new).map_err(fail)?, None)
                 };
-                Ok(CellResponse { force, stiffness, stress: response.stress, f })
+                let p = DVector::from_iterator(9, (0..9).map(|r| stress[(r / 3, r % 3)]));
+                let force = op.tr_mul(&p) * g.weight;
+                let stiffness = match tangent {
+                    Some(t) => {
+                        let a = DMatrix::from_iterator(9, 9, t.iter().copied());
+                        op.tr_mul(&(a * op)) * g.weight
+                    }
+                    None => DMatrix::zeros(0, 0),
+                };
+                Ok(CellResponse { force, stiffness, stress, f })
             })
             .collect::<Result<Vec<_>, CellFailure>>()?;
         let per_cell: Vec<[SVector<f64, D>; N]> = cells
@@ -304,7 +322,7 @@ where
             .collect();
         let mut magnitude = vec![0.0; u.len()];
         assemble_vector::<D, N>(&self.model.topology, &per_cell_abs, &mut magnitude);
-        Ok(Evaluation { cells, patch_stiffness: Vec::new(), history: new_history, internal, magnitude })
+        Ok(Evaluation { cells, patch_stiffness: Vec::new(), history: new_history, internal, magnitude, with_tangent })
     }
 
     /// [`Self::evaluate`] on F-bar patches ([`fbar`]).
@@ -342,7 +360,13 @@ where
                 let mut update = |i: usize, h: &Matrix3<f64>| {
                     let e = group[i] as usize;
                     let old = &history[self.offsets[e]..self.offsets[e + 1]];
-                    self.law_of(e).update(h, dt, old, &mut new[i])
+                    if with_tangent {
+                        self.law_of(e).update(h, dt, old, &mut new[i])
+                    } else {
+                        // The patch reads no tangent without one.
+                        let stress = self.law_of(e).stress(h, dt, old, &mut new[i])?;
+                        Ok(PointResponse { stress, tangent: Tangent::zeros() })
+                    }
                 };
                 let plane_strain = matches!(self.model.problem.formulation, Formulation::PlaneStrain { .. });
                 let response =
@@ -391,7 +415,7 @@ where
         let mut magnitude = vec![0.0; u.len()];
         patches.assemble_vector::<D>(&forces_abs, &mut magnitude);
         let cells = cells.into_iter().map(|c| c.expect("every cell is in a patch")).collect();
-        Ok(Evaluation { cells, patch_stiffness, history: new_history, internal, magnitude })
+        Ok(Evaluation { cells, patch_stiffness, history: new_history, internal, magnitude, with_tangent })
     }
 
     fn tangent(&self, eval: &Evaluation) -> Vec<f64> {
@@ -1045,7 +1069,17 @@ where
     for iteration in 0..MAX_ITERATIONS {
         norms.push(norm / scale);
         let rounding = penalty.map_or(0.0, |p| p.rounding(newton.diagonal_positions(), &u));
-        if norm <= TOLERANCE * scale || (iteration > 0 && at_floor(&eval, &r)) || norm <= rounding {
+        let mut converged = norm <= TOLERANCE * scale || norm <= rounding;
+        if !converged {
+            // An iterate evaluated without its tangent (a trial expected to
+            // converge) gets it now: the next Newton step and the rounding
+            // floor need it. Its stress, history and forces are the same bits.
+            if !eval.with_tangent {
+                eval = newton.evaluate(&u, dt, history, true).map_err(law_err)?;
+            }
+            converged = iteration > 0 && at_floor(&eval, &r);
+        }
+        if converged {
             let stress =
                 cauchy_stresses::<S>(&eval, model.problem.formulation, |e| newton.law_of(e).strain == Strain::Small);
             return Ok(Converged {
@@ -1065,7 +1099,17 @@ where
         }
         let mut du = r.clone();
         factorizations += solve_tangent(step, newton, &k, &mut du, LINEAR_TOLERANCE * TOLERANCE * scale)?;
-        // Backtracking line search on the residual's norm.
+        // Whether the full step is expected to converge: Newton's quadratic
+        // rate predicts the next norm as `n_k^3 / n_(k-1)^2`. Such a trial is
+        // evaluated without its tangent (the converged iterate's tangent is not
+        // used); a wrong guess costs the tangent's evaluation afterwards, never
+        // a different iterate.
+        let expect_converged = iteration > 0 && {
+            let (last, before) = (norms[iteration], norms[iteration - 1]);
+            last * last * last <= TOLERANCE * before * before
+        };
+        // Backtracking line search on the residual's norm; a shortened trial,
+        // often refused, is evaluated without its tangent.
         let mut alpha = 1.0;
         let mut accepted = None;
         for _ in 0..=LINE_SEARCH_HALVINGS {
@@ -1073,7 +1117,8 @@ where
             for (i, &d) in system.dof_of_free.iter().enumerate() {
                 trial[d as usize] += alpha * du[i];
             }
-            if let Ok(e) = newton.evaluate(&trial, dt, history, true) {
+            let with_tangent = alpha == 1.0 && !expect_converged;
+            if let Ok(e) = newton.evaluate(&trial, dt, history, with_tangent) {
                 let (r1, n1, h1) = residual_of(&e, &trial);
                 if n1 < (1.0 - 1e-4 * alpha) * norm || alpha < 1e-3 {
                     accepted = Some((trial, e, r1, n1, h1));
@@ -1104,14 +1149,14 @@ where
 }
 
 /// Solves the tangent system `k du = rhs` on the free dofs (the dofs marked in
-/// `step.cut` stay at zero): by conjugate gradients preconditioned with the
-/// last numeric factorization on the system ([`pcg`]) while that reaches
-/// `max(PCG_RELATIVE |rhs|, floor)` within [`pcg_budget`] iterations, otherwise
-/// by a new factorization ([`factor_shifted`]), which is kept for the next
-/// solves. Over a step and from step to step the tangent changes little, so
+/// `step.cut` stay at zero): by MINRES preconditioned with the last numeric
+/// factorization on the system ([`minres`]) while that reaches
+/// `max(KRYLOV_RELATIVE |rhs|, floor)` within [`krylov_budget`] iterations,
+/// otherwise by a new factorization ([`factor_shifted`]), which is kept for
+/// the next solves; a shifted one preconditions MINRES on the tangent itself. Over a step and from step to step the tangent changes little, so
 /// the factor of an earlier tangent is a close preconditioner and a few
 /// triangular solves replace a factorization; Newton's steps stay those of the
-/// current tangent (to `PCG_RELATIVE`), so its convergence does not change.
+/// current tangent (to `KRYLOV_RELATIVE`), so its convergence does not change.
 /// Returns the factorizations made.
 fn solve_tangent<const D: usize, const N: usize, const S: usize>(
     step: &StepSystem<'_, '_>,
@@ -1124,16 +1169,25 @@ where
     Simplex<D, N>: ReferenceSimplex<D, N>,
 {
     let system = step.system;
+    let norm = rhs.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let tolerance = (KRYLOV_RELATIVE * norm).max(floor);
+    let budget = krylov_budget(system);
     if let Some(factor) = step.kept.and_then(|k| k.try_borrow().ok()).as_ref().and_then(|k| k.as_ref()) {
-        let norm = rhs.iter().map(|x| x * x).sum::<f64>().sqrt();
-        let tolerance = (PCG_RELATIVE * norm).max(floor);
-        if let Some(x) = pcg(system, newton.pattern(), k, step.cut, factor, rhs, tolerance, pcg_budget(system)) {
+        if let Some(x) = minres(system, newton.pattern(), k, step.cut, factor, rhs, tolerance, budget) {
             rhs.copy_from_slice(&x);
             return Ok(0);
         }
     }
     let (factor, n) = factor_shifted(system, k, newton.diagonal_positions(), step.cut)?;
-    factor.solve_in_place(rhs);
+    // A shifted factor (the tangent is not positive definite) preconditions
+    // the exact solve: Newton's step stays the current tangent's, and with it
+    // the quadratic rate. Its own solve, a descent direction still, if not.
+    let exact =
+        if n > 1 { minres(system, newton.pattern(), k, step.cut, &factor, rhs, tolerance, budget) } else { None };
+    match exact {
+        Some(x) => rhs.copy_from_slice(&x),
+        None => factor.solve_in_place(rhs),
+    }
     if let Some(kept) = step.kept {
         *kept.borrow_mut() = Some(factor);
     }
@@ -1142,31 +1196,35 @@ where
 
 /// The linear residual the preconditioned solves reach, relative to the
 /// right-hand side's norm.
-const PCG_RELATIVE: f64 = 1e-10;
+const KRYLOV_RELATIVE: f64 = 1e-10;
 /// Or below this share of Newton's own tolerance (absolute, as a force): the
 /// linear error then adds at most this share of [`TOLERANCE`] to the next
 /// iterate's out-of-balance force.
 const LINEAR_TOLERANCE: f64 = 1e-3;
 
-/// The most conjugate-gradient iterations before refactoring: about the
+/// The most MINRES iterations before refactoring: about the
 /// number of triangular-solve pairs a factorization costs. A factorization
 /// takes about `sum_j c_j^2` flops (`c_j` the factor's column counts, here
 /// their mean `nnz(L) / n`), an iteration `4 nnz(L)` for its two triangular
 /// solves and the tangent's product; a quarter of the mean column count.
-fn pcg_budget(system: &ReducedSystem) -> usize {
+fn krylov_budget(system: &ReducedSystem) -> usize {
     let n = system.num_free().max(1);
     (system.factor_nonzeros() / n / 4).clamp(4, 40)
 }
 
-/// Conjugate gradients on `k` restricted to the free, uncut dofs, preconditioned
-/// by `factor` (a factorization of an earlier tangent, with its own cut set;
-/// projected onto the uncut dofs). Returns the solution when the residual's
-/// norm falls below `tolerance` within `budget` iterations, `None` when it does
-/// not or when the tangent shows a direction of non-positive curvature (the
-/// caller then factors, shifting if it must). Sums run in a fixed order: the
+/// Preconditioned MINRES (Paige & Saunders 1975) on `k` restricted to the
+/// free, uncut dofs, preconditioned by `factor` (a factorization of an earlier
+/// tangent, or of this one shifted, with its own cut set; projected onto the
+/// uncut dofs). The tangent may be indefinite (compressive stresses soften its
+/// geometric part; the viscous networks' step potential is not convex), the
+/// preconditioner must be positive definite. The residual `rhs - k x` is
+/// carried along (`k w` by the same recurrence as the search directions `w`)
+/// and checked against a true product at the end. Returns the solution when
+/// the residual's norm falls below `tolerance` within `budget` iterations,
+/// `None` otherwise (the caller then factors). Sums run in a fixed order: the
 /// result does not depend on the thread count.
 #[allow(clippy::too_many_arguments)]
-fn pcg(
+fn minres(
     system: &ReducedSystem,
     pattern: &CsrPattern,
     k: &[f64],
@@ -1195,29 +1253,73 @@ fn pcg(
         factor.solve_in_place(z);
         z.iter_mut().zip(&uncut).for_each(|(v, &u)| *v = if u { *v } else { 0.0 });
     };
-    let mut r: Vec<f64> = rhs.iter().zip(&uncut).map(|(&v, &u)| if u { v } else { 0.0 }).collect();
+    let b: Vec<f64> = rhs.iter().zip(&uncut).map(|(&v, &u)| if u { v } else { 0.0 }).collect();
     let mut x = vec![0.0; n];
-    if dot(&r, &r).sqrt() <= tolerance {
+    let mut residual = b.clone();
+    if dot(&residual, &residual).sqrt() <= tolerance {
         return Some(x);
     }
-    let mut z = vec![0.0; n];
-    precondition(&r, &mut z);
-    let mut p = z.clone();
-    let mut rz = dot(&r, &z);
-    let mut q = vec![0.0; n];
-    for _ in 0..budget {
-        apply(&p, &mut q);
-        let curvature = dot(&p, &q);
-        if !(curvature > 0.0 && rz > 0.0) {
+    let mut r1 = b.clone();
+    let mut r2 = b;
+    let mut y = vec![0.0; n];
+    precondition(&r1, &mut y);
+    let beta1 = dot(&r1, &y);
+    if !(beta1 > 0.0) {
+        return None;
+    }
+    let (mut beta, mut old_beta) = (beta1.sqrt(), 0.0);
+    let (mut dbar, mut epsln, mut phibar) = (0.0, 0.0, beta);
+    let (mut cs, mut sn) = (-1.0, 0.0);
+    let (mut v, mut kv) = (vec![0.0; n], vec![0.0; n]);
+    let (mut w, mut w1, mut w2) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let (mut kw, mut kw1, mut kw2) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    for iteration in 0..budget {
+        v.iter_mut().zip(&y).for_each(|(v, y)| *v = y / beta);
+        apply(&v, &mut kv);
+        y.copy_from_slice(&kv);
+        if iteration > 0 {
+            let c = beta / old_beta;
+            y.iter_mut().zip(&r1).for_each(|(y, r)| *y -= c * r);
+        }
+        let alpha = dot(&v, &y);
+        let c = alpha / beta;
+        y.iter_mut().zip(&r2).for_each(|(y, r)| *y -= c * r);
+        std::mem::swap(&mut r1, &mut r2);
+        r2.copy_from_slice(&y);
+        precondition(&r2, &mut y);
+        old_beta = beta;
+        let beta2 = dot(&r2, &y);
+        if !(beta2 >= 0.0) {
             return None;
         }
-        let alpha = rz / curvature;
-        x.iter_mut().zip(&p).for_each(|(x, p)| *x += alpha * p);
-        r.iter_mut().zip(&q).for_each(|(r, q)| *r -= alpha * q);
-        if dot(&r, &r).sqrt() <= tolerance {
+        beta = beta2.sqrt();
+        let old_eps = epsln;
+        let delta = cs * dbar + sn * alpha;
+        let gbar = sn * dbar - cs * alpha;
+        epsln = sn * beta;
+        dbar = -cs * beta;
+        let gamma = gbar.hypot(beta);
+        if !(gamma > 0.0) {
+            return None;
+        }
+        cs = gbar / gamma;
+        sn = beta / gamma;
+        let phi = cs * phibar;
+        phibar *= sn;
+        std::mem::swap(&mut w1, &mut w2);
+        std::mem::swap(&mut w2, &mut w);
+        std::mem::swap(&mut kw1, &mut kw2);
+        std::mem::swap(&mut kw2, &mut kw);
+        for i in 0..n {
+            w[i] = (v[i] - old_eps * w1[i] - delta * w2[i]) / gamma;
+            kw[i] = (kv[i] - old_eps * kw1[i] - delta * kw2[i]) / gamma;
+            x[i] += phi * w[i];
+            residual[i] -= phi * kw[i];
+        }
+        if dot(&residual, &residual).sqrt() <= tolerance {
             // The recurrence's residual drifts from the true one: check it.
-            apply(&x, &mut q);
-            let true_norm = q
+            apply(&x, &mut kv);
+            let true_norm = kv
                 .iter()
                 .zip(rhs)
                 .zip(&uncut)
@@ -1226,11 +1328,9 @@ fn pcg(
                 .sqrt();
             return (true_norm <= 2.0 * tolerance && x.iter().all(|v| v.is_finite())).then_some(x);
         }
-        precondition(&r, &mut z);
-        let rz_next = dot(&r, &z);
-        let beta = rz_next / rz;
-        rz = rz_next;
-        p.iter_mut().zip(&z).for_each(|(p, z)| *p = z + beta * *p);
+        if beta == 0.0 {
+            return None;
+        }
     }
     None
 }

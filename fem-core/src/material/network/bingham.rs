@@ -101,10 +101,10 @@ impl Part for BinghamNetwork {
     }
 
     fn respond(&self, k: &Kinematics, old: &[f64], new: &mut [f64]) -> Result<(Matrix3<f64>, Tangent), LawFailure> {
-        let (p, tangent, _) = radial_return(self.e_mpa, k.h, &k.f_inv, k.poisson, old, new, |s_norm, mu| {
+        let (p, tangent, _) = radial_return(self.e_mpa, k.h, &k.f_inv, k.poisson, old, new, true, |s_norm, mu| {
             self.multiplier(s_norm, mu, k.dt_s)
         });
-        Ok((p, tangent))
+        Ok((p, tangent.expect("asked for")))
     }
 }
 

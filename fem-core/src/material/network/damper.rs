@@ -74,4 +74,9 @@ impl Part for Damper {
         let (p, t, _) = hencky::spring(k.h, &k.f_inv_t, &k.c_n_inv_dev, self.c_mpa_s / k.dt_s, lame);
         Ok((p, t))
     }
+
+    fn stress(&self, k: &Kinematics, _old: &[f64], _new: &mut [f64]) -> Result<Matrix3<f64>, LawFailure> {
+        let lame = hencky::unit_lame(k.poisson);
+        Ok(hencky::spring_stress(k.h, &k.f_inv_t, &k.c_n_inv_dev, self.c_mpa_s / k.dt_s, lame).p)
+    }
 }

@@ -141,6 +141,12 @@ impl Part for DualNetwork {
         new[12] = if self.loads(k, old)? { 0.0 } else { 1.0 };
         ViscousNetwork { e_mpa: self.e_mpa, tau_s }.respond(k, &old[..12], &mut new[..12])
     }
+
+    fn stress(&self, k: &Kinematics, old: &[f64], new: &mut [f64]) -> Result<Matrix3<f64>, LawFailure> {
+        let tau_s = if old[12] == 0.0 { self.tau_load_s } else { self.tau_unload_s };
+        new[12] = if self.loads(k, old)? { 0.0 } else { 1.0 };
+        ViscousNetwork { e_mpa: self.e_mpa, tau_s }.stress(k, &old[..12], &mut new[..12])
+    }
 }
 
 #[cfg(test)]

@@ -135,7 +135,7 @@ impl Part for FlowNetwork {
 
     fn respond(&self, k: &Kinematics, old: &[f64], new: &mut [f64]) -> Result<(Matrix3<f64>, Tangent), LawFailure> {
         let failed = std::cell::Cell::new(false);
-        let (p, tangent, _) = radial_return(self.e_mpa, k.h, &k.f_inv, k.poisson, old, new, |s_norm, mu| {
+        let (p, tangent, _) = radial_return(self.e_mpa, k.h, &k.f_inv, k.poisson, old, new, true, |s_norm, mu| {
             let m = self.multiplier(s_norm, mu, k.dt_s);
             failed.set(m.is_none());
             m
@@ -143,7 +143,7 @@ impl Part for FlowNetwork {
         if failed.get() {
             return Err(LawFailure::ReturnMapping { law: "flow" });
         }
-        Ok((p, tangent))
+        Ok((p, tangent.expect("asked for")))
     }
 }
 

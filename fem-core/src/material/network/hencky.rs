@@ -94,6 +94,49 @@ pub(crate) fn push_deviation(h: &Matrix3<f64>, y: &Matrix3<f64>) -> Matrix3<f64>
     symmetrize(&(y + h + h.transpose() + hy + hy.transpose() + h * h.transpose() + hy * h.transpose()))
 }
 
+/// A Hencky spring's stress at a point, with the decomposition its tangent
+/// ([`spring_tangent`]) reuses.
+pub(crate) struct SpringStress {
+    /// The first Piola-Kirchhoff stress `P = tau F^-T`.
+    pub p: Matrix3<f64>,
+    /// The Kirchhoff stress `tau`.
+    pub tau: Matrix3<f64>,
+    /// The eigenvectors of `b = F A F^T`.
+    pub q: Matrix3<f64>,
+    /// The eigenvalues of `b - I`.
+    pub x: [f64; 3],
+}
+
+/// A Hencky spring's stress at `F = I + h` on the intermediate configuration
+/// `A = I + a_dev` (module docs), without its tangent.
+pub(crate) fn spring_stress(
+    h: &Matrix3<f64>,
+    f_inv_t: &Matrix3<f64>,
+    a_dev: &Matrix3<f64>,
+    e_mpa: f64,
+    lame: (f64, f64),
+) -> SpringStress {
+    // b - I = F A F^T - I, decomposed: b = Q diag(1 + x) Q^T.
+    let (q, x) = eigen(&push_deviation(h, a_dev));
+    let eps = spectral(&q, x, |v| 0.5 * v.ln_1p());
+    let tau = hooke(e_mpa, lame, &eps);
+    SpringStress { p: tau * f_inv_t, tau, q, x }
+}
+
+/// The tangent `dP/dF` of the spring whose stress is `s` ([`spring_stress`]
+/// at the same arguments).
+pub(crate) fn spring_tangent(
+    h: &Matrix3<f64>,
+    f_inv_t: &Matrix3<f64>,
+    a_dev: &Matrix3<f64>,
+    e_mpa: f64,
+    lame: (f64, f64),
+    s: &SpringStress,
+) -> Tangent {
+    let f = Matrix3::identity() + h;
+    log_strain_tangent(&f, a_dev, &s.q, s.x, &s.tau, f_inv_t, |d_eps| hooke(e_mpa, lame, d_eps))
+}
+
 /// A Hencky spring's stress `P`, tangent `dP/dF` and Kirchhoff stress `tau` at
 /// `F = I + h` on the intermediate configuration `A = I + a_dev` (module docs).
 pub(crate) fn spring(
@@ -103,14 +146,9 @@ pub(crate) fn spring(
     e_mpa: f64,
     lame: (f64, f64),
 ) -> (Matrix3<f64>, Tangent, Matrix3<f64>) {
-    let f = Matrix3::identity() + h;
-    // b - I = F A F^T - I, decomposed: b = Q diag(1 + x) Q^T.
-    let (q, x) = eigen(&push_deviation(h, a_dev));
-    let eps = spectral(&q, x, |v| 0.5 * v.ln_1p());
-    let tau = hooke(e_mpa, lame, &eps);
-    let p = tau * f_inv_t;
-    let tangent = log_strain_tangent(&f, a_dev, &q, x, &tau, f_inv_t, |d_eps| hooke(e_mpa, lame, d_eps));
-    (p, tangent, tau)
+    let s = spring_stress(h, f_inv_t, a_dev, e_mpa, lame);
+    let tangent = spring_tangent(h, f_inv_t, a_dev, e_mpa, lame, &s);
+    (s.p, tangent, s.tau)
 }
 
 /// `dP/dF` of `P = tau F^-T` for a Kirchhoff stress `tau` that depends on the
@@ -119,6 +157,12 @@ pub(crate) fn spring(
 /// by the Daleckii-Krein formula (divided differences in the principal frame),
 /// then `d_tau`, the derivative of `tau` by `eps` as a map (the spring's
 /// modulus, or a return mapping's consistent one), and the push by `F^-T`.
+///
+/// For `dF = e_k e_m^T` every rank-one factor is formed as an outer product:
+/// with `c = F A e_m`, `db = e_k c^T + c e_k^T` and, in the principal frame,
+/// `Q^T db Q = u v^T + v u^T` (`u = Q^T e_k`, `v = Q^T c`); the geometric term
+/// `tau F^-T dF^T F^-T` is `(P e_m)(e_k^T F^-T)`. Three 3 x 3 products remain
+/// per column (back from the principal frame, and the push by `F^-T`).
 pub(crate) fn log_strain_tangent(
     f: &Matrix3<f64>,
     a_dev: &Matrix3<f64>,
@@ -131,20 +175,26 @@ pub(crate) fn log_strain_tangent(
     let mut g = Matrix3::zeros();
     for i in 0..3 {
         for j in 0..3 {
-            g[(i, j)] = log_divided_difference(x[i], x[j]);
+            // Halved: eps = log(b) / 2.
+            g[(i, j)] = 0.5 * log_divided_difference(x[i], x[j]);
         }
     }
     let qt = q.transpose();
-    let fa = f * (Matrix3::identity() + a_dev);
+    let qt_fa = qt * (f * (Matrix3::identity() + a_dev));
+    let p = tau * f_inv_t;
     let mut tangent = Tangent::zeros();
     for k in 0..3 {
+        let u = qt.column(k);
         for m in 0..3 {
-            // dF = e_k e_m^T: db = dF A F^T + F A dF^T.
-            let mut df = Matrix3::zeros();
-            df[(k, m)] = 1.0;
-            let db = df * fa.transpose() + fa * df.transpose();
-            let d_eps = q * (qt * db * q).component_mul(&g) * qt * 0.5;
-            let dp = d_tau(&d_eps) * f_inv_t - tau * f_inv_t * df.transpose() * f_inv_t;
+            let v = qt_fa.column(m);
+            let local = Matrix3::from_fn(|i, j| (u[i] * v[j] + v[i] * u[j]) * g[(i, j)]);
+            let d_eps = q * local * qt;
+            let mut dp = d_tau(&d_eps) * f_inv_t;
+            for i in 0..3 {
+                for j in 0..3 {
+                    dp[(i, j)] -= p[(i, m)] * f_inv_t[(k, j)];
+                }
+            }
             for i in 0..3 {
                 for j in 0..3 {
                     tangent[(ij(i, j), ij(k, m))] = dp[(i, j)];

@@ -116,12 +116,42 @@ pub use part::{Kinematics, Part, PartKind, SmallKinematics, PARTS};
 pub use plastic::PlasticNetwork;
 pub use viscous::ViscousNetwork;
 
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 use nalgebra::Matrix3;
 
 use crate::material::law::{LawFailure, ParameterSpec, PointLaw, PointResponse, Tangent};
 use crate::material::Rheology;
+
+/// How many cell-law evaluations the Newton path has made in this process:
+/// with their tangent and of the stress alone ([`Network::stress`]). For
+/// benchmarks (the `network_cost` example prints them); one atomic addition
+/// per evaluation of the whole body.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct EvaluationCounts {
+    /// Cell evaluations with the tangent.
+    pub with_tangent: u64,
+    /// Cell evaluations of the stress alone.
+    pub stress_only: u64,
+}
+
+static WITH_TANGENT: AtomicU64 = AtomicU64::new(0);
+static STRESS_ONLY: AtomicU64 = AtomicU64::new(0);
+
+/// The evaluations counted so far ([`EvaluationCounts`]).
+pub fn evaluation_counts() -> EvaluationCounts {
+    EvaluationCounts {
+        with_tangent: WITH_TANGENT.load(Ordering::Relaxed),
+        stress_only: STRESS_ONLY.load(Ordering::Relaxed),
+    }
+}
+
+/// Counts an evaluation of `cells` cells' laws.
+pub(crate) fn count_evaluations(cells: usize, with_tangent: bool) {
+    let counter = if with_tangent { &WITH_TANGENT } else { &STRESS_ONLY };
+    counter.fetch_add(cells as u64, Ordering::Relaxed);
+}
 
 /// The kinematics a network works in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -513,6 +543,38 @@ impl PointLaw for Network {
         if self.strain == Strain::Small {
             return self.update_small(h, dt_s, old, new);
         }
+        let (stress, tangent) = self.respond(h, dt_s, old, new, true)?;
+        Ok(PointResponse { stress, tangent: tangent.expect("asked for") })
+    }
+}
+
+impl Network {
+    /// The stress of [`PointLaw::update`] alone, bit for bit, with the same
+    /// history: each part's [`Part::stress`], for the evaluations whose tangent
+    /// is not used (a line search's trials, a converged iterate).
+    pub fn stress(
+        &self,
+        h: &Matrix3<f64>,
+        dt_s: f64,
+        old: &[f64],
+        new: &mut [f64],
+    ) -> Result<Matrix3<f64>, LawFailure> {
+        if self.strain == Strain::Small {
+            // Hooke's tangents cost no more than the stress.
+            return self.update_small(h, dt_s, old, new).map(|r| r.stress);
+        }
+        self.respond(h, dt_s, old, new, false).map(|(p, _)| p)
+    }
+
+    /// The finite-strain update: the stress and, when `with_tangent`, its tangent.
+    fn respond(
+        &self,
+        h: &Matrix3<f64>,
+        dt_s: f64,
+        old: &[f64],
+        new: &mut [f64],
+        with_tangent: bool,
+    ) -> Result<(Matrix3<f64>, Option<Tangent>), LawFailure> {
         let f = Matrix3::identity() + h;
         let tr = h.trace();
         let j = 1.0 + tr + 0.5 * (tr * tr - (h * h).trace()) + h.determinant();
@@ -522,13 +584,15 @@ impl PointLaw for Network {
         let f_inv = f.try_inverse().ok_or(LawFailure::Inverted { det: j })?;
         let f_inv_t = f_inv.transpose();
         let mut p = Matrix3::zeros();
-        let mut tangent = Tangent::zeros();
+        let mut tangent = with_tangent.then(Tangent::zeros);
         new.copy_from_slice(old);
 
         if let Some(eq) = &self.equilibrium {
-            let (pe, te, w_max) = eq.respond(h, &f_inv_t, self.poisson, old[6]);
+            let (pe, te, w_max) = eq.respond(h, &f_inv_t, self.poisson, old[6], with_tangent);
             p += pe;
-            tangent += te;
+            if let (Some(t), Some(te)) = (&mut tangent, te) {
+                *t += te;
+            }
             new[6] = w_max;
         }
         let kinematics =
@@ -536,16 +600,22 @@ impl PointLaw for Network {
         let mut o = HISTORY_BASE;
         for part in &self.parts {
             let n = part.history_len();
-            let (pp, tp) = part.respond(&kinematics, &old[o..o + n], &mut new[o..o + n])?;
-            p += pp;
-            tangent += tp;
+            let (old, new) = (&old[o..o + n], &mut new[o..o + n]);
+            match &mut tangent {
+                Some(t) => {
+                    let (pp, tp) = part.respond(&kinematics, old, new)?;
+                    p += pp;
+                    *t += tp;
+                }
+                None => p += part.stress(&kinematics, old, new)?,
+            }
             o += n;
         }
         sym_to(&hencky::inverse_right_deviation(h, &f_inv), &mut new[0..6]);
-        if !(p.iter().all(|x| x.is_finite()) && tangent.iter().all(|x| x.is_finite())) {
+        if !(p.iter().all(|x| x.is_finite()) && tangent.iter().flat_map(|t| t.iter()).all(|x| x.is_finite())) {
             return Err(LawFailure::NonFinite);
         }
-        Ok(PointResponse { stress: p, tangent })
+        Ok((p, tangent))
     }
 }
 
@@ -612,6 +682,64 @@ mod tests {
         let err = (r.tangent - fd).amax() / r.tangent.amax();
         assert!(err < 1e-6, "tangent error {err:.3e}");
         assert!((r.tangent - r.tangent.transpose()).amax() < 1e-12 * r.tangent.amax(), "major symmetry");
+    }
+
+    /// The stress-only path ([`Network::stress`], [`Part::stress`]) is the full
+    /// update's stress and history bit for bit: for every part on its own (the
+    /// plastic network yielding, with kinematic hardening), for the network
+    /// with every part and softening on its unloading branch, for Ogden's
+    /// energy and in small-strain kinematics. Compared by their bits: the two
+    /// paths run the same operations on the stress, so no rounding separates them.
+    #[test]
+    fn the_stress_only_path_is_the_full_updates_stress_bit_for_bit() {
+        let bits = |m: &Matrix3<f64>| m.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let hist_bits = |h: &[f64]| h.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let net = full();
+        let (h, f_last) = loaded_history(&net);
+        let f = f_last * 0.98 + Matrix3::new(0.0, 0.01, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        let d = f - Matrix3::identity();
+        let f_inv = f.try_inverse().unwrap();
+        let kinematics = Kinematics {
+            h: &d,
+            f,
+            f_inv,
+            f_inv_t: f_inv.transpose(),
+            c_n_inv_dev: sym_from(&h[0..6]),
+            poisson: net.poisson,
+            dt_s: 0.3,
+        };
+        let mut o = HISTORY_BASE;
+        for part in &net.parts {
+            let n = part.history_len();
+            let old = &h[o..o + n];
+            let (mut full_new, mut stress_new) = (old.to_vec(), old.to_vec());
+            let (p, _) = part.respond(&kinematics, old, &mut full_new).unwrap();
+            let s = part.stress(&kinematics, old, &mut stress_new).unwrap();
+            assert_eq!(bits(&p), bits(&s), "{} stress", part.kind().table);
+            assert_eq!(hist_bits(&full_new), hist_bits(&stress_new), "{} history", part.kind().table);
+            o += n;
+        }
+        let ogden = Network::new(0.45)
+            .with_equilibrium(Equilibrium {
+                energy: Energy::Ogden { alpha: [5.0, -2.5, 1.3], share: [0.5, 0.3, 0.2] },
+                e_mpa: 0.03,
+                mullins: Some(Mullins { r: 2.0, m_mpa: 1e-3, beta: 0.1 }),
+            })
+            .with(Damper { c_mpa_s: 5e-3 });
+        let small = Network::new(0.3)
+            .with_strain(Strain::Small)
+            .with_equilibrium(Equilibrium { energy: Energy::NeoHookean, e_mpa: 0.02, mullins: None })
+            .with(ViscousNetwork { e_mpa: 0.015, tau_s: 2.0 })
+            .with(Damper { c_mpa_s: 5e-3 });
+        for net in [net, ogden, small] {
+            let (h, f_last) = loaded_history(&net);
+            let d = f_last * 0.98 - Matrix3::identity();
+            let (mut full_new, mut stress_new) = (h.clone(), h.clone());
+            let r = net.update(&d, 0.3, &h, &mut full_new).unwrap();
+            let s = net.stress(&d, 0.3, &h, &mut stress_new).unwrap();
+            assert_eq!(bits(&r.stress), bits(&s), "{net:?}");
+            assert_eq!(hist_bits(&full_new), hist_bits(&stress_new), "{net:?}");
+        }
     }
 
     /// Objectivity: a superposed rotation `Q F` rotates the stress, `P -> Q P`,

@@ -79,6 +79,14 @@ pub trait Part: std::fmt::Debug + Send + Sync {
     /// from its history `old` (zeros at rest); writes its history at the step's
     /// end into `new` (same length, a copy of `old` on entry).
     fn respond(&self, k: &Kinematics, old: &[f64], new: &mut [f64]) -> Result<(Matrix3<f64>, Tangent), LawFailure>;
+    /// Its first Piola-Kirchhoff stress alone, bit for bit that of
+    /// [`Part::respond`] with the same history contract: for the evaluations
+    /// whose tangent is not used (a line search's trials, a converged
+    /// iterate). The default calls [`Part::respond`]; a part whose tangent
+    /// costs more than its stress overrides it.
+    fn stress(&self, k: &Kinematics, old: &[f64], new: &mut [f64]) -> Result<Matrix3<f64>, LawFailure> {
+        self.respond(k, old, new).map(|(p, _)| p)
+    }
     /// Whether it has a small-strain form ([`Part::respond_small`]); a network
     /// in small-strain kinematics with a part that has none is refused
     /// ([`super::Network::validate`]).

@@ -138,18 +138,36 @@ impl Part for PlasticNetwork {
     }
 
     fn respond(&self, k: &Kinematics, old: &[f64], new: &mut [f64]) -> Result<(Matrix3<f64>, Tangent), LawFailure> {
-        if self.kinematic_mpa == 0.0 {
-            return Ok(respond(self, k.h, &k.f_inv, k.poisson, old, new));
-        }
-        let (sublayer, spring_e_mpa) = self.sublayer(k.poisson);
-        let (p, tangent) = respond(&sublayer, k.h, &k.f_inv, k.poisson, old, new);
-        let (ps, ts, _) =
-            hencky::spring(k.h, &k.f_inv_t, &Matrix3::zeros(), spring_e_mpa, hencky::unit_lame(k.poisson));
-        Ok((p + ps, tangent + ts))
+        let (p, tangent) = self.step(k, old, new, true);
+        Ok((p, tangent.expect("asked for")))
+    }
+
+    fn stress(&self, k: &Kinematics, old: &[f64], new: &mut [f64]) -> Result<Matrix3<f64>, LawFailure> {
+        Ok(self.step(k, old, new, false).0)
     }
 }
 
 impl PlasticNetwork {
+    /// The step's stress, its tangent when `with_tangent`, and the new history
+    /// ([`Part::respond`]).
+    fn step(
+        &self,
+        k: &Kinematics,
+        old: &[f64],
+        new: &mut [f64],
+        with_tangent: bool,
+    ) -> (Matrix3<f64>, Option<Tangent>) {
+        if self.kinematic_mpa == 0.0 {
+            return respond(self, k.h, &k.f_inv, k.poisson, old, new, with_tangent);
+        }
+        let (sublayer, spring_e_mpa) = self.sublayer(k.poisson);
+        let (p, tangent) = respond(&sublayer, k.h, &k.f_inv, k.poisson, old, new, with_tangent);
+        let (zero, lame) = (Matrix3::zeros(), hencky::unit_lame(k.poisson));
+        let spring = hencky::spring_stress(k.h, &k.f_inv_t, &zero, spring_e_mpa, lame);
+        let tangent = tangent.map(|t| t + hencky::spring_tangent(k.h, &k.f_inv_t, &zero, spring_e_mpa, lame, &spring));
+        (p + spring.p, tangent)
+    }
+
     /// The sublayer form of the kinematic hardening at Poisson ratio `poisson`
     /// (module docs): the isotropic network `(s E, s sigma_y, s^2 H)` and the
     /// Young's modulus `(1 - s) E` of the spring beside it [MPa].
@@ -167,7 +185,7 @@ impl PlasticNetwork {
 }
 
 /// The plastic network's response at `F = I + h`: the first Piola-Kirchhoff
-/// stress and its tangent; writes the new history into `new`.
+/// stress and, when `with_tangent`, its tangent; writes the new history into `new`.
 pub(crate) fn respond(
     net: &PlasticNetwork,
     h: &Matrix3<f64>,
@@ -175,9 +193,10 @@ pub(crate) fn respond(
     poisson: f64,
     old: &[f64],
     new: &mut [f64],
-) -> (Matrix3<f64>, Tangent) {
+    with_tangent: bool,
+) -> (Matrix3<f64>, Option<Tangent>) {
     let alpha_n = old[6];
-    let (p, tangent, dgamma) = radial_return(net.e_mpa, h, f_inv, poisson, old, new, |s_norm, mu| {
+    let (p, tangent, dgamma) = radial_return(net.e_mpa, h, f_inv, poisson, old, new, with_tangent, |s_norm, mu| {
         let radius = (2.0f64 / 3.0).sqrt() * (net.yield_mpa + net.hardening_mpa * alpha_n);
         let yielding = s_norm - radius;
         (yielding > 0.0).then(|| {
@@ -195,7 +214,9 @@ pub(crate) fn respond(
 /// multiplier `dgamma > 0` and the flow's stiffness share
 /// `1 / (1 + R'(dgamma) / (2 mu))`, `R` the return's radius `|s|` as a
 /// function of `dgamma` (`2/3 H` for linear hardening). Writes `Cp^-1 - I`
-/// into `new[0..6]`; returns `P`, its exact tangent and `dgamma`.
+/// into `new[0..6]`; returns `P`, its exact tangent (when `with_tangent`) and
+/// `dgamma`.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn radial_return(
     e_mpa: f64,
     h: &Matrix3<f64>,
@@ -203,8 +224,9 @@ pub(crate) fn radial_return(
     poisson: f64,
     old: &[f64],
     new: &mut [f64],
+    with_tangent: bool,
     rule: impl Fn(f64, f64) -> Option<(f64, f64)>,
-) -> (Matrix3<f64>, Tangent, f64) {
+) -> (Matrix3<f64>, Option<Tangent>, f64) {
     let f_inv_t = f_inv.transpose();
     let (lambda1, mu1) = hencky::unit_lame(poisson);
     let mu = e_mpa * mu1;
@@ -234,21 +256,22 @@ pub(crate) fn radial_return(
     let p = tau * f_inv_t;
 
     // The consistent modulus on the trial strain, as a map of symmetric tensors.
-    let (theta, theta_bar) = if dgamma > 0.0 {
-        let theta = 1.0 - 2.0 * mu * dgamma / s_norm;
-        (theta, share - (1.0 - theta))
-    } else {
-        (1.0, 0.0)
-    };
-    let n_tensor = q * Matrix3::from_diagonal(&n.into()) * qt;
-    let modulus = |d_eps: &Matrix3<f64>| {
-        let t = d_eps.trace();
-        let d_dev = d_eps - Matrix3::identity() * (t / 3.0);
-        Matrix3::identity() * (bulk * t) + d_dev * (2.0 * mu * theta)
-            - n_tensor * (2.0 * mu * theta_bar * n_tensor.dot(d_eps))
-    };
-    let tangent =
-        hencky::log_strain_tangent(&f, &cp_inv_dev, &q, x, &tau, &f_inv_t, |d_eps| modulus(&symmetrize(d_eps)));
+    let tangent = with_tangent.then(|| {
+        let (theta, theta_bar) = if dgamma > 0.0 {
+            let theta = 1.0 - 2.0 * mu * dgamma / s_norm;
+            (theta, share - (1.0 - theta))
+        } else {
+            (1.0, 0.0)
+        };
+        let n_tensor = q * Matrix3::from_diagonal(&n.into()) * qt;
+        let modulus = |d_eps: &Matrix3<f64>| {
+            let t = d_eps.trace();
+            let d_dev = d_eps - Matrix3::identity() * (t / 3.0);
+            Matrix3::identity() * (bulk * t) + d_dev * (2.0 * mu * theta)
+                - n_tensor * (2.0 * mu * theta_bar * n_tensor.dot(d_eps))
+        };
+        hencky::log_strain_tangent(&f, &cp_inv_dev, &q, x, &tau, &f_inv_t, |d_eps| modulus(&symmetrize(d_eps)))
+    });
 
     // The new state: Cp^-1 - I = F^-1 (b_e - I) F^-T + (C^-1 - I).
     let b_e_dev = q * Matrix3::from_diagonal(&eps_e.map(|e| (2.0 * e).exp_m1()).into()) * qt;
@@ -267,8 +290,8 @@ mod tests {
 
     fn step(f: &Matrix3<f64>, old: &[f64]) -> (Matrix3<f64>, Tangent, Vec<f64>) {
         let mut new = old.to_vec();
-        let (p, t) = respond(&NET, &(f - Matrix3::identity()), &f.try_inverse().unwrap(), 0.35, old, &mut new);
-        (p, t, new)
+        let (p, t) = respond(&NET, &(f - Matrix3::identity()), &f.try_inverse().unwrap(), 0.35, old, &mut new, true);
+        (p, t.expect("asked for"), new)
     }
 
     /// The tangent against central differences of the stress, on the elastic

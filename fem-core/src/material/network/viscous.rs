@@ -82,13 +82,32 @@ impl Part for ViscousNetwork {
     }
 
     fn respond(&self, k: &Kinematics, old: &[f64], new: &mut [f64]) -> Result<(Matrix3<f64>, Tangent), LawFailure> {
+        let (p, tangent) = self.step(k, old, new, true)?;
+        Ok((p, tangent.expect("asked for")))
+    }
+
+    fn stress(&self, k: &Kinematics, old: &[f64], new: &mut [f64]) -> Result<Matrix3<f64>, LawFailure> {
+        self.step(k, old, new, false).map(|(p, _)| p)
+    }
+}
+
+impl ViscousNetwork {
+    /// The step's stress, its tangent when `with_tangent`, and the new history
+    /// ([`Part::respond`]).
+    fn step(
+        &self,
+        k: &Kinematics,
+        old: &[f64],
+        new: &mut [f64],
+        with_tangent: bool,
+    ) -> Result<(Matrix3<f64>, Option<Tangent>), LawFailure> {
         let (f, f_inv, f_inv_t) = (k.f, k.f_inv, k.f_inv_t);
         let lame = hencky::unit_lame(k.poisson);
         let a_dev = sym_from(&old[0..6]);
         let s_n = sym_from(&old[6..12]);
         let x = k.dt_s / self.tau_s;
         let (decay, phi) = ((-x).exp(), phi1(x));
-        let (ps, ts, _) = hencky::spring(k.h, &f_inv_t, &a_dev, self.e_mpa, lame);
+        let spring = hencky::spring_stress(k.h, &f_inv_t, &a_dev, self.e_mpa, lame);
         // The old stress carried into the current frame: the mean of its push
         // forward as a contravariant (F S_n F^T) and as a covariant
         // (F^-T M_n F^-1, M_n = C_n S_n C_n) tensor, as Kirchhoff stresses.
@@ -96,22 +115,33 @@ impl Part for ViscousNetwork {
         let m_n = c_n * s_n * c_n;
         let c_inv = f_inv * f_inv_t;
         let w = 0.5 * (decay - phi);
-        let pv = ps * phi + (f * s_n + f_inv_t * m_n * c_inv) * w;
-        let mut tangent = ts * phi;
-        for kk in 0..3 {
-            for l in 0..3 {
-                let mut df = Matrix3::zeros();
-                df[(kk, l)] = 1.0;
-                let d_finv_t = -f_inv_t * df.transpose() * f_inv_t;
-                let d_c_inv = d_finv_t.transpose() * f_inv_t + f_inv * d_finv_t;
-                let dp = (df * s_n + d_finv_t * m_n * c_inv + f_inv_t * m_n * d_c_inv) * w;
-                for i in 0..3 {
-                    for jj in 0..3 {
-                        tangent[(3 * i + jj, 3 * kk + l)] += dp[(i, jj)];
+        let pv = spring.p * phi + (f * s_n + f_inv_t * m_n * c_inv) * w;
+        let tangent = with_tangent.then(|| {
+            let mut tangent = hencky::spring_tangent(k.h, &f_inv_t, &a_dev, self.e_mpa, lame, &spring) * phi;
+            // d/dF of (F S_n + F^-T M_n C^-1) w at dF = e_k e_l^T, with
+            // a = F^-T e_l, b = F^-1 e_k (d F^-T = -a b^T) and c = F^-1 a
+            // (d C^-1 = -b c^T - c b^T): every term an outer product.
+            let x_mc = m_n * c_inv;
+            let y_fm = f_inv_t * m_n;
+            for kk in 0..3 {
+                let b = f_inv.column(kk).into_owned();
+                let xb = x_mc.transpose() * b;
+                let yb = y_fm * b;
+                for l in 0..3 {
+                    let a = f_inv_t.column(l).into_owned();
+                    let c = f_inv * a;
+                    let yc = y_fm * c;
+                    for i in 0..3 {
+                        for jj in 0..3 {
+                            let df_s = if i == kk { s_n[(l, jj)] } else { 0.0 };
+                            let dp = df_s - a[i] * xb[jj] - yb[i] * c[jj] - yc[i] * b[jj];
+                            tangent[(3 * i + jj, 3 * kk + l)] += dp * w;
+                        }
                     }
                 }
             }
-        }
+            tangent
+        });
         // The new state from the stress: A - I = F^-1 (b_e - I) F^-T + (C^-1 - I).
         let tau = hencky::symmetrize(&(pv * f.transpose()));
         let eps_e = hencky::hooke_inverse(self.e_mpa, lame, &tau);
