@@ -1,5 +1,6 @@
 //! The network model on the Newton path against closed forms and the chain.
 
+use fem_core::effects::{EffectId, Effects};
 use fem_core::element::Formulation;
 use fem_core::material::network::{
     DualNetwork, Energy, Equilibrium, FlowNetwork, Network, PlasticNetwork, Strain, ViscousNetwork,
@@ -226,6 +227,104 @@ fn the_seeds_table_ii_sets_as_small_strain_networks_equal_the_chain() {
         worst = worst.max(gap_3d).max(gap_2d);
     }
     assert!(worst < 1e-6, "worst {worst:.3e} of the peak");
+}
+
+/// The load-path and observation effects on the Newton path: the seed's
+/// material 1 as a small-strain network against the chain with the same
+/// effect, in plane strain on the chain's own step ends, pushed to 1 %
+/// strain (small-strain kinematics: the chain at any strain), held and released. `force-offset` (b0 + b1 t on the bottom force),
+/// `ageing` (moduli by exp(gamma_E tau), viscosities by exp(gamma_c tau), the
+/// viscous networks' times by their ratio) and `gravity` (a thousandth of g:
+/// the specimen's weight about a fifth of the peak force) change nothing in either path's iteration,
+/// so they agree to the Newton tolerance as the baseline does (1e-8 of the
+/// peak; measured 8e-12, 9e-12 and 2.4e-10). `plate-friction` makes both
+/// paths' plates Coulomb contact tools settled by the same contact iteration,
+/// which stops friction's linearly converging iteration at 1e-8 of the
+/// specimen's size (58 mm), about 1e-6 of the push's depth: the paths agree
+/// to that tolerance, not to Newton's (1e-5 of the peak; measured 3.0e-6, in
+/// the push's first steps), and each path's plate force equals its bottom
+/// force (the tools' forces are the equilibrium's reactions): the bottom
+/// force less the plate's is the offset or the weight, or zero, throughout
+/// (1e-8 of the peak).
+#[test]
+fn the_load_path_and_observation_effects_on_a_small_strain_network_equal_the_chain() {
+    let (w, h, t) = (58.0, 59.5, 12.0);
+    let depth = 1e-2 * h;
+    let chain = Material::seed_mat1_force();
+    let net =
+        Material::network(Network::from_chain(&chain.rheology, chain.poisson).with_strain(Strain::Small)).unwrap();
+    let mut protocol = Protocol::ramp_hold_release(depth / 28.87, 28.87, 210.93, 400.0);
+    protocol.plate = Attachment::Frictionless;
+    protocol.support = Attachment::Frictionless;
+    let plane = |material: &Material, effects: &Effects| {
+        let mut protocol = protocol.clone();
+        // A Coulomb floor does not settle on the chain's path at the push's
+        // first steps: the friction plate over a glued support.
+        if effects.is_active(EffectId::PlateFriction) {
+            protocol.support = Attachment::Glued;
+        }
+        let mut p =
+            PlanePress::new_2d(mesh::rectangle(w, h, 6.0, "m").unwrap(), t, vec![material.clone()], protocol).unwrap();
+        p.formulation = Formulation::PlaneStrain { thickness_mm: t };
+        p.density_t_mm3 = 1e-9;
+        p.effects = effects.clone();
+        p
+    };
+    let mut aged = Effects::none().with(EffectId::Ageing, &[0.02, 0.05]).unwrap();
+    aged.set_age_h(Some(7.5)).unwrap();
+    let cases = [
+        ("force-offset", Effects::none().with(EffectId::ForceOffset, &[1e-3, -2e-6]).unwrap(), 1e-8),
+        ("ageing", aged, 1e-8),
+        ("gravity", Effects::none().with(EffectId::Gravity, &[1e-3]).unwrap(), 1e-8),
+        ("plate-friction", Effects::none().with(EffectId::PlateFriction, &[0.3]).unwrap(), 1e-5),
+    ];
+    let baseline = press::simulate(&plane(&chain, &Effects::none()), &Settings::default(), &mut |_| {}).unwrap();
+    let mut glued = plane(&chain, &Effects::none());
+    glued.protocol.support = Attachment::Glued;
+    let glued = press::simulate(&glued, &Settings::default(), &mut |_| {}).unwrap();
+    for (name, effects, tolerance) in cases {
+        let reference = press::simulate(&plane(&chain, &effects), &Settings::default(), &mut |_| {}).unwrap();
+        let settings =
+            Settings { step_ends_s: Some(reference.steps.iter().map(|s| s.t_s).collect()), ..Settings::default() };
+        let result = press::simulate(&plane(&net, &effects), &settings, &mut |_| {}).unwrap();
+        let peak = reference.peak_force();
+        assert_eq!(reference.steps.len(), result.steps.len(), "{name}");
+        let gap = reference
+            .steps
+            .iter()
+            .zip(&result.steps)
+            .map(|(a, b)| (a.bottom_force_n - b.bottom_force_n).abs().max((a.plate_force_n - b.plate_force_n).abs()))
+            .fold(0.0, f64::max)
+            / peak;
+        // The effect is felt: the chain with it differs from the chain without.
+        let felt = reference
+            .steps
+            .iter()
+            .map(|s| {
+                let base = if effects.is_active(EffectId::PlateFriction) { &glued } else { &baseline };
+                (s.bottom_force_n - base.bottom_force_at(s.t_s)).abs()
+            })
+            .fold(0.0, f64::max)
+            / peak;
+        eprintln!("{name}: peak {peak:.4e} N, effect {felt:.3e} of the peak, network vs chain {gap:.3e}");
+
+        assert!(felt > 1e-3, "{name}: the effect changes the chain's force by {felt:.3e} only");
+        assert!(gap < tolerance, "{name}: {gap:.3e} of the peak");
+        for s in &result.steps {
+            // The floor carries the weight, the plate does not (f rho g V).
+            let weight = if name == "gravity" { 1e-3 * 1e-9 * 9810.0 * w * h * t } else { 0.0 };
+            let offset = s.bottom_force_n - s.plate_force_n - weight;
+            let expected = if name == "force-offset" { 1e-3 - 2e-6 * s.t_s } else { 0.0 };
+            assert!((offset - expected).abs() < 1e-8 * peak, "{name}, t = {}: bottom less plate {offset:.6e} N", s.t_s);
+        }
+    }
+    // The others are refused by name.
+    for (effect, values) in [(EffectId::Adhesion, vec![0.002, 0.1]), (EffectId::PlasticSlider, vec![0.01, 0.01])] {
+        let effects = Effects::none().with(effect, &values).unwrap();
+        let err = press::simulate(&plane(&net, &effects), &Settings::default(), &mut |_| {}).unwrap_err();
+        let want = format!("the network model cannot run with the {effect} effect");
+        assert!(err.to_string().contains(&want), "{err}");
+    }
 }
 
 /// One viscous network on a homogeneous uniaxial stress path: the engine

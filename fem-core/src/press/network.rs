@@ -40,6 +40,17 @@
 //!   (friction's trial tractions are measured from there), not from the
 //!   velocity's extrapolation.
 //!
+//! ## Effects
+//!
+//! Of the diagnosis's effects ([`crate::effects`]) these run, applied as on the
+//! chain's path: `ageing` (each network aged before the run,
+//! [`crate::effects::Effects::aged_network`]), `plate-friction` (the plates
+//! become Coulomb contact tools, run by the contact iteration above),
+//! `gravity` (the model's body force in the residual; the floor's reaction
+//! carries the weight) and `force-offset` (added to the reported bottom
+//! force). The others (adhesion, machine compliance, the chain's
+//! material-point effects) are refused by name.
+//!
 //! ## A step
 //!
 //! Newton-Raphson with the consistent tangent and a backtracking line search on
@@ -84,6 +95,7 @@ use super::{
     ToolContact, ToolSample, ToolShape, ToolTrack, Volumetric,
 };
 use crate::assembly::{assemble_blocks, assemble_vector, CsrPattern};
+use crate::effects::EffectId;
 use crate::element::{CellGeometry, Formulation, ReferenceSimplex, Simplex};
 use crate::material::law::{LawFailure, PointLaw};
 use crate::material::network::{Network, Strain};
@@ -122,8 +134,16 @@ fn check<const D: usize, const N: usize, const S: usize>(
     if let Formulation::PlaneStress { .. } = problem.formulation {
         return bad("in plane stress (use plane strain, axisymmetric or 3D)");
     }
-    if !problem.effects.is_null() {
-        return bad("with the diagnosis's effects (adhesion and machine compliance included)");
+    // `ageing` and `plate-friction` arrive applied (aged networks, friction
+    // tools), `gravity` is the model's body force, `force-offset` is added to the
+    // result: these run. The material-point effects are the chain's (the
+    // network has its own components); adhesion has no cohesive law here.
+    let runs = [EffectId::ForceOffset, EffectId::Ageing, EffectId::Gravity, EffectId::PlateFriction];
+    if let Some(effect) = problem.effects.active().into_iter().find(|e| !runs.contains(e)) {
+        return bad(&format!("with the {effect} effect"));
+    }
+    if problem.effects.forces_material_point_path() {
+        return bad("on the chain's material-point path (the network has its own components)");
     }
     if problem.materials.iter().any(|m| m.damage.is_some()) {
         return bad("beside a chain with Mullins damage (give the network's own `[equilibrium.mullins]`)");
@@ -940,6 +960,7 @@ where
         u_start: &state.u,
         diagonal: &diagonal,
         body_force: &model.body_force,
+        held,
         pattern: newton.pattern(),
     };
     let mut factorizations = 0;
