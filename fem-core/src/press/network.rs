@@ -47,9 +47,13 @@
 //! [`crate::effects::Effects::aged_network`]), `plate-friction` (the plates
 //! become Coulomb contact tools, run by the contact iteration above),
 //! `gravity` (the model's body force in the residual; the floor's reaction
-//! carries the weight) and `force-offset` (added to the reported bottom
-//! force). The others (adhesion, machine compliance, the chain's
-//! material-point effects) are refused by name.
+//! carries the weight), `force-offset` (added to the reported bottom
+//! force) and `machine-compliance` on the constrained plate (the plate held
+//! back by `delta = c F`, `F` the plate force at the step's end: the chain's
+//! scalar iteration on `delta - c F(delta)`, Illinois on a bracket to 1e-11 of
+//! the displacement scale, each evaluation a Newton solve of the whole step).
+//! Refused by name: adhesion, machine compliance with contact tools
+//! (`plate-friction` included), the chain's material-point effects.
 //!
 //! ## A step
 //!
@@ -89,7 +93,7 @@ use super::contact::{ContactState, Settled};
 use super::fbar::{self, PatchCell, Patches};
 use super::model::Model;
 use super::network_contact::{ContactStep, NetworkContact, Penalty};
-use super::stepper::emit_markers;
+use super::stepper::{deflected_step, emit_markers, DEFLECTION_RTOL};
 use super::{
     Integrator, MarkerTrack, PressError, PressProblem, PressResult, Progress, Settings, Snapshot, StepRecord, Tool,
     ToolContact, ToolSample, ToolShape, ToolTrack, Volumetric,
@@ -138,9 +142,18 @@ fn check<const D: usize, const N: usize, const S: usize>(
     // tools), `gravity` is the model's body force, `force-offset` is added to the
     // result: these run. The material-point effects are the chain's (the
     // network has its own components); adhesion has no cohesive law here.
-    let runs = [EffectId::ForceOffset, EffectId::Ageing, EffectId::Gravity, EffectId::PlateFriction];
+    let runs = [
+        EffectId::ForceOffset,
+        EffectId::Ageing,
+        EffectId::Gravity,
+        EffectId::PlateFriction,
+        EffectId::MachineCompliance,
+    ];
     if let Some(effect) = problem.effects.active().into_iter().find(|e| !runs.contains(e)) {
         return bad(&format!("with the {effect} effect"));
+    }
+    if problem.effects.is_active(EffectId::MachineCompliance) && !problem.tools.is_empty() {
+        return bad("with the machine-compliance effect and contact tools (`plate-friction` included)");
     }
     if problem.effects.forces_material_point_path() {
         return bad("on the chain's material-point path (the network has its own components)");
@@ -692,6 +705,11 @@ where
     };
     let replay = settings.step_ends_s.clone();
     let mut replay_index = 0usize;
+    // The `machine-compliance` effect [mm/N] and the machine's deflection at the
+    // state's time [mm] (0 without it, and once the plate has let go).
+    let compliance = problem.effects.machine_compliance_mm_per_n();
+    let mut deflection = 0.0;
+    let deflection_tol = DEFLECTION_RTOL * model.displacement_scale;
 
     while state.t < end * (1.0 - 1e-12) {
         let next_landing = landings.iter().copied().find(|&k| k > state.t * (1.0 + 1e-12) + 1e-15).unwrap_or(end);
@@ -747,64 +765,119 @@ where
         let mut predict = after_kink;
         let mut passes = 0;
         let mut settled: Option<Settled> = None;
-        let attempt = loop {
-            if let (Some(nc), Some(cs)) = (&tool_contact, &contact_state) {
-                // From the step's start, as the chain's contact steps: the contact
-                // iteration predicts the nodes on the tools itself (stuck nodes move
-                // with their anchors), and friction's trial tractions are measured
-                // from there.
-                let mut start = state.u.clone();
-                model.prescribe(constraints, t1, &mut start);
-                let step = ContactSolve { system, held: &constraints.held, dt, t1, step_index, largest_force };
-                break contact_step(&newton, nc, cs, &step, &state, start).map(|(c, s)| {
-                    settled = Some(s);
-                    c
-                });
-            }
-            let cut = cut_dofs::<D>(&holder);
-            for (node, &h) in holder.iter().enumerate() {
-                if h != FREE {
-                    u0[node * D + 1] = faces[h as usize].unwrap() - mesh.nodes[node][1];
-                }
-            }
+        let mut step_deflection = 0.0;
+        // Machine compliance on the constrained plate: the plate held back by
+        // the deflection `delta = c F` at the step's end, `F` the plate force,
+        // by the chain's scalar iteration around whole Newton solves of the
+        // step (`super::stepper::deflected_step`).
+        let compliant = compliance.filter(|_| !released && !constraints.plate_dofs.is_empty());
+        let attempt = if let Some(c) = compliant {
+            let d_cmd = protocol.displacement(t1);
+            let failed = RefCell::new(None);
+            let made = std::cell::Cell::new(0);
+            let no_cut = vec![false; u0.len()];
             let step = StepSystem {
                 system,
                 kept: Some(kept),
                 held: &constraints.held,
-                cut: &cut,
+                cut: &no_cut,
                 dt,
                 history: &state.history,
                 penalty: None,
             };
-            let solved = if predict {
-                tangent_predictor(&newton, &step, &start, u0)
-                    .map(|(u, n)| {
-                        factorizations += n;
-                        u
+            let mut take = |lift: f64| -> Result<(Converged, f64), PressError> {
+                let mut u = u0.clone();
+                for &dof in &constraints.plate_dofs {
+                    u[dof] = -(d_cmd - lift);
+                }
+                let solved = if after_kink {
+                    tangent_predictor(&newton, &step, &state.u, u).and_then(|(u, n)| {
+                        made.set(made.get() + n);
+                        solve_step(&newton, &step, u, largest_force)
                     })
-                    .and_then(|u0| solve_step(&newton, &step, u0, largest_force))
-            } else {
-                solve_step(&newton, &step, u0, largest_force)
+                } else {
+                    solve_step(&newton, &step, u, largest_force)
+                };
+                match solved {
+                    Ok(converged) => {
+                        made.set(made.get() + converged.factorizations);
+                        let [_, plate] = reactions(&model, &converged.internal, false);
+                        Ok((converged, plate))
+                    }
+                    Err(f) => {
+                        *failed.borrow_mut() = Some(f);
+                        Err(PressError::BadSettings("a Newton solve of the deflection's iteration failed".into()))
+                    }
+                }
             };
-            let c = match solved {
-                Ok(c) => c,
-                Err(e) => break Err(e),
-            };
-            if plates.is_empty()
-                || !update_contact(&model, &plates, &faces, &candidates, &c, &mut holder, largest_force)
-            {
-                break Ok(c);
+            match deflected_step(&mut take, deflection, c, deflection_tol, step_index, t1) {
+                Ok((mut converged, lift)) => {
+                    converged.factorizations = made.get();
+                    step_deflection = lift;
+                    Ok(converged)
+                }
+                Err(e) => Err(failed.into_inner().unwrap_or(StepFailure::Contact(e))),
             }
-            passes += 1;
-            if passes > MAX_CONTACT_PASSES {
-                let tool = holder.iter().copied().find(|&h| h != FREE).unwrap_or(0) as usize;
-                let nodes = (0..holder.len() as u32).filter(|&n| holder[n as usize] == tool as u8).collect();
-                break Err(StepFailure::ContactNotSettled { tool, nodes });
+        } else {
+            loop {
+                if let (Some(nc), Some(cs)) = (&tool_contact, &contact_state) {
+                    // From the step's start, as the chain's contact steps: the contact
+                    // iteration predicts the nodes on the tools itself (stuck nodes move
+                    // with their anchors), and friction's trial tractions are measured
+                    // from there.
+                    let mut start = state.u.clone();
+                    model.prescribe(constraints, t1, &mut start);
+                    let step = ContactSolve { system, held: &constraints.held, dt, t1, step_index, largest_force };
+                    break contact_step(&newton, nc, cs, &step, &state, start).map(|(c, s)| {
+                        settled = Some(s);
+                        c
+                    });
+                }
+                let cut = cut_dofs::<D>(&holder);
+                for (node, &h) in holder.iter().enumerate() {
+                    if h != FREE {
+                        u0[node * D + 1] = faces[h as usize].unwrap() - mesh.nodes[node][1];
+                    }
+                }
+                let step = StepSystem {
+                    system,
+                    kept: Some(kept),
+                    held: &constraints.held,
+                    cut: &cut,
+                    dt,
+                    history: &state.history,
+                    penalty: None,
+                };
+                let solved = if predict {
+                    tangent_predictor(&newton, &step, &start, u0)
+                        .map(|(u, n)| {
+                            factorizations += n;
+                            u
+                        })
+                        .and_then(|u0| solve_step(&newton, &step, u0, largest_force))
+                } else {
+                    solve_step(&newton, &step, u0, largest_force)
+                };
+                let c = match solved {
+                    Ok(c) => c,
+                    Err(e) => break Err(e),
+                };
+                if plates.is_empty()
+                    || !update_contact(&model, &plates, &faces, &candidates, &c, &mut holder, largest_force)
+                {
+                    break Ok(c);
+                }
+                passes += 1;
+                if passes > MAX_CONTACT_PASSES {
+                    let tool = holder.iter().copied().find(|&h| h != FREE).unwrap_or(0) as usize;
+                    let nodes = (0..holder.len() as u32).filter(|&n| holder[n as usize] == tool as u8).collect();
+                    break Err(StepFailure::ContactNotSettled { tool, nodes });
+                }
+                factorizations += c.factorizations;
+                start = c.u.clone();
+                u0 = c.u;
+                predict = true;
             }
-            factorizations += c.factorizations;
-            start = c.u.clone();
-            u0 = c.u;
-            predict = true;
         };
         let converged = match attempt {
             Ok(c) => c,
@@ -838,6 +911,7 @@ where
         }
         // Accept.
         retry_dt = None;
+        deflection = step_deflection;
         let [mut bottom, mut plate] = reactions(&model, &converged.internal, released);
         if let Some(s) = settled {
             let keep_nodes = keep(t1);
