@@ -398,6 +398,62 @@ fn the_load_path_and_observation_effects_on_a_small_strain_network_equal_the_cha
     }
 }
 
+/// `ageing` on a finite-strain network of every rate-independent and viscous
+/// kind (an exponential equilibrium network with Mullins softening, a viscous,
+/// a plastic and a power-law flow network, a damper) pushed 20 % and held:
+/// with equal rates for moduli and viscosities every stress parameter scales
+/// by `s = exp(gamma tau)` and every time is kept, so every force scales by
+/// exactly `s` (1e-8 of the peak: Newton's tolerance on both runs, steps
+/// replayed); the viscosities' rate alone stiffens the push (a slower flow).
+#[test]
+fn an_aged_network_scales_every_stress_parameter_and_keeps_its_times() {
+    use fem_core::material::network::{Damper, Mullins};
+    let net = Network::new(0.3)
+        .with_equilibrium(Equilibrium {
+            energy: Energy::Exponential { stiffening: 2.0 },
+            e_mpa: 0.02,
+            mullins: Some(Mullins { r: 3.0, m_mpa: 1e-3, beta: 0.1 }),
+        })
+        .with(ViscousNetwork { e_mpa: 0.01, tau_s: 2.0 })
+        .with(PlasticNetwork { e_mpa: 0.02, yield_mpa: 1e-3, hardening_mpa: 2e-3, kinematic_mpa: 1e-3 })
+        .with(FlowNetwork { e_mpa: 0.01, stress_mpa: 0.02, exponent: 2.0 })
+        .with(Damper { c_mpa_s: 0.01 });
+    let problem = |effects: Effects| {
+        let mut p = SolidPress::new_3d(
+            mesh::block([12.0, 10.0, 8.0], 4.0, "m").unwrap(),
+            vec![Material::network(net.clone()).unwrap()],
+            frictionless(2.0, 5.0, 10.0),
+        )
+        .unwrap();
+        p.effects = effects;
+        p
+    };
+    let reference = run(&problem(Effects::none()), &Settings::default());
+    let on_its_steps =
+        Settings { step_ends_s: Some(reference.steps.iter().map(|s| s.t_s).collect()), ..Settings::default() };
+    let (gamma, tau) = (0.02, 7.5);
+    let aged = |rates: [f64; 2]| {
+        let mut e = Effects::none().with(EffectId::Ageing, &rates).unwrap();
+        e.set_age_h(Some(tau)).unwrap();
+        run(&problem(e), &on_its_steps)
+    };
+    let scale = f64::exp(gamma * tau);
+    let both = aged([gamma, gamma]);
+    let peak = reference.peak_force();
+    let worst = reference
+        .steps
+        .iter()
+        .zip(&both.steps)
+        .map(|(a, b)| (b.bottom_force_n - scale * a.bottom_force_n).abs() / (scale * peak))
+        .fold(0.0, f64::max);
+    eprintln!("aged network: peak {peak:.4e} N, forces against s times the baseline's {worst:.3e} of the peak");
+    assert!(worst < 1e-8, "{worst:.3e}");
+    let viscous = aged([0.0, gamma]);
+    for (a, b) in reference.steps.iter().zip(&viscous.steps).filter(|(a, _)| a.t_s > 0.5 && a.t_s <= 5.0) {
+        assert!(b.bottom_force_n > a.bottom_force_n, "t = {}: {} vs {}", a.t_s, b.bottom_force_n, a.bottom_force_n);
+    }
+}
+
 /// One viscous network on a homogeneous uniaxial stress path: the engine
 /// against an independent integration in principal log strains written here
 /// (RK4 on the Maxwell ODE `d eps_e/dt = d eps/dt - eps_e / tau` per principal
