@@ -771,113 +771,112 @@ where
         // by the chain's scalar iteration around whole Newton solves of the
         // step (`super::stepper::deflected_step`).
         let compliant = compliance.filter(|_| !released && !constraints.plate_dofs.is_empty());
-        let attempt = if let Some(c) = compliant {
-            let d_cmd = protocol.displacement(t1);
-            let failed = RefCell::new(None);
-            let made = std::cell::Cell::new(0);
-            let no_cut = vec![false; u0.len()];
-            let step = StepSystem {
-                system,
-                kept: Some(kept),
-                held: &constraints.held,
-                cut: &no_cut,
-                dt,
-                history: &state.history,
-                penalty: None,
-            };
-            let mut take = |lift: f64| -> Result<(Converged, f64), PressError> {
-                let mut u = u0.clone();
-                for &dof in &constraints.plate_dofs {
-                    u[dof] = -(d_cmd - lift);
-                }
-                let solved = if after_kink {
-                    tangent_predictor(&newton, &step, &state.u, u).and_then(|(u, n)| {
-                        made.set(made.get() + n);
-                        solve_step(&newton, &step, u, largest_force)
-                    })
-                } else {
-                    solve_step(&newton, &step, u, largest_force)
-                };
-                match solved {
-                    Ok(converged) => {
-                        made.set(made.get() + converged.factorizations);
-                        let [_, plate] = reactions(&model, &converged.internal, false);
-                        Ok((converged, plate))
-                    }
-                    Err(f) => {
-                        *failed.borrow_mut() = Some(f);
-                        Err(PressError::BadSettings("a Newton solve of the deflection's iteration failed".into()))
-                    }
-                }
-            };
-            match deflected_step(&mut take, deflection, c, deflection_tol, step_index, t1) {
-                Ok((mut converged, lift)) => {
-                    converged.factorizations = made.get();
-                    step_deflection = lift;
-                    Ok(converged)
-                }
-                Err(e) => Err(failed.into_inner().unwrap_or(StepFailure::Contact(e))),
-            }
-        } else {
-            loop {
-                if let (Some(nc), Some(cs)) = (&tool_contact, &contact_state) {
-                    // From the step's start, as the chain's contact steps: the contact
-                    // iteration predicts the nodes on the tools itself (stuck nodes move
-                    // with their anchors), and friction's trial tractions are measured
-                    // from there.
-                    let mut start = state.u.clone();
-                    model.prescribe(constraints, t1, &mut start);
-                    let step = ContactSolve { system, held: &constraints.held, dt, t1, step_index, largest_force };
-                    break contact_step(&newton, nc, cs, &step, &state, start).map(|(c, s)| {
-                        settled = Some(s);
-                        c
-                    });
-                }
-                let cut = cut_dofs::<D>(&holder);
-                for (node, &h) in holder.iter().enumerate() {
-                    if h != FREE {
-                        u0[node * D + 1] = faces[h as usize].unwrap() - mesh.nodes[node][1];
-                    }
-                }
+        let attempt = loop {
+            if let Some(c) = compliant {
+                let d_cmd = protocol.displacement(t1);
+                let failed = RefCell::new(None);
+                let made = std::cell::Cell::new(0);
+                let no_cut = vec![false; u0.len()];
                 let step = StepSystem {
                     system,
                     kept: Some(kept),
                     held: &constraints.held,
-                    cut: &cut,
+                    cut: &no_cut,
                     dt,
                     history: &state.history,
                     penalty: None,
                 };
-                let solved = if predict {
-                    tangent_predictor(&newton, &step, &start, u0)
-                        .map(|(u, n)| {
-                            factorizations += n;
-                            u
+                let mut take = |lift: f64| -> Result<(Converged, f64), PressError> {
+                    let mut u = u0.clone();
+                    for &dof in &constraints.plate_dofs {
+                        u[dof] = -(d_cmd - lift);
+                    }
+                    let solved = if after_kink {
+                        tangent_predictor(&newton, &step, &state.u, u).and_then(|(u, n)| {
+                            made.set(made.get() + n);
+                            solve_step(&newton, &step, u, largest_force)
                         })
-                        .and_then(|u0| solve_step(&newton, &step, u0, largest_force))
-                } else {
-                    solve_step(&newton, &step, u0, largest_force)
+                    } else {
+                        solve_step(&newton, &step, u, largest_force)
+                    };
+                    match solved {
+                        Ok(converged) => {
+                            made.set(made.get() + converged.factorizations);
+                            let [_, plate] = reactions(&model, &converged.internal, false);
+                            Ok((converged, plate))
+                        }
+                        Err(f) => {
+                            *failed.borrow_mut() = Some(f);
+                            Err(PressError::BadSettings("a Newton solve of the deflection's iteration failed".into()))
+                        }
+                    }
                 };
-                let c = match solved {
-                    Ok(c) => c,
-                    Err(e) => break Err(e),
+                break match deflected_step(&mut take, deflection, c, deflection_tol, step_index, t1) {
+                    Ok((mut converged, lift)) => {
+                        converged.factorizations = made.get();
+                        step_deflection = lift;
+                        Ok(converged)
+                    }
+                    Err(e) => Err(failed.into_inner().unwrap_or(StepFailure::Contact(e))),
                 };
-                if plates.is_empty()
-                    || !update_contact(&model, &plates, &faces, &candidates, &c, &mut holder, largest_force)
-                {
-                    break Ok(c);
-                }
-                passes += 1;
-                if passes > MAX_CONTACT_PASSES {
-                    let tool = holder.iter().copied().find(|&h| h != FREE).unwrap_or(0) as usize;
-                    let nodes = (0..holder.len() as u32).filter(|&n| holder[n as usize] == tool as u8).collect();
-                    break Err(StepFailure::ContactNotSettled { tool, nodes });
-                }
-                factorizations += c.factorizations;
-                start = c.u.clone();
-                u0 = c.u;
-                predict = true;
             }
+            if let (Some(nc), Some(cs)) = (&tool_contact, &contact_state) {
+                // From the step's start, as the chain's contact steps: the contact
+                // iteration predicts the nodes on the tools itself (stuck nodes move
+                // with their anchors), and friction's trial tractions are measured
+                // from there.
+                let mut start = state.u.clone();
+                model.prescribe(constraints, t1, &mut start);
+                let step = ContactSolve { system, held: &constraints.held, dt, t1, step_index, largest_force };
+                break contact_step(&newton, nc, cs, &step, &state, start).map(|(c, s)| {
+                    settled = Some(s);
+                    c
+                });
+            }
+            let cut = cut_dofs::<D>(&holder);
+            for (node, &h) in holder.iter().enumerate() {
+                if h != FREE {
+                    u0[node * D + 1] = faces[h as usize].unwrap() - mesh.nodes[node][1];
+                }
+            }
+            let step = StepSystem {
+                system,
+                kept: Some(kept),
+                held: &constraints.held,
+                cut: &cut,
+                dt,
+                history: &state.history,
+                penalty: None,
+            };
+            let solved = if predict {
+                tangent_predictor(&newton, &step, &start, u0)
+                    .map(|(u, n)| {
+                        factorizations += n;
+                        u
+                    })
+                    .and_then(|u0| solve_step(&newton, &step, u0, largest_force))
+            } else {
+                solve_step(&newton, &step, u0, largest_force)
+            };
+            let c = match solved {
+                Ok(c) => c,
+                Err(e) => break Err(e),
+            };
+            if plates.is_empty()
+                || !update_contact(&model, &plates, &faces, &candidates, &c, &mut holder, largest_force)
+            {
+                break Ok(c);
+            }
+            passes += 1;
+            if passes > MAX_CONTACT_PASSES {
+                let tool = holder.iter().copied().find(|&h| h != FREE).unwrap_or(0) as usize;
+                let nodes = (0..holder.len() as u32).filter(|&n| holder[n as usize] == tool as u8).collect();
+                break Err(StepFailure::ContactNotSettled { tool, nodes });
+            }
+            factorizations += c.factorizations;
+            start = c.u.clone();
+            u0 = c.u;
+            predict = true;
         };
         let converged = match attempt {
             Ok(c) => c,
