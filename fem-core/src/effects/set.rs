@@ -6,6 +6,7 @@ use std::collections::BTreeMap;
 use thiserror::Error;
 
 use super::registry::EffectId;
+use crate::material::network::{Equilibrium, Mullins, Network};
 use crate::material::{InelasticLaw, Material, Rheology};
 
 /// Why effect values were refused.
@@ -209,7 +210,8 @@ impl Effects {
     }
 
     /// `material` aged by `scales = [modulus scale, viscosity scale]`:
-    /// `E_i -> E_i s_E`, `c_i -> c_i s_c`, Poisson's ratio unchanged.
+    /// `E_i -> E_i s_E`, `c_i -> c_i s_c`, Poisson's ratio unchanged; its
+    /// network, if any, by [`Effects::aged_network`].
     pub fn aged(material: &Material, scales: [f64; 2]) -> Material {
         let [se, sc] = scales;
         let rheology = match material.rheology {
@@ -231,7 +233,49 @@ impl Effects {
                 c3_mpa_s: c3_mpa_s * sc,
             },
         };
-        Material { rheology, poisson: material.poisson, damage: material.damage, network: material.network.clone() }
+        let network = material.network.as_ref().map(|n| Self::aged_network(n, scales));
+        Material { rheology, poisson: material.poisson, damage: material.damage, network }
+    }
+
+    /// `network` aged by `scales = [s_E, s_c]`, each parameter by what it is
+    /// (its unit in the part's table): a stress or modulus [MPa] by `s_E` (the
+    /// springs' moduli, the equilibrium network's modulus and its softening's
+    /// energy scale, yield stresses and hardening moduli); a viscosity
+    /// [MPa s] by `s_c` (the damper's `c`, a Bingham network's viscosity), and a
+    /// flow network's `stress_MPa`, the stress at a unit strain rate, which is a
+    /// viscosity's resistance (its Newtonian relaxation time is
+    /// `sigma_0 / (3 mu)`); a time [s] by `s_c / s_E` (a viscous network's
+    /// `tau = viscosity / modulus`); dimensionless ones unchanged. So the
+    /// seed's chain as a network ([`Network::from_chain`]) aged is the aged
+    /// chain as a network, and with `s_E = s_c` every stress of the network
+    /// scales by `s_E` at unchanged times.
+    pub fn aged_network(network: &Network, scales: [f64; 2]) -> Network {
+        let [se, sc] = scales;
+        let equilibrium = network.equilibrium.map(|eq| Equilibrium {
+            e_mpa: eq.e_mpa * se,
+            mullins: eq.mullins.map(|m| Mullins { m_mpa: m.m_mpa * se, ..m }),
+            ..eq
+        });
+        let parts = network
+            .parts
+            .iter()
+            .map(|part| {
+                let kind = part.kind();
+                let values: Vec<f64> = kind
+                    .parameters
+                    .iter()
+                    .zip(part.values())
+                    .map(|(spec, v)| match (spec.unit, kind.table, spec.key) {
+                        ("MPa", "flow", "stress_MPa") | ("MPa s", _, _) => v * sc,
+                        ("MPa", _, _) => v * se,
+                        ("s", _, _) => v * (sc / se),
+                        _ => v,
+                    })
+                    .collect();
+                (kind.build)(&values)
+            })
+            .collect();
+        Network { equilibrium, parts, ..network.clone() }
     }
 
     /// For verification: run the material-point path (the inelastic strain, the

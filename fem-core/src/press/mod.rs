@@ -103,7 +103,12 @@ where
 {
     problem.validate_effects()?;
     if network::applies(problem) {
-        return network::run(problem, settings, progress);
+        let effective = effects_applied(problem)?;
+        let mut result = network::run(effective.as_ref(), settings, progress)?;
+        if let Some(offset) = problem.effects.force_offset() {
+            result.observe_force_offset(offset);
+        }
+        return Ok(result);
     }
     if settings.volumetric == Volumetric::FBar {
         return Err(PressError::BadSettings(

@@ -40,6 +40,21 @@
 //!   (friction's trial tractions are measured from there), not from the
 //!   velocity's extrapolation.
 //!
+//! ## Effects
+//!
+//! Of the diagnosis's effects ([`crate::effects`]) these run, applied as on the
+//! chain's path: `ageing` (each network aged before the run,
+//! [`crate::effects::Effects::aged_network`]), `plate-friction` (the plates
+//! become Coulomb contact tools, run by the contact iteration above),
+//! `gravity` (the model's body force in the residual; the floor's reaction
+//! carries the weight), `force-offset` (added to the reported bottom
+//! force) and `machine-compliance` on the constrained plate (the plate held
+//! back by `delta = c F`, `F` the plate force at the step's end: the chain's
+//! scalar iteration on `delta - c F(delta)`, Illinois on a bracket to 1e-11 of
+//! the displacement scale, each evaluation a Newton solve of the whole step).
+//! Refused by name: adhesion, machine compliance with contact tools
+//! (`plate-friction` included), the chain's material-point effects.
+//!
 //! ## A step
 //!
 //! Newton-Raphson with the consistent tangent and a backtracking line search on
@@ -83,12 +98,13 @@ use super::contact::{ContactState, Settled};
 use super::fbar::{self, PatchCell, Patches};
 use super::model::Model;
 use super::network_contact::{ContactStep, NetworkContact, Penalty};
-use super::stepper::emit_markers;
+use super::stepper::{deflected_step, emit_markers, DEFLECTION_RTOL};
 use super::{
     Integrator, MarkerTrack, PressError, PressProblem, PressResult, Progress, Settings, Snapshot, StepRecord, Tool,
     ToolContact, ToolSample, ToolShape, ToolTrack, Volumetric,
 };
 use crate::assembly::{assemble_blocks, assemble_vector, CsrPattern};
+use crate::effects::EffectId;
 use crate::element::{CellGeometry, Formulation, ReferenceSimplex, Simplex};
 use crate::material::law::{LawFailure, PointLaw, PointResponse, Tangent};
 use crate::material::network::{Network, Strain};
@@ -127,8 +143,25 @@ fn check<const D: usize, const N: usize, const S: usize>(
     if let Formulation::PlaneStress { .. } = problem.formulation {
         return bad("in plane stress (use plane strain, axisymmetric or 3D)");
     }
-    if !problem.effects.is_null() {
-        return bad("with the diagnosis's effects (adhesion and machine compliance included)");
+    // `ageing` and `plate-friction` arrive applied (aged networks, friction
+    // tools), `gravity` is the model's body force, `force-offset` is added to the
+    // result: these run. The material-point effects are the chain's (the
+    // network has its own components); adhesion has no cohesive law here.
+    let runs = [
+        EffectId::ForceOffset,
+        EffectId::Ageing,
+        EffectId::Gravity,
+        EffectId::PlateFriction,
+        EffectId::MachineCompliance,
+    ];
+    if let Some(effect) = problem.effects.active().into_iter().find(|e| !runs.contains(e)) {
+        return bad(&format!("with the {effect} effect"));
+    }
+    if problem.effects.is_active(EffectId::MachineCompliance) && !problem.tools.is_empty() {
+        return bad("with the machine-compliance effect and contact tools (`plate-friction` included)");
+    }
+    if problem.effects.forces_material_point_path() {
+        return bad("on the chain's material-point path (the network has its own components)");
     }
     if problem.materials.iter().any(|m| m.damage.is_some()) {
         return bad("beside a chain with Mullins damage (give the network's own `[equilibrium.mullins]`)");
@@ -696,6 +729,11 @@ where
     };
     let replay = settings.step_ends_s.clone();
     let mut replay_index = 0usize;
+    // The `machine-compliance` effect [mm/N] and the machine's deflection at the
+    // state's time [mm] (0 without it, and once the plate has let go).
+    let compliance = problem.effects.machine_compliance_mm_per_n();
+    let mut deflection = 0.0;
+    let deflection_tol = DEFLECTION_RTOL * model.displacement_scale;
 
     while state.t < end * (1.0 - 1e-12) {
         let next_landing = landings.iter().copied().find(|&k| k > state.t * (1.0 + 1e-12) + 1e-15).unwrap_or(end);
@@ -751,7 +789,61 @@ where
         let mut predict = after_kink;
         let mut passes = 0;
         let mut settled: Option<Settled> = None;
+        let mut step_deflection = 0.0;
+        // Machine compliance on the constrained plate: the plate held back by
+        // the deflection `delta = c F` at the step's end, `F` the plate force,
+        // by the chain's scalar iteration around whole Newton solves of the
+        // step (`super::stepper::deflected_step`).
+        let compliant = compliance.filter(|_| !released && !constraints.plate_dofs.is_empty());
         let attempt = loop {
+            if let Some(c) = compliant {
+                let d_cmd = protocol.displacement(t1);
+                let failed = RefCell::new(None);
+                let made = std::cell::Cell::new(0);
+                let no_cut = vec![false; u0.len()];
+                let step = StepSystem {
+                    system,
+                    kept: Some(kept),
+                    held: &constraints.held,
+                    cut: &no_cut,
+                    dt,
+                    history: &state.history,
+                    penalty: None,
+                };
+                let mut take = |lift: f64| -> Result<(Converged, f64), PressError> {
+                    let mut u = u0.clone();
+                    for &dof in &constraints.plate_dofs {
+                        u[dof] = -(d_cmd - lift);
+                    }
+                    let solved = if after_kink {
+                        tangent_predictor(&newton, &step, &state.u, u).and_then(|(u, n)| {
+                            made.set(made.get() + n);
+                            solve_step(&newton, &step, u, largest_force)
+                        })
+                    } else {
+                        solve_step(&newton, &step, u, largest_force)
+                    };
+                    match solved {
+                        Ok(converged) => {
+                            made.set(made.get() + converged.factorizations);
+                            let [_, plate] = reactions(&model, &converged.internal, false);
+                            Ok((converged, plate))
+                        }
+                        Err(f) => {
+                            *failed.borrow_mut() = Some(f);
+                            Err(PressError::BadSettings("a Newton solve of the deflection's iteration failed".into()))
+                        }
+                    }
+                };
+                break match deflected_step(&mut take, deflection, c, deflection_tol, step_index, t1) {
+                    Ok((mut converged, lift)) => {
+                        converged.factorizations = made.get();
+                        step_deflection = lift;
+                        Ok(converged)
+                    }
+                    Err(e) => Err(failed.into_inner().unwrap_or(StepFailure::Contact(e))),
+                };
+            }
             if let (Some(nc), Some(cs)) = (&tool_contact, &contact_state) {
                 // From the step's start, as the chain's contact steps: the contact
                 // iteration predicts the nodes on the tools itself (stuck nodes move
@@ -842,6 +934,7 @@ where
         }
         // Accept.
         retry_dt = None;
+        deflection = step_deflection;
         let [mut bottom, mut plate] = reactions(&model, &converged.internal, released);
         if let Some(s) = settled {
             let keep_nodes = keep(t1);
@@ -964,6 +1057,7 @@ where
         u_start: &state.u,
         diagonal: &diagonal,
         body_force: &model.body_force,
+        held,
         pattern: newton.pattern(),
     };
     let mut factorizations = 0;

@@ -100,6 +100,8 @@ pub(super) struct ContactStep<'a> {
     pub diagonal: &'a [f64],
     /// The body force per dof [N].
     pub body_force: &'a [f64],
+    /// The dofs the support holds (their reactions are not contact forces).
+    pub held: &'a [bool],
     /// The step matrix's pattern.
     pub pattern: &'a CsrPattern,
 }
@@ -198,8 +200,16 @@ impl<'t> NetworkContact<'t> {
         };
         let settled = self.contact.settle(&input, state0, u_guess.clone(), &mut penalized, &mut eliminated, self.nnz);
         match settled {
-            Ok(s) => {
+            Ok(mut s) => {
                 let c = last.into_inner().expect("a contact step solves at least once");
+                // The tool forces as the equilibrium's reactions: what the free
+                // rows leave unbalanced against the contact forces (the
+                // multipliers' and the penalties' rounding, up to the
+                // contact iteration's tolerance) moves into the tools.
+                let imbalance: Vec<f64> = (0..c.internal.len())
+                    .map(|d| if step.held[d] { 0.0 } else { c.internal[d] - step.body_force[d] - s.forces[d] })
+                    .collect();
+                self.contact.rebalance(&mut s, &imbalance);
                 Ok((c, s))
             }
             Err(e) => Err(failed.into_inner().unwrap_or(StepFailure::Contact(e))),

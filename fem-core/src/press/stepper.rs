@@ -1442,7 +1442,7 @@ fn compliant_step<const S: usize>(
 /// residual times `min(k, 1/c)` (`k` the step's stiffness against the
 /// deflection), at most this fraction of the peak force on the plate, and far
 /// less on a soft machine.
-const DEFLECTION_RTOL: f64 = 1e-11;
+pub(super) const DEFLECTION_RTOL: f64 = 1e-11;
 /// Evaluations of the deflection's scalar iteration before a step counts as not
 /// converged (a step affine in the deflection takes three; the bracket halves at
 /// least every third evaluation).
@@ -1474,7 +1474,7 @@ const DEFLECTION_ITERATIONS: usize = 150;
 /// (the step is then retried shorter; a step's own failure inside an evaluation
 /// is returned as it is, e.g. the material-point iteration's `NotConverged`). Every state variable is that of the step
 /// taken at the returned deflection.
-fn deflected_step<T>(
+pub(super) fn deflected_step<T>(
     take: &mut dyn FnMut(f64) -> Result<(T, f64), PressError>,
     guess: f64,
     c: f64,
