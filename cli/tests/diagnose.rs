@@ -1,9 +1,13 @@
 //! `wagashi diagnose` end to end: three 2D trials at different speeds and holds
 //! are simulated by `wagashi press` with a machine compliance the diagnosis is
 //! not told about, given deterministic force noise, and diagnosed (also with one
-//! trial held out by `--validate`); bad input is refused in one line.
+//! trial held out by `--validate`); the reports are laid out in headless
+//! Chromium with no clipped label (`tests/browser/harness.rs` says when that
+//! runs: always on CI); bad input is refused in one line.
 
 mod common;
+#[path = "../../tests/browser/harness.rs"]
+mod harness;
 
 use std::path::Path;
 
@@ -222,6 +226,32 @@ fn a_withheld_machine_compliance_is_named() {
     assert_eq!(v["validation_trials"], serde_json::json!(["trial2"]));
     let g = v["candidates"]["machine-compliance"]["gap_closure"]["value"].as_f64().unwrap();
     assert!(g > 0.8, "G on the validation trial = {g}");
+    // No label is clipped in any of the three reports, laid out by Chromium.
+    let pages = ["diag", "diag-m", "diag-v"].map(|d| cwd.join(d).join("report.html"));
+    assert_report_layout(&pages.iter().map(|p| p.as_path()).collect::<Vec<_>>());
+    // The report draws the validation trial too: every trial's force against
+    // time, before and after, on axes with ticks and units.
+    let html = std::fs::read_to_string(cwd.join("diag-v/report.html")).unwrap();
+    roxmltree::Document::parse(html.trim_start_matches("<!DOCTYPE html>")).expect("report.html is well-formed");
+    assert!(html.contains("trial2 (validation)"), "the validation trial's curves are in the report");
+    assert_eq!(html.matches("time [s]").count(), 3, "one force plot per trial, each with its time axis");
+    assert_eq!(html.matches("force [N]").count(), 3, "one force plot per trial, each with its force axis");
+}
+
+/// Lays `pages` out in headless Chromium and asserts that every SVG label lies
+/// inside its SVG and overlaps no other, and that no table cell's content
+/// overflows it (skipped with a note when the browser is missing, except on CI).
+fn assert_report_layout(pages: &[&Path]) {
+    let Some(report) = harness::layout(pages) else { return };
+    let mut defects = Vec::new();
+    for page in report["pages"].as_array().unwrap() {
+        let (svgs, texts) = (page["svgs"].as_u64().unwrap(), page["texts"].as_u64().unwrap());
+        assert!(svgs >= 2 && texts >= 10, "nothing laid out: {page:#}");
+        for d in page["defects"].as_array().unwrap() {
+            defects.push(format!("{}: {}", page["file"].as_str().unwrap(), d.as_str().unwrap()));
+        }
+    }
+    assert!(defects.is_empty(), "{} layout defects:\n{}", defects.len(), defects.join("\n"));
 }
 
 /// Bad input: an unknown effect id, a bundle without data, an existing output;
