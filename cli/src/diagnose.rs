@@ -741,13 +741,15 @@ pub fn report_html(d: &Diagnosis) -> String {
     html.push_str("</table><h2>Which: candidates (likelihood ratio)</h2>");
     let lr_max = d.candidates.iter().map(|c| c.lr).fold(1.0, f64::max);
     let bar_h = 22.0;
-    let total_h = bar_h * d.candidates.len() as f64 + 10.0;
-    // The label column fits the longest id (12 px text, about 7 px a character).
-    let label_w = d.candidates.iter().map(|c| c.effect.id().len()).max().unwrap_or(0) as f64 * 7.0 + 10.0;
+    let bars_h = bar_h * d.candidates.len() as f64 + 10.0;
+    let total_h = bars_h + 40.0;
+    // The label column fits the longest id (12 px text).
+    let label_w = d.candidates.iter().map(|c| text_width(c.effect.id(), 12.0)).fold(0.0, f64::max) + 10.0;
     let width = label_w + 400.0 + 120.0;
+    let bar_x = |lr: f64| label_w + 400.0 * (lr / lr_max).max(0.0);
     html.push_str(&format!(r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0}" height="{total_h}">"#));
     for (i, c) in d.candidates.iter().enumerate() {
-        let wbar = 400.0 * (c.lr / lr_max).max(0.0);
+        let wbar = bar_x(c.lr) - label_w;
         let y = 5.0 + i as f64 * bar_h;
         let colour = if d.verdict.effects.contains(&c.effect) { "#2471a3" } else { "#aab7c4" };
         html.push_str(&format!(
@@ -761,6 +763,25 @@ pub fn report_html(d: &Diagnosis) -> String {
             if c.significant { " *" } else { "" }
         ));
     }
+    // The LR axis under the bars.
+    html.push_str(&format!(
+        r##"<line x1="{label_w:.1}" y1="{bars_h:.1}" x2="{:.1}" y2="{bars_h:.1}" stroke="#888"/>"##,
+        bar_x(lr_max)
+    ));
+    let (lrs, decimals) = ticks(0.0, lr_max, 6);
+    for v in lrs {
+        let px = bar_x(v);
+        html.push_str(&format!(
+            r##"<line x1="{px:.1}" y1="{bars_h:.1}" x2="{px:.1}" y2="{:.1}" stroke="#888"/><text x="{px:.1}" y="{:.1}" font-size="11" text-anchor="middle">{v:.decimals$}</text>"##,
+            bars_h + 4.0,
+            bars_h + 15.0
+        ));
+    }
+    html.push_str(&format!(
+        r#"<text x="{:.1}" y="{:.1}" font-size="12" text-anchor="middle">likelihood ratio LR (dimensionless)</text>"#,
+        label_w + 200.0,
+        total_h - 5.0
+    ));
     html.push_str("</svg><p>* significant after Holm's correction.</p>");
     if !d.not_evaluated.is_empty() {
         html.push_str("<p>Not evaluated: ");

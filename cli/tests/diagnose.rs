@@ -228,7 +228,7 @@ fn a_withheld_machine_compliance_is_named() {
     assert!(g > 0.8, "G on the validation trial = {g}");
     // No label is clipped in any of the three reports, laid out by Chromium.
     let pages = ["diag", "diag-m", "diag-v"].map(|d| cwd.join(d).join("report.html"));
-    assert_report_layout(&pages.iter().map(|p| p.as_path()).collect::<Vec<_>>());
+    assert_report_layout(&pages.iter().map(|p| p.as_path()).collect::<Vec<_>>(), cwd);
     // The report draws the validation trial too: every trial's force against
     // time, before and after, on axes with ticks and units.
     let html = std::fs::read_to_string(cwd.join("diag-v/report.html")).unwrap();
@@ -241,10 +241,25 @@ fn a_withheld_machine_compliance_is_named() {
 /// Lays `pages` out in headless Chromium and asserts that every SVG label lies
 /// inside its SVG and overlaps no other, and that no table cell's content
 /// overflows it (skipped with a note when the browser is missing, except on CI).
-fn assert_report_layout(pages: &[&Path]) {
-    let Some(report) = harness::layout(pages) else { return };
+/// A control page in `scratch` with one defect of each kind shows that the
+/// check finds them.
+fn assert_report_layout(pages: &[&Path], scratch: &Path) {
+    let control = scratch.join("layout-control.html");
+    std::fs::write(
+        &control,
+        r#"<!DOCTYPE html><html><body><svg xmlns="http://www.w3.org/2000/svg" width="200" height="60"><text x="150" y="30" font-size="12">clipped at the right</text><text x="10" y="30" font-size="12">one</text><text x="14" y="34" font-size="12">two</text></svg><table><tr><td style="max-width:30px;overflow:hidden">overflowing-cell-content</td></tr></table></body></html>"#,
+    )
+    .unwrap();
+    let mut all = pages.to_vec();
+    all.push(&control);
+    let Some(report) = harness::layout(&all) else { return };
+    let (reports, control) = report["pages"].as_array().unwrap().split_at(pages.len());
+    let found: Vec<&str> = control[0]["defects"].as_array().unwrap().iter().map(|d| d.as_str().unwrap()).collect();
+    for kind in ["clipped: ", "overlap: ", "overflow: "] {
+        assert_eq!(found.iter().filter(|d| d.starts_with(kind)).count(), 1, "control page, {kind}{found:#?}");
+    }
     let mut defects = Vec::new();
-    for page in report["pages"].as_array().unwrap() {
+    for page in reports {
         let (svgs, texts) = (page["svgs"].as_u64().unwrap(), page["texts"].as_u64().unwrap());
         assert!(svgs >= 2 && texts >= 10, "nothing laid out: {page:#}");
         for d in page["defects"].as_array().unwrap() {
