@@ -700,7 +700,7 @@ pub fn report_html(d: &Diagnosis) -> String {
         html.push_str(&format!("<h3>{} (validation)</h3>{}", esc(&c.trial), force_svg(c, named)));
     }
     if !d.shapes.is_empty() {
-        html.push_str("<h2>Marker shapes</h2><p>The markers at the last photograph of each phase, grey dots where they were measured; from each, the error of the simulation (simulated minus measured place, magnified by the stated factor): red the baseline");
+        html.push_str("<h2>Marker shapes</h2><p>The markers at the last photograph of each phase in the model's coordinates (x across, y up; r and y in an axisymmetric section; x and y of a 3D trial), grey dots where they were measured; from each, the error of the simulation (simulated minus measured place, magnified by the stated factor): red the baseline");
         if named {
             html.push_str(&format!(", blue with {}", esc(&d.verdict.label)));
         }
