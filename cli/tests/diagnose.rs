@@ -232,10 +232,43 @@ fn a_withheld_machine_compliance_is_named() {
     // The report draws the validation trial too: every trial's force against
     // time, before and after, on axes with ticks and units.
     let html = std::fs::read_to_string(cwd.join("diag-v/report.html")).unwrap();
-    roxmltree::Document::parse(html.trim_start_matches("<!DOCTYPE html>")).expect("report.html is well-formed");
+    let doc =
+        roxmltree::Document::parse(html.trim_start_matches("<!DOCTYPE html>")).expect("report.html is well-formed");
     assert!(html.contains("trial2 (validation)"), "the validation trial's curves are in the report");
     assert_eq!(html.matches("time [s]").count(), 3, "one force plot per trial, each with its time axis");
     assert_eq!(html.matches("force [N]").count(), 3, "one force plot per trial, each with its force axis");
+    // Its held-out prediction with the named effect (blue) lies closer to the
+    // measured force (grey) than the baseline's (red): RMS distance in the
+    // plot's pixels, at least halved (G > 0.8 above).
+    let heading = doc
+        .descendants()
+        .find(|n| n.has_tag_name("h3") && n.text() == Some("trial2 (validation)"))
+        .expect("the validation trial's heading");
+    let svg = heading.next_sibling_element().filter(|n| n.has_tag_name("svg")).expect("its plot");
+    let curve = |colour: &str| -> Vec<(f64, f64)> {
+        let line = svg
+            .children()
+            .find(|n| n.has_tag_name("polyline") && n.attribute("stroke") == Some(colour))
+            .unwrap_or_else(|| panic!("no {colour} curve"));
+        line.attribute("points")
+            .unwrap()
+            .split(' ')
+            .map(|p| {
+                let (x, y) = p.split_once(',').unwrap();
+                (x.parse().unwrap(), y.parse().unwrap())
+            })
+            .collect()
+    };
+    let (measured, baseline, with) = (curve("#999"), curve("#c0392b"), curve("#2471a3"));
+    let rms = |a: &[(f64, f64)]| {
+        assert_eq!(a.len(), measured.len());
+        (a.iter().zip(&measured).map(|(p, q)| (p.1 - q.1).powi(2)).sum::<f64>() / a.len() as f64).sqrt()
+    };
+    let (before, after) = (rms(&baseline), rms(&with));
+    assert!(
+        after < 0.5 * before,
+        "validation trial: {before:.2} px from the measured force before, {after:.2} px after"
+    );
 }
 
 /// Lays `pages` out in headless Chromium and asserts that every SVG label lies
