@@ -7,7 +7,7 @@
 //! | file             | what                                                                 |
 //! |------------------|----------------------------------------------------------------------|
 //! | `diagnosis.json` | `verdict` (label, effects, sentence, separating experiment), `selection` (the forward selection, one entry per step: the candidates included, the step's label, the candidate it names, its LR and gap closure with its 90 % interval, the step's candidates), `where` (one entry per cell), `candidates` (per effect id: score, LR, p-value, held-out gain, gap closure with its 90 % interval, fitted effect parameters), `numerical_error` (noise units), `peak_stress_MPa` (the campaign's stress level, which the stress-valued effects' references follow), `marker_shapes` (per trial, the last photograph of the hold and of the recovery: measured, baseline and with the effect), the baseline, the candidates not evaluated and why, warnings |
-//! | `report.html`    | one self-contained page (inline SVG, no network): the verdict, measured against simulated force per trial and phase before and after the named effect, the marker shapes before and after (misfits magnified, RMS in mm), the WHERE heat table, the candidates as a bar chart, the recommended next experiment |
+//! | `report.html`    | one self-contained page (inline SVG, no network): the verdict, measured against simulated force [N] against time [s] per trial and phase before and after the named set, calibration and validation trials, the marker shapes before and after on axes in mm (misfits magnified, RMS in mm), the WHERE heat table, the candidates as a bar chart, the forward selection's steps, the recommended next experiment |
 //! | `summary.json`   | a short summary (and the mark of a wagashi output folder for `--force`) |
 
 use std::collections::BTreeMap;
@@ -402,37 +402,164 @@ fn esc(s: &str) -> String {
     s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
 }
 
-/// One trial's measured and simulated force as an inline SVG (before: baseline,
-/// after: with the named effect), phases shaded.
+/// Tick positions of an axis over `[lo, hi]`: multiples of a "nice" step (1, 2
+/// or 5 times a power of ten) giving at most about `max_ticks` ticks, and the
+/// decimals their labels need.
+fn ticks(lo: f64, hi: f64, max_ticks: usize) -> (Vec<f64>, usize) {
+    let span = (hi - lo).abs().max(1e-12);
+    let raw = span / max_ticks.max(1) as f64;
+    let p = 10f64.powf(raw.log10().floor());
+    let step = [1.0, 2.0, 5.0, 10.0].into_iter().map(|m| m * p).find(|&v| v >= raw).unwrap_or(10.0 * p);
+    let decimals = (-step.log10().floor()).max(0.0) as usize;
+    let first = (lo / step - 1e-9).ceil() as i64;
+    let last = (hi / step + 1e-9).floor() as i64;
+    let values = (first..=last).map(|k| k as f64 * step).map(|v| if v == 0.0 { 0.0 } else { v }).collect();
+    (values, decimals)
+}
+
+/// The estimated width [px] of `text` at `font_px` in a sans-serif face (a
+/// generous 0.62 em a character, so that estimates err on the wide side).
+fn text_width(text: &str, font_px: f64) -> f64 {
+    text.chars().count() as f64 * 0.62 * font_px
+}
+
+/// The plot area of an SVG chart [px] and its axes' ranges: draws the frame,
+/// the ticks with their labels and the axis titles (`x_title` below,
+/// `y_title` turned along the left side).
+struct Axes {
+    left: f64,
+    right: f64,
+    top: f64,
+    bottom: f64,
+    x_range: [f64; 2],
+    y_range: [f64; 2],
+}
+
+impl Axes {
+    fn x(&self, v: f64) -> f64 {
+        self.left + (self.right - self.left) * (v - self.x_range[0]) / (self.x_range[1] - self.x_range[0])
+    }
+
+    fn y(&self, v: f64) -> f64 {
+        self.bottom - (self.bottom - self.top) * (v - self.y_range[0]) / (self.y_range[1] - self.y_range[0])
+    }
+
+    /// The frame, the ticks and their labels (11 px), and the titles.
+    fn draw(&self, x_title: &str, y_title: &str, svg_h: f64) -> String {
+        let mut s = format!(
+            r##"<rect x="{:.1}" y="{:.1}" width="{:.1}" height="{:.1}" fill="none" stroke="#888"/>"##,
+            self.left,
+            self.top,
+            self.right - self.left,
+            self.bottom - self.top
+        );
+        // As many ticks as fit their labels side by side.
+        let max_x = |decimals: usize| {
+            let longest = [self.x_range[0], self.x_range[1]]
+                .iter()
+                .map(|v| text_width(&format!("{v:.decimals$}"), 11.0))
+                .fold(0.0, f64::max);
+            ((self.right - self.left) / (longest + 12.0)).floor().max(2.0) as usize
+        };
+        let (mut xs, mut xd) = ticks(self.x_range[0], self.x_range[1], 8);
+        if xs.len() > max_x(xd) {
+            (xs, xd) = ticks(self.x_range[0], self.x_range[1], max_x(xd));
+        }
+        for v in xs {
+            let px = self.x(v);
+            s.push_str(&format!(
+                r##"<line x1="{px:.1}" y1="{:.1}" x2="{px:.1}" y2="{:.1}" stroke="#888"/><text x="{px:.1}" y="{:.1}" font-size="11" text-anchor="middle">{v:.xd$}</text>"##,
+                self.bottom,
+                self.bottom + 4.0,
+                self.bottom + 15.0
+            ));
+        }
+        let max_y = ((self.bottom - self.top) / 18.0).floor().max(2.0) as usize;
+        let (ys, yd) = ticks(self.y_range[0], self.y_range[1], max_y.min(6));
+        for v in ys {
+            let py = self.y(v);
+            s.push_str(&format!(
+                r##"<line x1="{:.1}" y1="{py:.1}" x2="{:.1}" y2="{py:.1}" stroke="#888"/><text x="{:.1}" y="{:.1}" font-size="11" text-anchor="end">{v:.yd$}</text>"##,
+                self.left - 4.0,
+                self.left,
+                self.left - 6.0,
+                py + 4.0
+            ));
+        }
+        s.push_str(&format!(
+            r#"<text x="{:.1}" y="{:.1}" font-size="12" text-anchor="middle">{x_title}</text><text transform="translate(13 {:.1}) rotate(-90)" font-size="12" text-anchor="middle">{y_title}</text>"#,
+            0.5 * (self.left + self.right),
+            svg_h - 5.0,
+            0.5 * (self.top + self.bottom)
+        ));
+        s
+    }
+}
+
+/// The left margin [px] that fits the y tick labels of `range` and the turned title.
+fn left_margin(range: [f64; 2]) -> f64 {
+    let (ys, yd) = ticks(range[0], range[1], 6);
+    let widest = ys.iter().map(|v| text_width(&format!("{v:.yd$}"), 11.0)).fold(0.0, f64::max);
+    widest + 30.0
+}
+
+/// One trial's measured and simulated force against time as an inline SVG
+/// (before: baseline, after: with the named effect), phases shaded and named
+/// above the plot where their names fit.
 fn force_svg(c: &calibrate::diagnosis::ForceCurves, named: bool) -> String {
-    let (w, h, pad) = (520.0, 220.0, 36.0);
+    let (w, h) = (560.0, 250.0);
     let t_max = c.times.last().map_or(1.0, |t| t.0).max(1e-9);
-    let all = c.measured.iter().chain(&c.baseline).chain(&c.with_effect);
-    let (f_min, f_max) = all.fold((0.0f64, 0.0f64), |(a, b), &f| (a.min(f), b.max(f)));
-    let span = (f_max - f_min).max(1e-12);
-    let x = |t: f64| pad + (w - 2.0 * pad) * t / t_max;
-    let y = |f: f64| h - pad - (h - 2.0 * pad) * (f - f_min) / span;
+    let t_min = c.times.first().map_or(0.0, |t| t.0).min(0.0);
+    let shown: Vec<&f64> = if named {
+        c.measured.iter().chain(&c.baseline).chain(&c.with_effect).collect()
+    } else {
+        c.measured.iter().chain(&c.baseline).collect()
+    };
+    let (f_min, f_max) = shown.into_iter().fold((0.0f64, 0.0f64), |(a, b), &f| (a.min(f), b.max(f)));
+    let margin = 0.05 * (f_max - f_min).max(1e-12);
+    let y_range = [f_min - margin, f_max + margin];
+    let axes = Axes {
+        left: left_margin(y_range),
+        right: w - 14.0,
+        top: 30.0,
+        bottom: h - 42.0,
+        x_range: [t_min, t_max],
+        y_range,
+    };
     let line = |v: &[f64], colour: &str, width: f64| {
-        let pts: Vec<String> = c.times.iter().zip(v).map(|((t, _), f)| format!("{:.1},{:.1}", x(*t), y(*f))).collect();
+        let pts: Vec<String> =
+            c.times.iter().zip(v).map(|((t, _), f)| format!("{:.1},{:.1}", axes.x(*t), axes.y(*f))).collect();
         format!(r#"<polyline fill="none" stroke="{colour}" stroke-width="{width}" points="{}"/>"#, pts.join(" "))
     };
     let mut svg = format!(r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}">"#);
-    // Phase bands.
+    // Phase bands; each name on the first of two rows where it clears the
+    // name before it, else on the second, else left out (the band stays).
     let (mut start, mut band) = (0usize, 0usize);
+    let mut row_end = [f64::NEG_INFINITY; 2];
     for i in 1..=c.times.len() {
         if i == c.times.len() || c.times[i].1 != c.times[start].1 {
-            let (t0, t1) = (c.times[start].0, c.times[i - 1].0);
+            let t0 = c.times[start].0;
+            let t1 = if i == c.times.len() { c.times[i - 1].0 } else { c.times[i].0 };
             let shade = if band.is_multiple_of(2) { "#f4f4f4" } else { "#e9eef5" };
             band += 1;
+            let (x0, x1) = (axes.x(t0), axes.x(t1));
             svg.push_str(&format!(
-                r#"<rect x="{:.1}" y="{pad}" width="{:.1}" height="{:.1}" fill="{shade}"/><text x="{:.1}" y="{:.1}" font-size="10" fill="gray">{}</text>"#,
-                x(t0),
-                (x(t1) - x(t0)).max(0.5),
-                h - 2.0 * pad,
-                x(t0) + 2.0,
-                pad - 4.0,
-                c.times[start].1.as_str()
+                r#"<rect x="{x0:.1}" y="{:.1}" width="{:.1}" height="{:.1}" fill="{shade}"/>"#,
+                axes.top,
+                (x1 - x0).max(0.5),
+                axes.bottom - axes.top
             ));
+            let name = c.times[start].1.as_str();
+            let (tx, tw) = (x0 + 2.0, text_width(name, 10.0));
+            if tx + tw <= axes.right {
+                if let Some(row) = (0..2).find(|&r| tx >= row_end[r] + 4.0) {
+                    row_end[row] = tx + tw;
+                    svg.push_str(&format!(
+                        r#"<text x="{tx:.1}" y="{:.1}" font-size="10" fill="gray">{name}</text>"#,
+                        axes.top - 4.0 - 12.0 * row as f64
+                    ));
+                }
+            }
             start = i;
         }
     }
@@ -441,11 +568,8 @@ fn force_svg(c: &calibrate::diagnosis::ForceCurves, named: bool) -> String {
     if named {
         svg.push_str(&line(&c.with_effect, "#2471a3", 1.5));
     }
-    svg.push_str(&format!(
-        r#"<text x="{pad}" y="{:.1}" font-size="11">time [s] (0 to {t_max:.1})</text><text x="4" y="{:.1}" font-size="11">force [N] ({f_min:.3} to {f_max:.3})</text></svg>"#,
-        h - 8.0,
-        pad - 18.0
-    ));
+    svg.push_str(&axes.draw("time [s]", "force [N]", h));
+    svg.push_str("</svg>");
     svg
 }
 
@@ -463,20 +587,10 @@ fn nice_floor(x: f64) -> f64 {
     [5.0, 2.0, 1.0].into_iter().map(|m| m * p).find(|&v| v <= x).unwrap_or(p)
 }
 
-/// One photograph's markers as an inline SVG (x across, y up, equal scales):
-/// the measured places (grey dots) and, from each, the error of the baseline
-/// (red) and of the model with the named effect (blue), simulated minus
-/// measured, magnified by a stated factor so that millimetre shapes show
-/// tenth-of-a-millimetre misfits.
-fn shapes_svg(s: &calibrate::diagnosis::MarkerShapes, named: bool) -> String {
-    let (w, h, pad): (f64, f64, f64) = (360.0, 260.0, 30.0);
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for p in s.markers.iter().map(|m| &m.measured) {
-        for i in 0..2 {
-            lo[i] = lo[i].min(p[i]);
-            hi[i] = hi[i].max(p[i]);
-        }
-    }
+/// The factor by which [`shapes_svg`] magnifies the marker errors: the largest
+/// error drawn as about a fifth of the markers' extent.
+fn error_gain(s: &calibrate::diagnosis::MarkerShapes, named: bool) -> f64 {
+    let (lo, hi) = marker_extent(s);
     let span = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1.0) * 1.3;
     let err = |a: &[f64], b: &[f64]| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt();
     let largest = s
@@ -484,19 +598,67 @@ fn shapes_svg(s: &calibrate::diagnosis::MarkerShapes, named: bool) -> String {
         .iter()
         .map(|p| err(&p.baseline, &p.measured).max(if named { err(&p.with_effect, &p.measured) } else { 0.0 }))
         .fold(0.0, f64::max);
-    // The largest error drawn as about a fifth of the picture.
-    let gain = if largest > 0.0 { nice_floor(0.2 * span / largest).max(1.0) } else { 1.0 };
+    if largest > 0.0 {
+        nice_floor(0.2 * span / largest).max(1.0)
+    } else {
+        1.0
+    }
+}
+
+/// The measured markers' lower and upper corners [mm] (first two coordinates).
+fn marker_extent(s: &calibrate::diagnosis::MarkerShapes) -> ([f64; 2], [f64; 2]) {
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in s.markers.iter().map(|m| &m.measured) {
+        for i in 0..2 {
+            lo[i] = lo[i].min(p[i]);
+            hi[i] = hi[i].max(p[i]);
+        }
+    }
+    if lo[0] > hi[0] {
+        return ([0.0; 2], [1.0; 2]);
+    }
+    (lo, hi)
+}
+
+/// One photograph's markers as an inline SVG on axes in mm (x across, y up,
+/// equal scales): the measured places (grey dots) and, from each, the error of
+/// the baseline (red) and of the model with the named effect (blue), simulated
+/// minus measured, magnified by [`error_gain`] so that millimetre shapes show
+/// tenth-of-a-millimetre misfits.
+fn shapes_svg(s: &calibrate::diagnosis::MarkerShapes, named: bool) -> String {
+    let (w, h): (f64, f64) = (360.0, 290.0);
+    let (lo, hi) = marker_extent(s);
+    let span = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1.0) * 1.3;
+    let gain = error_gain(s, named);
     let (cx, cy) = (0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]));
-    let scale = (w - 2.0 * pad).min(h - 2.0 * pad) / span;
-    let x = |v: f64| 0.5 * w + scale * (v - cx);
-    let y = |v: f64| 0.5 * h - scale * (v - cy);
+    // Equal scales: the ranges fill the plot area at the scale that fits the
+    // span both ways; the left margin fits the y labels of those ranges.
+    let (top, bottom, right) = (10.0, h - 42.0, w - 14.0);
+    let mut left = 50.0;
+    let mut axes = None;
+    for _ in 0..2 {
+        let scale = (right - left).min(bottom - top) / span;
+        let (hx, hy) = (0.5 * (right - left) / scale, 0.5 * (bottom - top) / scale);
+        let a = Axes { left, right, top, bottom, x_range: [cx - hx, cx + hx], y_range: [cy - hy, cy + hy] };
+        left = left_margin(a.y_range);
+        axes = Some(a);
+    }
+    let axes = axes.expect("two passes");
     let mut svg = format!(r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}">"#);
-    svg.push_str(&format!(r##"<rect x="0" y="0" width="{w}" height="{h}" fill="#fafafa" stroke="#ddd"/>"##));
+    svg.push_str(&format!(
+        r##"<rect x="{:.1}" y="{:.1}" width="{:.1}" height="{:.1}" fill="#fafafa"/>"##,
+        axes.left,
+        axes.top,
+        axes.right - axes.left,
+        axes.bottom - axes.top
+    ));
     for calibrate::diagnosis::MarkerPlaces { measured, baseline, with_effect: with, .. } in &s.markers {
-        let (mx, my) = (x(measured[0]), y(measured[1]));
+        let (mx, my) = (axes.x(measured[0]), axes.y(measured[1]));
         let mut arrow = |to: &[f64], colour: &str| {
-            let (ex, ey) =
-                (x(measured[0] + gain * (to[0] - measured[0])), y(measured[1] + gain * (to[1] - measured[1])));
+            let (ex, ey) = (
+                axes.x(measured[0] + gain * (to[0] - measured[0])),
+                axes.y(measured[1] + gain * (to[1] - measured[1])),
+            );
             svg.push_str(&format!(
                 r##"<line x1="{mx:.1}" y1="{my:.1}" x2="{ex:.1}" y2="{ey:.1}" stroke="{colour}" stroke-width="1.5"/><circle cx="{ex:.1}" cy="{ey:.1}" r="2.5" fill="{colour}"/>"##
             ));
@@ -507,14 +669,8 @@ fn shapes_svg(s: &calibrate::diagnosis::MarkerShapes, named: bool) -> String {
         }
         svg.push_str(&format!(r##"<circle cx="{mx:.1}" cy="{my:.1}" r="3" fill="#777"/>"##));
     }
-    svg.push_str(&format!(
-        r#"<text x="4" y="{:.1}" font-size="11">errors x {gain}; x {:.1} to {:.1} mm, y {:.1} to {:.1} mm</text></svg>"#,
-        h - 6.0,
-        lo[0],
-        hi[0],
-        lo[1],
-        hi[1]
-    ));
+    svg.push_str(&axes.draw("x [mm]", "y [mm]", h));
+    svg.push_str("</svg>");
     svg
 }
 
@@ -533,12 +689,18 @@ pub fn report_html(d: &Diagnosis) -> String {
     if named {
         html.push_str(&format!("; blue: with {}", esc(&d.verdict.label)));
     }
-    html.push_str("</p>");
+    html.push_str(
+        ". Calibration trials: the fits. Validation trials: the held-out predictions at the calibrated \
+         parameters, each trial's two sample scales re-estimated, as the gap closure is measured.</p>",
+    );
     for c in &d.curves {
         html.push_str(&format!("<h3>{}</h3>{}", esc(&c.trial), force_svg(c, named)));
     }
+    for c in &d.validation_curves {
+        html.push_str(&format!("<h3>{} (validation)</h3>{}", esc(&c.trial), force_svg(c, named)));
+    }
     if !d.shapes.is_empty() {
-        html.push_str("<h2>Marker shapes</h2><p>The markers at the last photograph of each phase, grey dots where they were measured; from each, the error of the simulation (simulated minus measured place, magnified by the stated factor): red the baseline");
+        html.push_str("<h2>Marker shapes</h2><p>The markers at the last photograph of each phase in the model's coordinates (x across, y up; r and y in an axisymmetric section; x and y of a 3D trial), grey dots where they were measured; from each, the error of the simulation (simulated minus measured place, magnified by the stated factor): red the baseline");
         if named {
             html.push_str(&format!(", blue with {}", esc(&d.verdict.label)));
         }
@@ -557,6 +719,7 @@ pub fn report_html(d: &Diagnosis) -> String {
             if named {
                 caption.push_str(&format!(", {:.3} mm (with the effect)", rms_distance(&with, &measured)));
             }
+            caption.push_str(&format!("; errors magnified x {}", error_gain(s, named)));
             html.push_str(&format!("<figure style=\"margin:0\">{}<figcaption style=\"font-size:12px;max-width:360px\">{caption}</figcaption></figure>", shapes_svg(s, named)));
         }
         html.push_str("</div>");
@@ -578,13 +741,15 @@ pub fn report_html(d: &Diagnosis) -> String {
     html.push_str("</table><h2>Which: candidates (likelihood ratio)</h2>");
     let lr_max = d.candidates.iter().map(|c| c.lr).fold(1.0, f64::max);
     let bar_h = 22.0;
-    let total_h = bar_h * d.candidates.len() as f64 + 10.0;
-    // The label column fits the longest id (12 px text, about 7 px a character).
-    let label_w = d.candidates.iter().map(|c| c.effect.id().len()).max().unwrap_or(0) as f64 * 7.0 + 10.0;
+    let bars_h = bar_h * d.candidates.len() as f64 + 10.0;
+    let total_h = bars_h + 40.0;
+    // The label column fits the longest id (12 px text).
+    let label_w = d.candidates.iter().map(|c| text_width(c.effect.id(), 12.0)).fold(0.0, f64::max) + 10.0;
     let width = label_w + 400.0 + 120.0;
+    let bar_x = |lr: f64| label_w + 400.0 * (lr / lr_max).max(0.0);
     html.push_str(&format!(r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0}" height="{total_h}">"#));
     for (i, c) in d.candidates.iter().enumerate() {
-        let wbar = 400.0 * (c.lr / lr_max).max(0.0);
+        let wbar = bar_x(c.lr) - label_w;
         let y = 5.0 + i as f64 * bar_h;
         let colour = if d.verdict.effects.contains(&c.effect) { "#2471a3" } else { "#aab7c4" };
         html.push_str(&format!(
@@ -598,6 +763,25 @@ pub fn report_html(d: &Diagnosis) -> String {
             if c.significant { " *" } else { "" }
         ));
     }
+    // The LR axis under the bars.
+    html.push_str(&format!(
+        r##"<line x1="{label_w:.1}" y1="{bars_h:.1}" x2="{:.1}" y2="{bars_h:.1}" stroke="#888"/>"##,
+        bar_x(lr_max)
+    ));
+    let (lrs, decimals) = ticks(0.0, lr_max, 6);
+    for v in lrs {
+        let px = bar_x(v);
+        html.push_str(&format!(
+            r##"<line x1="{px:.1}" y1="{bars_h:.1}" x2="{px:.1}" y2="{:.1}" stroke="#888"/><text x="{px:.1}" y="{:.1}" font-size="11" text-anchor="middle">{v:.decimals$}</text>"##,
+            bars_h + 4.0,
+            bars_h + 15.0
+        ));
+    }
+    html.push_str(&format!(
+        r#"<text x="{:.1}" y="{:.1}" font-size="12" text-anchor="middle">likelihood ratio LR (dimensionless)</text>"#,
+        label_w + 200.0,
+        total_h - 5.0
+    ));
     html.push_str("</svg><p>* significant after Holm's correction.</p>");
     if !d.not_evaluated.is_empty() {
         html.push_str("<p>Not evaluated: ");

@@ -1,9 +1,13 @@
 //! `wagashi diagnose` end to end: three 2D trials at different speeds and holds
 //! are simulated by `wagashi press` with a machine compliance the diagnosis is
 //! not told about, given deterministic force noise, and diagnosed (also with one
-//! trial held out by `--validate`); bad input is refused in one line.
+//! trial held out by `--validate`); the reports are laid out in headless
+//! Chromium with no clipped label (`tests/browser/harness.rs` says when that
+//! runs: always on CI); bad input is refused in one line.
 
 mod common;
+#[path = "../../tests/browser/harness.rs"]
+mod harness;
 
 use std::path::Path;
 
@@ -222,6 +226,80 @@ fn a_withheld_machine_compliance_is_named() {
     assert_eq!(v["validation_trials"], serde_json::json!(["trial2"]));
     let g = v["candidates"]["machine-compliance"]["gap_closure"]["value"].as_f64().unwrap();
     assert!(g > 0.8, "G on the validation trial = {g}");
+    // No label is clipped in any of the three reports, laid out by Chromium.
+    let pages = ["diag", "diag-m", "diag-v"].map(|d| cwd.join(d).join("report.html"));
+    assert_report_layout(&pages.iter().map(|p| p.as_path()).collect::<Vec<_>>(), cwd);
+    // The report draws the validation trial too: every trial's force against
+    // time, before and after, on axes with ticks and units.
+    let html = std::fs::read_to_string(cwd.join("diag-v/report.html")).unwrap();
+    let doc =
+        roxmltree::Document::parse(html.trim_start_matches("<!DOCTYPE html>")).expect("report.html is well-formed");
+    assert!(html.contains("trial2 (validation)"), "the validation trial's curves are in the report");
+    assert_eq!(html.matches("time [s]").count(), 3, "one force plot per trial, each with its time axis");
+    assert_eq!(html.matches("force [N]").count(), 3, "one force plot per trial, each with its force axis");
+    // Its held-out prediction with the named effect (blue) lies closer to the
+    // measured force (grey) than the baseline's (red): RMS distance in the
+    // plot's pixels, at least halved (G > 0.8 above).
+    let heading = doc
+        .descendants()
+        .find(|n| n.has_tag_name("h3") && n.text() == Some("trial2 (validation)"))
+        .expect("the validation trial's heading");
+    let svg = heading.next_sibling_element().filter(|n| n.has_tag_name("svg")).expect("its plot");
+    let curve = |colour: &str| -> Vec<(f64, f64)> {
+        let line = svg
+            .children()
+            .find(|n| n.has_tag_name("polyline") && n.attribute("stroke") == Some(colour))
+            .unwrap_or_else(|| panic!("no {colour} curve"));
+        line.attribute("points")
+            .unwrap()
+            .split(' ')
+            .map(|p| {
+                let (x, y) = p.split_once(',').unwrap();
+                (x.parse().unwrap(), y.parse().unwrap())
+            })
+            .collect()
+    };
+    let (measured, baseline, with) = (curve("#999"), curve("#c0392b"), curve("#2471a3"));
+    let rms = |a: &[(f64, f64)]| {
+        assert_eq!(a.len(), measured.len());
+        (a.iter().zip(&measured).map(|(p, q)| (p.1 - q.1).powi(2)).sum::<f64>() / a.len() as f64).sqrt()
+    };
+    let (before, after) = (rms(&baseline), rms(&with));
+    assert!(
+        after < 0.5 * before,
+        "validation trial: {before:.2} px from the measured force before, {after:.2} px after"
+    );
+}
+
+/// Lays `pages` out in headless Chromium and asserts that every SVG label lies
+/// inside its SVG and overlaps no other, and that no table cell's content
+/// overflows it (skipped with a note when the browser is missing, except on CI).
+/// A control page in `scratch` with one defect of each kind shows that the
+/// check finds them.
+fn assert_report_layout(pages: &[&Path], scratch: &Path) {
+    let control = scratch.join("layout-control.html");
+    std::fs::write(
+        &control,
+        r#"<!DOCTYPE html><html><body><svg xmlns="http://www.w3.org/2000/svg" width="200" height="60"><text x="150" y="30" font-size="12">clipped at the right</text><text x="10" y="30" font-size="12">one</text><text x="14" y="34" font-size="12">two</text></svg><table><tr><td style="max-width:30px;overflow:hidden">overflowing-cell-content</td></tr></table></body></html>"#,
+    )
+    .unwrap();
+    let mut all = pages.to_vec();
+    all.push(&control);
+    let Some(report) = harness::layout(&all) else { return };
+    let (reports, control) = report["pages"].as_array().unwrap().split_at(pages.len());
+    let found: Vec<&str> = control[0]["defects"].as_array().unwrap().iter().map(|d| d.as_str().unwrap()).collect();
+    for kind in ["clipped: ", "overlap: ", "overflow: "] {
+        assert_eq!(found.iter().filter(|d| d.starts_with(kind)).count(), 1, "control page, {kind}{found:#?}");
+    }
+    let mut defects = Vec::new();
+    for page in reports {
+        let (svgs, texts) = (page["svgs"].as_u64().unwrap(), page["texts"].as_u64().unwrap());
+        assert!(svgs >= 2 && texts >= 10, "nothing laid out: {page:#}");
+        for d in page["defects"].as_array().unwrap() {
+            defects.push(format!("{}: {}", page["file"].as_str().unwrap(), d.as_str().unwrap()));
+        }
+    }
+    assert!(defects.is_empty(), "{} layout defects:\n{}", defects.len(), defects.join("\n"));
 }
 
 /// Bad input: an unknown effect id, a bundle without data, an existing output;

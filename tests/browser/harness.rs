@@ -6,6 +6,9 @@
 //!   error and no warning.
 //! - [`render`] loads a file with three.js in headless Chromium (`render.mjs`)
 //!   and saves a screenshot.
+//! - [`layout`] opens HTML pages in headless Chromium (`layout.mjs`) and lists
+//!   clipped or overlapping SVG labels and overflowing table cells
+//!   (`cli/tests/diagnose.rs` checks `report.html` with it).
 //!
 //! Both need Node.js and `npm ci` in `tests/browser` (`.ci/run` does it); the
 //! render also needs Chromium (`/usr/bin/chromium`, or `WAGASHI_CHROMIUM`).
@@ -29,6 +32,8 @@ pub enum Need {
     Validator,
     /// node, `three`, `playwright-core` and Chromium.
     Browser,
+    /// node, `playwright-core` and Chromium.
+    Page,
 }
 
 /// Whether missing tools fail the tests instead of skipping them.
@@ -51,13 +56,14 @@ fn missing(need: Need) -> Option<String> {
     let packages: &[&str] = match need {
         Need::Validator => &["gltf-validator"],
         Need::Browser => &["three", "playwright-core"],
+        Need::Page => &["playwright-core"],
     };
     for p in packages {
         if !browser_dir().join("node_modules").join(p).join("package.json").is_file() {
             return Some(format!("the npm package {p} is not installed (run `npm ci` in tests/browser)"));
         }
     }
-    if need == Need::Browser && !chromium().is_file() {
+    if need != Need::Validator && !chromium().is_file() {
         return Some(format!("no Chromium at {} (apt-get install chromium)", chromium().display()));
     }
     None
@@ -146,4 +152,29 @@ pub fn render(glb: &Path, png: &Path, time_s: Option<f64>) -> Option<serde_json:
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(output.status.success(), "render.mjs exited with {:?}:\n{stdout}\n{stderr}", output.status);
     Some(serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("render.mjs output is not JSON ({e}):\n{stdout}")))
+}
+
+/// Opens each HTML page of `pages` in headless Chromium (`layout.mjs`, a 1280 x
+/// 900 viewport) and returns what it found per page (`{"pages": [{"file",
+/// "svgs", "texts", "cells", "defects": [...]}]}`): SVG labels outside their
+/// SVG or overlapping each other, table cells whose content overflows. `None`
+/// when skipped.
+pub fn layout(pages: &[&Path]) -> Option<serde_json::Value> {
+    if !available(Need::Page) {
+        return None;
+    }
+    let output = Command::new("node")
+        .arg(browser_dir().join("layout.mjs"))
+        .args(pages)
+        .env("WAGASHI_CHROMIUM", chromium())
+        .stdin(Stdio::null())
+        .output()
+        .expect("node runs");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "layout.mjs exited with {:?}:\n{stdout}\n{stderr}", output.status);
+    let report: serde_json::Value =
+        serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("layout.mjs output is not JSON ({e}):\n{stdout}"));
+    assert_eq!(report["pages"].as_array().map(Vec::len), Some(pages.len()), "{report:#}");
+    Some(report)
 }

@@ -426,7 +426,7 @@ pub struct TieTest {
     pub cosine: f64,
 }
 
-/// Measured and simulated force of one calibration trial, before and after the named effect.
+/// Measured and simulated force of one trial, before and after the named effect.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ForceCurves {
     /// The trial.
@@ -495,8 +495,13 @@ pub struct Diagnosis {
     pub selection: Vec<SelectionStep>,
     /// Warnings in words.
     pub warnings: Vec<String>,
-    /// Forces for the report.
+    /// Forces for the report, per calibration trial (the fits' predictions).
     pub curves: Vec<ForceCurves>,
+    /// Forces for the report, per validation trial (none without
+    /// `validation`): the held-out predictions of the baseline and of the model
+    /// with the named set, each trial anchored on its two sample scales as the
+    /// gap closure is measured.
+    pub validation_curves: Vec<ForceCurves>,
     /// Per calibration trial, the marker shapes at the last photograph of the
     /// hold and of the recovery (none without markers).
     pub shapes: Vec<MarkerShapes>,
@@ -829,6 +834,7 @@ pub fn diagnose(
     }
     let named = verdict.effects.first().and_then(|id| evaluated.iter().find(|e| e.report.effect == *id));
     let mut after = named.map_or(r0.clone(), |e| e.residuals.clone());
+    let mut after_heldout = named.and_then(|e| e.heldout.clone());
 
     // The forward selection (module docs, "Composable verdicts").
     let mut selection = vec![selection_step(Vec::new(), &where_cells, &verdict, &evaluated, phi0)];
@@ -847,12 +853,17 @@ pub fn diagnose(
         model.included.clear();
         warnings.extend(notes);
         selection.extend(more);
-        if let Some(r) = last {
+        if let Some((r, h)) = last {
             after = r;
+            after_heldout = h;
         }
         compose_verdict(&mut verdict, &selection);
     }
     let curves = force_curves(&model, &r0, &after);
+    let validation_curves = match (&vmodel, &h0) {
+        (Some(vm), Some(h0)) => force_curves(vm, h0, after_heldout.as_deref().unwrap_or(h0)),
+        _ => Vec::new(),
+    };
     let shapes = marker_shapes(&model, &r0, &after);
     Ok(Diagnosis {
         trials: model.trial_names(),
@@ -867,6 +878,7 @@ pub fn diagnose(
         selection,
         warnings,
         curves,
+        validation_curves,
         shapes,
         force_noise: model.trials.iter().map(|t| (t.name.clone(), t.force_sigma_n, t.force_rho)).collect(),
         peak_stress_mpa,
@@ -1069,9 +1081,13 @@ fn selection_step(
     }
 }
 
+/// The residuals and held-out residuals (none without a held-out check) with a
+/// step's named candidate.
+type NamedResiduals = (Vec<f64>, Option<Vec<f64>>);
+
 /// A later step, what it names for the next (candidate, values, unknowns) and
 /// the residuals with its named candidate.
-type StepOutcome = (SelectionStep, Option<(CandidateId, Vec<f64>, Vec<f64>)>, Option<Vec<f64>>);
+type StepOutcome = (SelectionStep, Option<(CandidateId, Vec<f64>, Vec<f64>)>, Option<NamedResiduals>);
 
 /// What the forward selection's later steps share with the first.
 struct SelectionContext<'a> {
@@ -1090,8 +1106,8 @@ struct SelectionContext<'a> {
 /// coordinate descent, each with the unknowns), the unknowns are refitted, and
 /// the candidates left are tested against that baseline by the first step's
 /// rules. Returns the
-/// new steps, the residuals with the last named candidate (for the report's
-/// "after" curves) and warnings.
+/// new steps, the residuals and held-out residuals with the last named
+/// candidate (for the report's "after" curves) and warnings.
 fn forward_selection(
     model: &mut Model,
     vmodel: &mut Option<Model>,
@@ -1099,11 +1115,11 @@ fn forward_selection(
     ctx: &SelectionContext<'_>,
     options: &DiagnosisOptions,
     progress: ProgressFn<'_>,
-) -> (Vec<SelectionStep>, Option<Vec<f64>>, Vec<String>) {
+) -> (Vec<SelectionStep>, Option<NamedResiduals>, Vec<String>) {
     let mut steps = Vec::new();
     let mut warnings = Vec::new();
     let mut next = step_named(first.0, first.1).map(|e| (e.report.effect, e.values.clone(), e.report.theta.clone()));
-    let mut last = step_named(first.0, first.1).map(|e| e.residuals.clone());
+    let mut last = step_named(first.0, first.1).map(|e| (e.residuals.clone(), e.heldout.clone()));
     let kinds = model.scale_kind();
     while let Some((id, values, start)) = next.take() {
         if model.included.len() + 1 >= options.max_components {
@@ -1198,7 +1214,7 @@ fn forward_selection(
             Ok((
                 step,
                 named.map(|e| (e.report.effect, e.values.clone(), e.report.theta.clone())),
-                named.map(|e| e.residuals.clone()),
+                named.map(|e| (e.residuals.clone(), e.heldout.clone())),
             ))
         })();
         match step {
